@@ -1,0 +1,13 @@
+/* Appell: dynamics of mechanical systems with nonholonomic constraints.
+ * The umbrella header: include this one. */
+#ifndef APPELL_H
+#define APPELL_H
+
+#include "appell/export.h"
+#include "appell/status.h"
+#include "appell/system.h"
+#include "appell/sim.h"
+
+#define AP_VERSION_STRING "0.1.0"
+
+#endif

@@ -1,0 +1,98 @@
+/* Appell: simulation drivers.
+ *
+ * A simulation integrates one model from an initial state, in one of the modes of DESIGN.md:
+ *
+ *   AP_MODE_MINIMAL    state (q, e'), partitioned basis frozen during a step, re-partitioned
+ *                      between steps when R11 degrades; the constraints hold to round-off.
+ *   AP_MODE_PROJECTED  state (q, v), orthonormal basis, v projected onto A v + a0 = 0 in the
+ *                      metric g after every step.
+ *
+ * Stepping is done by SUNDIALS (ARKODE explicit pairs, fixed-step RK4, CVODE Adams/BDF);
+ * ap_method_count / ap_method_info list what is offered. */
+#ifndef APPELL_SIM_H
+#define APPELL_SIM_H
+
+#include "appell/export.h"
+#include "appell/system.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum ap_mode {
+  AP_MODE_MINIMAL = 0,
+  AP_MODE_PROJECTED = 1,
+  AP_MODE_DAE = 2          /* reserved for the IDA cross-check */
+} ap_mode;
+
+typedef struct ap_sim_def {
+  ap_mode mode;            /* default AP_MODE_MINIMAL */
+  const char *method;      /* stepper name (see ap_method_info); default "dopri5" */
+  double rtol;             /* relative tolerance; default 1e-8 */
+  double atol;             /* absolute tolerance; default 1e-10 */
+  double h_fixed;          /* step for fixed-step methods (s); default 1e-3 */
+  double h_init;           /* first step (s); 0 = let the stepper choose (default) */
+  double h_max;            /* largest step (s); 0 = unlimited (default) */
+  long max_steps;          /* internal steps allowed per ap_sim_advance; default 1000000 */
+  double rank_rtol;        /* relative rank tolerance on |R_ii|; default 1e-10 */
+  double switch_growth;    /* minimal mode: re-partition when max|R11^-1 R12| exceeds this;
+                              default 2 */
+  double init_tol;         /* initial speeds violating A v + a0 = 0 by more than this (in the
+                              metric g, relative to |v|) are refused; smaller violations are
+                              projected and reported. Default 1e-6 */
+} ap_sim_def;
+
+AP_API ap_sim_def ap_sim_def_default(void);
+
+typedef struct ap_sim_stats {
+  long steps;              /* accepted internal steps */
+  long rhs_evals;          /* right-hand-side (ap_forward) evaluations by the stepper */
+  long err_fails;          /* steps rejected by the error test */
+  long rhs_fails;          /* recoverable failures reported by the right-hand side */
+  long partition_switches; /* minimal mode: re-partitions (each restarts the stepper) */
+  long projections;        /* projected mode: velocity projections */
+  long restarts;           /* stepper restarts of any cause */
+  double max_residual;     /* largest |A v + a0| seen at step ends */
+  double max_projection;   /* projected mode: largest projection correction (g-norm) */
+  double init_correction;  /* g-norm of the correction applied to the initial speeds */
+} ap_sim_stats;
+
+typedef struct ap_sim ap_sim;
+
+/* Create a simulation at time t0 with coordinates q0 (n) and speeds v0 (k). Speeds slightly off
+ * the constraint set are projected (stats.init_correction says by how much); speeds far off it
+ * are refused with AP_ERR_INCONSISTENT. On failure *out is NULL and msg names the problem. */
+AP_API int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
+                         const double *v0, ap_sim **out, char *msg, size_t msg_len);
+
+/* Integrate to tout (>= current time). The stepper stops exactly at tout. On failure the state
+ * is left at the last time reached and ap_sim_message says what failed. */
+AP_API int ap_sim_advance(ap_sim *s, double tout);
+
+AP_API double ap_sim_time(const ap_sim *s);
+AP_API const double *ap_sim_q(const ap_sim *s);    /* (n) */
+AP_API const double *ap_sim_v(const ap_sim *s);    /* (k) */
+/* The pipeline evaluated at the current state (accelerations, metric, basis, ...). */
+AP_API const ap_data *ap_sim_data(const ap_sim *s);
+/* Multipliers at the current state (b entries). */
+AP_API int ap_sim_reactions(ap_sim *s, const double **lambda);
+AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
+AP_API const char *ap_sim_message(const ap_sim *s);
+AP_API void ap_sim_free(ap_sim *s);
+
+/* Methods (steppers) on offer. */
+typedef struct ap_method_info {
+  const char *name;        /* e.g. "dopri5" */
+  const char *summary;     /* e.g. "Dormand-Prince 5(4), ARKODE ERKStep" */
+  int order;               /* classical order of the propagated solution */
+  int adaptive;            /* 1: error-controlled steps; 0: fixed step h_fixed */
+} ap_method_info;
+
+AP_API int ap_method_count(void);
+AP_API const ap_method_info *ap_method_get(int i);
+AP_API const ap_method_info *ap_method_find(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,37 @@
+/* Appell: status codes and messages.
+ *
+ * Every public function that can fail returns an int status: AP_OK (0) on success, a negative
+ * AP_ERR_* code on failure. User callbacks follow the SUNDIALS rule: 0 = ok, > 0 = recoverable
+ * (the integrator retries with a smaller step), < 0 = stop. The object that failed (model,
+ * data, simulation) keeps a detailed message naming what failed, where, and the number. */
+#ifndef APPELL_STATUS_H
+#define APPELL_STATUS_H
+
+#include "appell/export.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum {
+  AP_OK = 0,
+  AP_RECOVERABLE = 1,         /* a stage asks for a smaller step (positive on purpose) */
+  AP_ERR_ARG = -1,            /* invalid argument or definition */
+  AP_ERR_NOMEM = -2,          /* allocation failed */
+  AP_ERR_CALLBACK = -3,       /* a user callback returned < 0 */
+  AP_ERR_NAN = -4,            /* a callback produced NaN or Inf */
+  AP_ERR_SINGULAR = -5,       /* singular or indefinite matrix (G, R11, g) */
+  AP_ERR_INCONSISTENT = -6,   /* constraint rows that contradict each other */
+  AP_ERR_RANK = -7,           /* the constraints leave no free speed, or the rank changed */
+  AP_ERR_SOLVER = -8,         /* the integrator failed (too many steps, step too small, ...) */
+  AP_ERR_UNSUPPORTED = -9,    /* method or option not available for this model */
+  AP_ERR_INTERNAL = -10       /* a bug in Appell: please report */
+};
+
+/* A short, static text for a status code. */
+AP_API const char *ap_strerror(int status);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

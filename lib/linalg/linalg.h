@@ -1,0 +1,91 @@
+/* Appell linear algebra (internal): null-space bases of the constraint matrix, Cholesky with a
+ * condition estimate, small dense kernels. Raw column-major arrays and sizes only: nothing here
+ * knows about models or data. No routine allocates; every scratch array is passed in and its
+ * size is given by ap_la_work_size / ap_la_iwork_size. LAPACKE _work routines, column-major.
+ *
+ * Notation (DESIGN.md §1): A is b x k (b constraint rows, k speeds), r = numerical rank of A,
+ * l = k - r free speeds. Return values: AP_OK, or AP_ERR_SINGULAR / AP_ERR_ARG. */
+#ifndef AP_LINALG_H
+#define AP_LINALG_H
+
+#include <stddef.h>
+
+/* Doubles of scratch that suffice for every routine below with these sizes. */
+size_t ap_la_work_size(int b, int k);
+/* Ints of scratch that suffice for every routine below with these sizes. */
+size_t ap_la_iwork_size(int b, int k);
+
+/* ---- Partitioned basis (DESIGN.md "Choosing B", the paper's construction) ---------------- */
+
+/* Choose dependent and independent speeds by pivoted QR (dgeqp3) of A.
+ * perm (k): the column order; perm[0..rank-1] are the dependent speeds (pivot order),
+ * perm[rank..k-1] the independent ones (ascending index order).
+ * rank: number of i with |R_ii| > rtol * |R_00| (0 when b == 0 or A == 0).
+ * Does not modify A. */
+int ap_la_pivot_select(int b, int k, const double *A, double rtol, int *perm, int *rank,
+                       double *work, int *iwork);
+
+/* With a frozen partition (perm, r): Householder QR (dgeqrf) of Ad = A[:, perm[0..r-1]]
+ * (b x r) into F (b x r, ld b) and tau (r); then
+ *   B  (k x l, ld k):  row perm[i] (i < r) = -(R11^-1 Q1^T A_i)_i,  row perm[r+j] = unit e_j
+ *   b0 (k) if a0 and b0 are not NULL: b0[perm[i]] = -(R11^-1 Q1^T a0)_i, 0 elsewhere
+ * where A_i = A[:, perm[r..k-1]] and Q1 = first r columns of Q.
+ * growth = max |(R11^-1 Q1^T A_i)_ij| (0 when l == 0 or r == 0);
+ * rcond  = reciprocal 1-norm condition estimate of R11 (dtrcon; 1 when r == 0);
+ * resid  = max |(Q^T [A_i a0])_{r..b-1, :}| : how far the dropped rows are from consistent
+ *          (0 when b == r).
+ * Returns AP_ERR_SINGULAR (outputs unspecified) when some R11_ii is exactly 0 or not finite. */
+int ap_la_partition_basis(int b, int k, int r, const int *perm, const double *A,
+                          const double *a0, double *F, double *tau, double *B, double *b0,
+                          double *growth, double *rcond, double *resid, double *work,
+                          int *iwork);
+
+/* Particular solution w (k) of A w = gamma with the factorization of ap_la_partition_basis:
+ * w[perm[i]] = (R11^-1 (Q^T gamma)_{0..r-1})_i for i < r, 0 elsewhere.
+ * resid = max |(Q^T gamma)_{r..b-1}| (0 when b == r). */
+int ap_la_partition_particular(int b, int k, int r, const int *perm, const double *F,
+                               const double *tau, const double *gamma, double *w,
+                               double *resid, double *work);
+
+/* ---- Orthonormal basis ("projected" mode) ------------------------------------------------ */
+
+/* Pivoted QR (dgeqp3) of A^T (k x b): A^T P = Q R. rank as above. Forms the full orthogonal
+ * Q (k x k, ld k; dorgqr) in Qf and Z = Q[:, rank..k-1] (k x l, ld k).
+ * F (k x b, ld k) and tau (min(k,b)) keep the factorization, jpvt (b) the row order of A
+ * (0-based), for ap_la_orth_particular.
+ * b0 (k) if a0 and b0 are not NULL: the minimum-norm solution of A b0 = -a0.
+ * resid = max over dropped rows of |A b0 + a0| (0 when rank == b). */
+int ap_la_orth_basis(int b, int k, const double *A, const double *a0, double rtol, int *rank,
+                     double *F, double *tau, int *jpvt, double *Qf, double *Z, double *b0,
+                     double *resid, double *work, int *iwork);
+
+/* Minimum-norm particular solution w (k) of A w = gamma from the factorization above.
+ * resid = max over dropped rows of |(A w - gamma)_s|. */
+int ap_la_orth_particular(int b, int k, int rank, const double *F, const int *jpvt,
+                          const double *Qf, const double *gamma, double *w, double *resid,
+                          double *work);
+
+/* ---- Cholesky, congruence, least squares -------------------------------------------------- */
+
+/* Cholesky factor G = L L^T in place (lower triangle; dpotrf) with the reciprocal 1-norm
+ * condition estimate (dpocon). AP_ERR_SINGULAR when G is not positive definite. l == 0 is ok
+ * (rcond = 1). */
+int ap_la_chol(int l, double *G, double *rcond, double *work, int *iwork);
+
+/* Solve G x = rhs in place with the factor from ap_la_chol (dpotrs, one right-hand side). */
+void ap_la_chol_solve(int l, const double *L, double *x);
+
+/* G = B^T g B (l x l, ld l, full symmetric), with scratch gB (k x l). g is k x k symmetric. */
+void ap_la_congruence(int k, int l, const double *g, const double *B, double *G, double *gB);
+
+/* Minimum-norm least-squares solution of A^T lambda = rhs (A is b x k, rhs has k entries,
+ * lambda b entries), rank decided with rtol as above. resid = max |A^T lambda - rhs|.
+ * Used for the reactions. Does not modify A or rhs. */
+int ap_la_lstsq_At(int b, int k, const double *A, const double *rhs, double rtol,
+                   double *lambda, double *resid, double *work, int *iwork);
+
+/* y = M x  (M m x n, column-major, ld m) and y = M^T x. */
+void ap_la_gemv(int m, int n, const double *M, const double *x, double *y);
+void ap_la_gemv_t(int m, int n, const double *M, const double *x, double *y);
+
+#endif
