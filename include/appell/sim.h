@@ -89,8 +89,10 @@ typedef struct ap_method_info {
 } ap_method_info;
 
 AP_API int ap_method_count(void);
-AP_API const ap_method_info *ap_method_get(int i);
-AP_API const ap_method_info *ap_method_find(const char *name);
+/* Fill *info for method i (0 <= i < ap_method_count()); AP_ERR_ARG when out of range. */
+AP_API int ap_method_get(int i, ap_method_info *info);
+/* Fill *info for the method called name; AP_ERR_ARG when there is none. */
+AP_API int ap_method_find(const char *name, ap_method_info *info);
 
 #ifdef __cplusplus
 }

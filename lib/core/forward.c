@@ -1,1 +1,371 @@
-/* placeholder */
+/* The Appell solve: from (t, q, v or e') to e'', v', q' (and the multipliers on request).
+ *
+ * DESIGN.md §1: with a basis B of the null space of A (A B = 0), b0 (A b0 = -a0) and
+ * w (A w = gamma), the speeds are v = B e' + b0, and Appell's equations in covariant form are
+ *
+ *     G e'' = Phi - B^T (h + g w),    G = B^T g B,   Phi = B^T Q,    v' = B e'' + w.
+ *
+ * The stages run in a fixed order (ap_forward): position (g, N, A, a0, basis), velocity
+ * (v, h, Q, gamma, w), acceleration (G, Phi, Cholesky, e'', v', q'), then reactions if asked
+ * (A^T lambda = g v' + h - Q). Stages that nothing needs are skipped: no constraints means no
+ * QR and B = I; no force callback means Q = 0. Nothing here allocates. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "core/core.h"
+#include "linalg/linalg.h"
+
+#define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
+
+/* Relative size beyond which a redundant constraint row is called inconsistent. */
+static const double consistency_rtol = 1e-8;
+/* Reciprocal condition of G below which a warning is stored (once per data). */
+static const double warn_rcond = 1e-12;
+
+/* ---- messages and checks ---------------------------------------------------------------- */
+
+int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int rc) {
+  if (rc == 0) return AP_OK;
+  if (rc > 0) {
+    ap_core_msg(d, "system '%s': callback '%s' asked for a smaller step (returned %d) at "
+                "t = %.17g", m->name, what, rc, d->t);
+    return AP_RECOVERABLE;
+  }
+  ap_core_msg(d, "system '%s': callback '%s' failed (returned %d) at t = %.17g", m->name,
+              what, rc, d->t);
+  return AP_ERR_CALLBACK;
+}
+
+int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,
+                         int rows, int cols) {
+  for (int j = 0; j < cols; j++)
+    for (int i = 0; i < rows; i++) {
+      double xi = x[i + (size_t)j * rows];
+      if (isfinite(xi)) continue;
+      if (cols == 1)
+        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry %d at t = %.17g",
+                    m->name, what, xi, i, d->t);
+      else
+        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry (%d, %d) at "
+                    "t = %.17g", m->name, what, xi, i, j, d->t);
+      return AP_ERR_NAN;
+    }
+  return AP_OK;
+}
+
+/* Zero out, call, then check: the pattern every callback goes through. */
+#define CALL(name, out, rows, cols, expr)                                                  \
+  do {                                                                                     \
+    memset((out), 0, sizeof(double) * (size_t)(rows) * (size_t)(cols));                   \
+    d->cnt.name++;                                                                         \
+    int rc_ = ap_core_callback_status(m, d, #name, (expr));                               \
+    if (rc_ != AP_OK) return rc_;                                                          \
+    rc_ = ap_core_check_finite(m, d, #name, (out), (rows), (cols));                        \
+    if (rc_ != AP_OK) return rc_;                                                          \
+  } while (0)
+
+static double max_abs(const double *x, size_t len) {
+  double mx = 0.0;
+  for (size_t i = 0; i < len; i++) mx = fmax(mx, fabs(x[i]));
+  return mx;
+}
+
+/* Names of the constraint rows a pivoted QR of A^T puts after the rank: the redundant ones. */
+static void name_redundant(const ap_model *m, ap_data *d, const int *jpvt, int r,
+                           const char *verdict, double resid) {
+  char rows[256] = "";
+  size_t used = 0;
+  for (int s = r; s < m->b && used + 40 < sizeof rows; s++) {
+    int len = snprintf(rows + used, sizeof rows - used, "%s'%s'", s > r ? ", " : "",
+                       m->constraint_names[jpvt[s]]);
+    if (len > 0) used += (size_t)len;
+  }
+  ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (%s) at t = %.17g: %s "
+              "is a combination of the others; residual %.3g", m->name, m->b - r, m->b,
+              verdict, d->t, rows, resid);
+}
+
+/* ---- partition ---------------------------------------------------------------------------- */
+
+int ap_partition(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  d->cnt.partitions++;
+  if (m->b == 0) {
+    d->rank = 0, d->l = m->k;
+    for (int i = 0; i < m->k; i++) d->perm[i] = i;
+    return AP_OK;
+  }
+  memset(d->a0, 0, sizeof(double) * (size_t)m->b);
+  CALL(constraint, d->A, m->b, m->k, m->sys.constraint(d->t, d->q, d->A, d->a0, m->sys.user));
+  int rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
+  if (rc != AP_OK) return rc;
+  int r = 0;
+  rc = ap_la_pivot_select(m->b, m->k, d->A, d->rank_rtol, d->perm, &r, s->work, s->iwork);
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': pivoted QR of A failed at t = %.17g", m->name, d->t);
+    return rc;
+  }
+  if (r == m->k) {
+    ap_core_msg(d, "system '%s': the %d constraint rows have rank %d = k at t = %.17g: no "
+                "free speed is left", m->name, m->b, r, d->t);
+    return AP_ERR_RANK;
+  }
+  d->rank = r, d->l = m->k - r;
+  if (r < m->b) {
+    /* Which rows are redundant, and are they consistent? The row-pivoted QR of A^T says. */
+    double resid = 0.0;
+    int rr = 0;
+    rc = ap_la_orth_basis(m->b, m->k, d->A, d->a0, d->rank_rtol, &rr, s->F, s->tau, s->jpvt,
+                          s->Qf, s->gB, s->tk1, &resid, s->work, s->iwork);
+    if (rc != AP_OK) return rc;
+    double scale = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A,
+                                                                         (size_t)m->b * m->k)));
+    int bad = resid > consistency_rtol * scale;
+    name_redundant(m, d, s->jpvt, rr, bad ? "inconsistent: the free terms a0 disagree"
+                                          : "consistent, dropped", resid);
+    if (bad) return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
+}
+
+/* ---- position stage ---------------------------------------------------------------------- */
+
+static int basis_partitioned(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  double resid = 0.0;
+  int rc = ap_la_partition_basis(m->b, m->k, d->rank, d->perm, d->A, d->a0, s->F, s->tau,
+                                 d->B, d->b0, &d->growth, &d->rcond_R, &resid, s->work,
+                                 s->iwork);
+  d->cnt.qr++;
+  d->resid_a0 = resid;
+  if (rc != AP_OK || d->rcond_R < 1e-14) {
+    ap_core_msg(d, "system '%s': the dependent-speed block R11 of the partition is singular "
+                "(rcond %.3g) at t = %.17g: re-partition needed", m->name, d->rcond_R, d->t);
+    return AP_RECOVERABLE;
+  }
+  return AP_OK;
+}
+
+static int basis_orthonormal(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int r = 0;
+  double resid = 0.0;
+  int rc = ap_la_orth_basis(m->b, m->k, d->A, d->a0, d->rank_rtol, &r, s->F, s->tau, s->jpvt,
+                            s->Qf, d->B, d->b0, &resid, s->work, s->iwork);
+  d->cnt.qr++;
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': QR of A^T failed at t = %.17g", m->name, d->t);
+    return rc;
+  }
+  if (r == m->k) {
+    ap_core_msg(d, "system '%s': the constraints have rank %d = k at t = %.17g: no free "
+                "speed is left", m->name, r, d->t);
+    return AP_ERR_RANK;
+  }
+  d->rank = r, d->l = m->k - r, d->resid_a0 = resid, d->growth = 1.0, d->rcond_R = 1.0;
+  return AP_OK;
+}
+
+int ap_fwd_position(const ap_model *m, ap_data *d) {
+  d->cnt.position++;
+  CALL(metric, d->g, m->k, m->k, m->sys.metric(d->t, d->q, d->g, m->sys.user));
+  if (m->sys.kinematic)
+    CALL(kinematic, d->N, m->n, m->k, m->sys.kinematic(d->t, d->q, d->N, m->sys.user));
+  if (m->b == 0) return AP_OK;   /* B = I, b0 = 0 since ap_data_create */
+  memset(d->a0, 0, sizeof(double) * (size_t)m->b);
+  CALL(constraint, d->A, m->b, m->k, m->sys.constraint(d->t, d->q, d->A, d->a0, m->sys.user));
+  int rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
+  if (rc != AP_OK) return rc;
+  rc = d->basis == AP_BASIS_ORTHONORMAL ? basis_orthonormal(m, d) : basis_partitioned(m, d);
+  if (rc != AP_OK) return rc;
+  double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
+  if (d->resid_a0 > consistency_rtol * scale) {
+    ap_core_msg(d, "system '%s': redundant constraint rows became inconsistent at "
+                "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
+    return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
+}
+
+/* ---- velocity stage ---------------------------------------------------------------------- */
+
+/* h_a = sum_c v^c (dg_c v)_a - 1/2 v^T dg_a v: the Christoffel terms of Lagrange's equations
+ * when v = q' (the covariant form of the founding paper). */
+static void christoffel_bias(int k, const double *dg, const double *v, double *h, double *tmp) {
+  for (int a = 0; a < k; a++) h[a] = 0.0;
+  for (int c = 0; c < k; c++) {
+    const double *dgc = dg + (size_t)c * k * k;
+    ap_la_gemv(k, k, dgc, v, tmp);                /* tmp = dg_c v */
+    double vdgv = 0.0;
+    for (int a = 0; a < k; a++) {
+      h[a] += v[c] * tmp[a];
+      vdgv += v[a] * tmp[a];
+    }
+    h[c] -= 0.5 * vdgv;
+  }
+}
+
+static int particular(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int rc;
+  if (d->basis == AP_BASIS_ORTHONORMAL)
+    rc = ap_la_orth_particular(m->b, m->k, d->rank, s->F, s->jpvt, s->Qf, d->gamma, d->w,
+                               &d->resid_gamma, s->work);
+  else
+    rc = ap_la_partition_particular(m->b, m->k, d->rank, d->perm, s->F, s->tau, d->gamma,
+                                    d->w, &d->resid_gamma, s->work);
+  if (rc != AP_OK) return rc;
+  double scale = fmax(1.0, max_abs(d->gamma, (size_t)m->b));
+  if (d->resid_gamma > consistency_rtol * scale) {
+    ap_core_msg(d, "system '%s': redundant constraint rows have inconsistent gamma at "
+                "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);
+    return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
+}
+
+int ap_fwd_velocity(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k, l = d->l;
+  d->cnt.velocity++;
+  if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) {
+    ap_la_gemv(k, l, d->B, d->e, d->v);           /* v = B e' + b0 */
+    for (int i = 0; i < k; i++) d->v[i] += d->b0[i];
+  }
+  switch (m->sys.bias_source) {
+    case AP_BIAS_CALLBACK:
+      CALL(bias, d->h, k, 1, m->sys.bias(d->t, d->q, d->v, d->h, m->sys.user));
+      break;
+    case AP_BIAS_CHRISTOFFEL:
+      CALL(bias, s->dg, k * k, m->n, m->sys.metric_deriv(d->t, d->q, s->dg, m->sys.user));
+      christoffel_bias(k, s->dg, d->v, d->h, s->tk1);
+      break;
+    case AP_BIAS_ZERO:
+      break;   /* h stays zero from ap_data_create */
+  }
+  if (m->sys.force) CALL(force, d->Q, k, 1, m->sys.force(d->t, d->q, d->v, d->Q, m->sys.user));
+  if (m->b == 0) return AP_OK;                    /* w = 0 */
+  CALL(gamma, d->gamma, m->b, 1, m->sys.gamma(d->t, d->q, d->v, d->gamma, m->sys.user));
+  return particular(m, d);
+}
+
+/* ---- acceleration stage ------------------------------------------------------------------- */
+
+int ap_fwd_acceleration(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k, l = d->l;
+  d->cnt.acceleration++;
+  /* tk2 = Q - h - g w ; Phi = B^T Q ; edd = B^T tk2 (the right-hand side) */
+  ap_la_gemv(k, k, d->g, d->w, s->tk1);
+  for (int i = 0; i < k; i++) s->tk2[i] = d->Q[i] - d->h[i] - s->tk1[i];
+  if (m->b == 0) {
+    memcpy(d->G, d->g, sizeof(double) * (size_t)k * k);
+    memcpy(d->Phi, d->Q, sizeof(double) * (size_t)k);
+    memcpy(d->edd, s->tk2, sizeof(double) * (size_t)k);
+  } else {
+    ap_la_congruence(k, l, d->g, d->B, d->G, s->gB);
+    ap_la_gemv_t(k, l, d->B, d->Q, d->Phi);
+    ap_la_gemv_t(k, l, d->B, s->tk2, d->edd);
+  }
+  int rc = ap_la_chol(l, d->G, &d->rcond_G, s->work, s->iwork);
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': G = B^T g B (%d x %d) is not positive definite at "
+                "t = %.17g: the metric g is not positive definite on the free speeds",
+                m->name, l, l, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  if (d->rcond_G < warn_rcond && !d->warned_cond) {
+    d->warned_cond = 1;
+    ap_core_msg(d, "warning: system '%s': G = B^T g B is ill-conditioned at t = %.17g "
+                "(condition estimate %.3g)", m->name, d->t, 1.0 / d->rcond_G);
+  }
+  ap_la_chol_solve(l, d->G, d->edd);
+  rc = ap_core_check_finite(m, d, "Appell solve (e'')", d->edd, l, 1);
+  if (rc != AP_OK) return rc;
+  if (m->b == 0) memcpy(d->vdot, d->edd, sizeof(double) * (size_t)k);
+  else {
+    ap_la_gemv(k, l, d->B, d->edd, d->vdot);     /* v' = B e'' + w */
+    for (int i = 0; i < k; i++) d->vdot[i] += d->w[i];
+  }
+  ap_la_gemv(m->n, k, d->N, d->v, d->qdot);      /* q' = N v */
+  return AP_OK;
+}
+
+/* ---- optional stages ---------------------------------------------------------------------- */
+
+int ap_fwd_reactions(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k;
+  d->cnt.reactions++;
+  if (m->b == 0) return AP_OK;
+  ap_la_gemv(k, k, d->g, d->vdot, s->tk1);       /* tk1 = g v' + h - Q */
+  for (int i = 0; i < k; i++) s->tk1[i] += d->h[i] - d->Q[i];
+  double resid = 0.0;
+  int rc = ap_la_lstsq_At(m->b, k, d->A, s->tk1, d->rank_rtol, d->lambda, &resid, s->work,
+                          s->iwork);
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': reaction solve A^T lambda = g v' + h - Q failed at "
+                "t = %.17g", m->name, d->t);
+    return rc;
+  }
+  return AP_OK;
+}
+
+int ap_forward(const ap_model *m, ap_data *d) {
+  d->cnt.forward++;
+  int rc = ap_fwd_position(m, d);
+  if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
+  if (rc == AP_OK) rc = ap_fwd_acceleration(m, d);
+  if (rc == AP_OK && d->want_reactions) rc = ap_fwd_reactions(m, d);
+  return rc;
+}
+
+/* ---- projection and diagnostics ---------------------------------------------------------- */
+
+int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k, l;
+  int rc = ap_fwd_position(m, d);
+  if (rc != AP_OK) return rc;
+  l = d->l;
+  for (int i = 0; i < k; i++) s->tk1[i] = v[i] - d->b0[i];   /* tk1 = v - b0 */
+  ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g (v - b0) */
+  ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g (v - b0) */
+  ap_la_congruence(k, l, d->g, d->B, d->G, s->gB);
+  rc = ap_la_chol(l, d->G, &d->rcond_G, s->work, s->iwork);
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': G = B^T g B is not positive definite at t = %.17g (speed "
+                "projection)", m->name, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  ap_la_chol_solve(l, d->G, s->tl);
+  ap_la_gemv(k, l, d->B, s->tl, s->tk2);                     /* tk2 = B e */
+  for (int i = 0; i < k; i++) {
+    double vi = d->b0[i] + s->tk2[i];
+    s->tk1[i] = vi - v[i];                                   /* correction */
+    v[i] = vi;
+  }
+  ap_la_gemv(k, k, d->g, s->tk1, s->tk2);
+  double c2 = 0.0;
+  for (int i = 0; i < k; i++) c2 += s->tk1[i] * s->tk2[i];
+  if (change) *change = sqrt(fmax(c2, 0.0));
+  return AP_OK;
+}
+
+double ap_constraint_residual(const ap_data *d, const double *v) {
+  double mx = 0.0;
+  for (int s = 0; s < d->b; s++) {
+    double r = d->a0[s];
+    for (int j = 0; j < d->k; j++) r += d->A[s + (size_t)j * d->b] * v[j];
+    mx = fmax(mx, fabs(r));
+  }
+  return mx;
+}
+
+double ap_kinetic_energy(const ap_data *d, const double *v) {
+  double e = 0.0;
+  for (int j = 0; j < d->k; j++)
+    for (int i = 0; i < d->k; i++) e += v[i] * d->g[i + (size_t)j * d->k] * v[j];
+  return 0.5 * e;
+}

@@ -1,1 +1,20 @@
-/* placeholder */
+/* Status codes to text (include/appell/status.h). */
+#include "appell/status.h"
+
+const char *ap_strerror(int status) {
+  switch (status) {
+    case AP_OK: return "success";
+    case AP_RECOVERABLE: return "recoverable failure: retry with a smaller step";
+    case AP_ERR_ARG: return "invalid argument or definition";
+    case AP_ERR_NOMEM: return "out of memory";
+    case AP_ERR_CALLBACK: return "a user callback reported failure";
+    case AP_ERR_NAN: return "a callback produced NaN or Inf";
+    case AP_ERR_SINGULAR: return "singular or indefinite matrix";
+    case AP_ERR_INCONSISTENT: return "inconsistent constraints";
+    case AP_ERR_RANK: return "the constraints leave no free speed, or their rank changed";
+    case AP_ERR_SOLVER: return "the integrator failed";
+    case AP_ERR_UNSUPPORTED: return "not supported";
+    case AP_ERR_INTERNAL: return "internal error";
+    default: return "unknown status";
+  }
+}

@@ -1,1 +1,367 @@
-/* placeholder */
+/* Simulation drivers: minimal mode and projected mode (DESIGN.md §1 "Choosing B", §2).
+ *
+ * Minimal mode integrates y = (q, e') with the partitioned basis frozen during a step. After
+ * every accepted step the driver looks at the growth max|R11^-1 R12| of the basis at the new
+ * state; past def.switch_growth it re-partitions by pivoted QR and restarts the stepper from
+ * e'_new = the new independent speeds. The velocity constraints hold to round-off throughout.
+ *
+ * Projected mode integrates y = (q, v) with the orthonormal basis and, after every accepted
+ * step, replaces v by its nearest point on A v + a0 = 0 in the metric g, then restarts the
+ * stepper from the projected state.
+ *
+ * The stepper (lib/integrate/stepper.h) stops exactly at each requested output time. A failed
+ * ap_sim_advance leaves (t, q, v) at the last accepted step. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "appell/sim.h"
+#include "core/core.h"
+#include "integrate/stepper.h"
+
+struct ap_sim {
+  const ap_model *m;
+  ap_data *d;
+  ap_sim_def def;
+  const ap_step_method *meth;
+  ap_stepper *st;
+  int n, k, ny;             /* ny = n + l (minimal) or n + k (projected) */
+  double t;                 /* time of the last accepted state */
+  double *y, *ytry;         /* (n + k) stepper state, trial state */
+  double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
+  int rhs_status;           /* last failure of the right-hand side */
+  char rhs_msg[512];
+  ap_sim_stats stats;
+  char msg[512];
+};
+
+static int sim_fail(ap_sim *s, int status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static int sim_fail(ap_sim *s, int status, const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(s->msg, sizeof s->msg, fmt, ap);
+  va_end(ap);
+  return status;
+}
+
+ap_sim_def ap_sim_def_default(void) {
+  ap_sim_def def;
+  memset(&def, 0, sizeof def);
+  def.mode = AP_MODE_MINIMAL;
+  def.method = "dopri5";
+  def.rtol = 1e-8;
+  def.atol = 1e-10;
+  def.h_fixed = 1e-3;
+  def.max_steps = 1000000;
+  def.rank_rtol = 1e-10;
+  def.switch_growth = 2.0;
+  def.init_tol = 1e-6;
+  return def;
+}
+
+/* ---- the right-hand side ------------------------------------------------------------------ */
+
+/* Load y = (q, e') or (q, v) into the data at time t. */
+static void load_state(ap_sim *s, double t, const double *y) {
+  ap_data *d = s->d;
+  d->t = t;
+  memcpy(d->q, y, sizeof(double) * (size_t)s->n);
+  if (s->def.mode == AP_MODE_MINIMAL) {
+    memcpy(d->e, y + s->n, sizeof(double) * (size_t)d->l);
+    d->speeds_from_e = 1;
+  } else {
+    memcpy(d->v, y + s->n, sizeof(double) * (size_t)s->k);
+    d->speeds_from_e = 0;
+  }
+}
+
+static int rhs(double t, const double *y, double *ydot, void *user) {
+  ap_sim *s = user;
+  ap_data *d = s->d;
+  load_state(s, t, y);
+  int rc = ap_forward(s->m, d);
+  if (rc != AP_OK) {
+    s->rhs_status = rc;
+    memcpy(s->rhs_msg, d->msg, sizeof s->rhs_msg);
+    return rc > 0 ? 1 : -1;
+  }
+  memcpy(ydot, d->qdot, sizeof(double) * (size_t)s->n);
+  if (s->def.mode == AP_MODE_MINIMAL)
+    memcpy(ydot + s->n, d->edd, sizeof(double) * (size_t)d->l);
+  else
+    memcpy(ydot + s->n, d->vdot, sizeof(double) * (size_t)s->k);
+  return 0;
+}
+
+/* ---- after each accepted step ------------------------------------------------------------ */
+
+/* Minimal mode: re-partition when the frozen basis has degraded. */
+static int after_step_minimal(ap_sim *s, double t) {
+  ap_data *d = s->d;
+  load_state(s, t, s->y);
+  int rc = ap_fwd_position(s->m, d);
+  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
+  if (rc != AP_OK)
+    return sim_fail(s, AP_ERR_SINGULAR, "%s (at an accepted step; lower switch_growth)",
+                    d->msg);
+  if (s->m->b == 0) return AP_OK;
+  rc = ap_fwd_velocity(s->m, d);                 /* v = B e' + b0 at the new state */
+  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
+  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
+  if (d->growth <= s->def.switch_growth) return AP_OK;
+
+  double old_growth = d->growth;
+  int old_rank = d->rank;
+  memcpy(s->v, d->v, sizeof(double) * (size_t)s->k);
+  int *old_perm = (int *)s->ytry;               /* k ints fit in the trial buffer */
+  memcpy(old_perm, d->perm, sizeof(int) * (size_t)s->k);
+  rc = ap_partition(s->m, d);
+  if (rc == AP_OK && d->rank != old_rank)
+    return sim_fail(s, AP_ERR_RANK, "system '%s': the rank of A changed from %d to %d at "
+                    "t = %.17g: the number of free speeds changed", s->m->name, old_rank,
+                    d->rank, t);
+  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
+  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
+  if (rc != AP_OK || d->growth >= old_growth) { /* no better partition: keep the old one */
+    memcpy(d->perm, old_perm, sizeof(int) * (size_t)s->k);
+    return AP_OK;
+  }
+  for (int j = 0; j < d->l; j++) s->y[s->n + j] = s->v[d->perm[d->rank + j]];
+  s->stats.partition_switches++;
+  s->stats.restarts++;
+  rc = ap_step_reset(s->st, t, s->y);
+  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
+}
+
+/* Projected mode: put v back on the constraint set, nearest in the metric g. */
+static int after_step_projected(ap_sim *s, double t) {
+  ap_data *d = s->d;
+  if (s->m->b == 0) return AP_OK;
+  load_state(s, t, s->y);
+  double change = 0.0, *v = s->y + s->n;
+  int rc = ap_project_speeds(s->m, d, v, &change);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
+  s->stats.projections++;
+  s->stats.max_projection = fmax(s->stats.max_projection, change);
+  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, v));
+  if (change == 0.0) return AP_OK;
+  s->stats.restarts++;
+  rc = ap_step_reset(s->st, t, s->y);
+  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
+}
+
+/* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
+static int evaluate_current(ap_sim *s) {
+  int rc = rhs(s->t, s->y, s->ytry, s);
+  if (rc != 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
+  memcpy(s->q, s->d->q, sizeof(double) * (size_t)s->n);
+  memcpy(s->v, s->d->v, sizeof(double) * (size_t)s->k);
+  return AP_OK;
+}
+
+/* ---- creation ----------------------------------------------------------------------------- */
+
+static int check_def(ap_sim *s, const ap_sim_def *def) {
+  if (def->mode == AP_MODE_DAE)
+    return sim_fail(s, AP_ERR_UNSUPPORTED, "mode DAE is not available yet");
+  if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED)
+    return sim_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);
+  s->meth = ap_step_method_find(def->method ? def->method : "");
+  if (!s->meth)
+    return sim_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
+                    def->method ? def->method : "(null)");
+  if (!(def->rtol > 0) || !(def->atol > 0))
+    return sim_fail(s, AP_ERR_ARG, "tolerances must be positive (rtol %g, atol %g)",
+                    def->rtol, def->atol);
+  if (!s->meth->adaptive && !(def->h_fixed > 0))
+    return sim_fail(s, AP_ERR_ARG, "method '%s' needs a positive h_fixed (got %g)",
+                    s->meth->name, def->h_fixed);
+  if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||
+      !(def->init_tol > 0))
+    return sim_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
+                    "init_tol positive (%g, %g), max_steps >= 1 (%ld)", def->switch_growth,
+                    def->rank_rtol, def->init_tol, def->max_steps);
+  return AP_OK;
+}
+
+static int check_initial(ap_sim *s, const double *q0, const double *v0) {
+  for (int i = 0; i < s->n; i++)
+    if (!isfinite(q0[i]))
+      return sim_fail(s, AP_ERR_ARG, "initial coordinate '%s' is %g",
+                      ap_model_coord_name(s->m, i), q0[i]);
+  for (int i = 0; i < s->k; i++)
+    if (!isfinite(v0[i]))
+      return sim_fail(s, AP_ERR_ARG, "initial speed '%s' is %g", ap_model_speed_name(s->m, i),
+                      v0[i]);
+  return AP_OK;
+}
+
+/* Put v on the constraint set; refuse speeds too far off it. */
+static int consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0) {
+  ap_data *d = s->d;
+  d->t = t0;
+  memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
+  memcpy(s->v, v0, sizeof(double) * (size_t)s->k);
+  if (s->def.mode == AP_MODE_MINIMAL) {
+    int rc = ap_partition(s->m, d);
+    if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+  }
+  if (s->m->b == 0) return AP_OK;
+  int rc = ap_fwd_position(s->m, d);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", d->msg);
+  double resid = ap_constraint_residual(d, s->v), size = sqrt(2 * ap_kinetic_energy(d, s->v));
+  double change = 0.0;
+  rc = ap_project_speeds(s->m, d, s->v, &change);
+  if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+  size = fmax(size, sqrt(2 * ap_kinetic_energy(d, s->v)));
+  s->stats.init_correction = change;
+  if (change > s->def.init_tol * size)
+    return sim_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial speeds violate the "
+                    "constraints (max |A v + a0| = %.3g; the nearest admissible speeds differ "
+                    "by %.3g in the metric g, more than init_tol %.3g relative to %.3g)",
+                    s->m->name, resid, change, s->def.init_tol, size);
+  return AP_OK;
+}
+
+static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
+  int rc = check_initial(s, q0, v0);
+  if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
+  if (rc != AP_OK) return rc == AP_ERR_NOMEM ? sim_fail(s, rc, "out of memory") : rc;
+  s->d->rank_rtol = s->def.rank_rtol;
+  s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
+  rc = consistent_speeds(s, t0, q0, v0);
+  if (rc != AP_OK) return rc;
+  s->t = t0;
+  memcpy(s->y, q0, sizeof(double) * (size_t)s->n);
+  if (s->def.mode == AP_MODE_MINIMAL) {
+    for (int j = 0; j < s->d->l; j++) s->y[s->n + j] = s->v[s->d->perm[s->d->rank + j]];
+    s->ny = s->n + s->d->l;
+  } else {
+    memcpy(s->y + s->n, s->v, sizeof(double) * (size_t)s->k);
+    s->ny = s->n + s->k;
+  }
+  rc = evaluate_current(s);
+  if (rc != AP_OK) return rc;
+  ap_step_opts o = {s->def.rtol, s->def.atol, s->def.h_fixed, s->def.h_init, s->def.h_max,
+                    s->def.max_steps};
+  return ap_step_create(s->meth, s->ny, rhs, s, t0, s->y, &o, &s->st, s->msg, sizeof s->msg);
+}
+
+int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
+                  const double *v0, ap_sim **out, char *msg, size_t msg_len) {
+  if (!out) return AP_ERR_ARG;
+  *out = NULL;
+  if (!m || !def || !q0 || !v0) {
+    if (msg && msg_len) snprintf(msg, msg_len, "ap_sim_create: NULL argument");
+    return AP_ERR_ARG;
+  }
+  ap_sim *s = calloc(1, sizeof *s);
+  size_t nk = (size_t)(m->n + m->k);
+  double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
+  if (!buf) {
+    free(s);
+    return AP_ERR_NOMEM;
+  }
+  s->m = m, s->n = m->n, s->k = m->k;
+  s->y = buf, s->ytry = buf + nk, s->q = buf + 2 * nk, s->v = s->q + m->n;
+  int rc = check_def(s, def);
+  if (rc == AP_OK) {
+    s->def = *def;
+    s->def.method = s->meth->name;
+    rc = setup(s, t0, q0, v0);
+  }
+  if (rc != AP_OK) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s", s->msg);
+    ap_sim_free(s);
+    return rc;
+  }
+  *out = s;
+  return AP_OK;
+}
+
+void ap_sim_free(ap_sim *s) {
+  if (!s) return;
+  ap_step_free(s->st);
+  ap_data_free(s->d);
+  free(s->y);
+  free(s);
+}
+
+/* ---- advancing ----------------------------------------------------------------------------- */
+
+int ap_sim_advance(ap_sim *s, double tout) {
+  if (!(tout >= s->t))
+    return sim_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
+                    s->t);
+  for (long steps = 0; s->t < tout; steps++) {
+    if (steps >= s->def.max_steps)
+      return sim_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
+                      "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
+    double t = s->t;
+    s->rhs_status = AP_OK;
+    int rc = ap_step_one(s->st, tout, &t, s->ytry);
+    if (rc != AP_OK) {
+      if (s->rhs_status < 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
+      return sim_fail(s, rc, "%s%s%s", ap_step_message(s->st),
+                      s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
+                      s->rhs_status > 0 ? s->rhs_msg : "");
+    }
+    s->t = t;
+    memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
+    rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t) : after_step_projected(s, t);
+    if (rc != AP_OK) return rc;
+  }
+  return evaluate_current(s);
+}
+
+/* ---- queries ------------------------------------------------------------------------------ */
+
+double ap_sim_time(const ap_sim *s) { return s->t; }
+const double *ap_sim_q(const ap_sim *s) { return s->q; }
+const double *ap_sim_v(const ap_sim *s) { return s->v; }
+const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
+const char *ap_sim_message(const ap_sim *s) { return s->msg; }
+
+int ap_sim_reactions(ap_sim *s, const double **lambda) {
+  int rc = ap_fwd_reactions(s->m, s->d);   /* the pipeline holds the current state */
+  if (rc != AP_OK) return sim_fail(s, rc, "%s", s->d->msg);
+  if (lambda) *lambda = s->d->lambda;
+  return AP_OK;
+}
+
+void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st) {
+  ap_step_stats ss;
+  ap_step_get_stats(s->st, &ss);
+  *st = s->stats;
+  st->steps = ss.steps;
+  st->rhs_evals = ss.rhs_evals;
+  st->err_fails = ss.err_fails;
+  st->rhs_fails = ss.rhs_fails;
+}
+
+/* ---- methods ------------------------------------------------------------------------------ */
+
+static int fill_info(const ap_step_method *meth, ap_method_info *info) {
+  if (!meth || !info) return AP_ERR_ARG;
+  info->name = meth->name;
+  info->summary = meth->summary;
+  info->order = meth->order;
+  info->adaptive = meth->adaptive;
+  return AP_OK;
+}
+
+int ap_method_count(void) { return ap_step_method_count(); }
+int ap_method_get(int i, ap_method_info *info) {
+  if (i < 0 || i >= ap_step_method_count()) return AP_ERR_ARG;
+  return fill_info(ap_step_method_get(i), info);
+}
+int ap_method_find(const char *name, ap_method_info *info) {
+  return fill_info(name ? ap_step_method_find(name) : NULL, info);
+}
