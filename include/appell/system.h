@@ -89,7 +89,9 @@ AP_API const char *ap_model_constraint_name(const ap_model *m, int s);
 
 typedef enum ap_basis {
   AP_BASIS_PARTITIONED = 0,   /* B = P [-R11^-1 R12; I]: smooth in q while the partition holds */
-  AP_BASIS_ORTHONORMAL = 1    /* Z from QR of A^T: orthonormal columns, best conditioned */
+  AP_BASIS_ORTHONORMAL = 1,   /* Z from QR of A^T: orthonormal columns, best conditioned */
+  AP_BASIS_NONE = 2           /* no basis: position and velocity stages give only g, N, A,
+                                 a0, h, Q (the DAE residual needs nothing more) */
 } ap_basis;
 
 typedef struct ap_counters {

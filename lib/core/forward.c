@@ -176,7 +176,7 @@ int ap_fwd_position(const ap_model *m, ap_data *d) {
   memset(d->a0, 0, sizeof(double) * (size_t)m->b);
   CALL(constraint, d->A, m->b, m->k, m->sys.constraint(d->t, d->q, d->A, d->a0, m->sys.user));
   int rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
-  if (rc != AP_OK) return rc;
+  if (rc != AP_OK || d->basis == AP_BASIS_NONE) return rc;
   rc = d->basis == AP_BASIS_ORTHONORMAL ? basis_orthonormal(m, d) : basis_partitioned(m, d);
   if (rc != AP_OK) return rc;
   double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
@@ -245,7 +245,7 @@ int ap_fwd_velocity(const ap_model *m, ap_data *d) {
       break;   /* h stays zero from ap_data_create */
   }
   if (m->sys.force) CALL(force, d->Q, k, 1, m->sys.force(d->t, d->q, d->v, d->Q, m->sys.user));
-  if (m->b == 0) return AP_OK;                    /* w = 0 */
+  if (m->b == 0 || d->basis == AP_BASIS_NONE) return AP_OK;   /* w = 0, or not needed */
   CALL(gamma, d->gamma, m->b, 1, m->sys.gamma(d->t, d->q, d->v, d->gamma, m->sys.user));
   return particular(m, d);
 }

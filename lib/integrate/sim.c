@@ -19,6 +19,7 @@
 
 #include "appell/sim.h"
 #include "core/core.h"
+#include "integrate/dae.h"
 #include "integrate/stepper.h"
 
 struct ap_sim {
@@ -26,10 +27,11 @@ struct ap_sim {
   ap_data *d;
   ap_sim_def def;
   const ap_step_method *meth;
-  ap_stepper *st;
-  int n, k, ny;             /* ny = n + l (minimal) or n + k (projected) */
+  ap_stepper *st;           /* minimal and projected modes */
+  ap_dae *dae;              /* DAE mode */
+  int n, k, b, ny;          /* ny = n + l (minimal), n + k (projected), n + k + b (DAE) */
   double t;                 /* time of the last accepted state */
-  double *y, *ytry;         /* (n + k) stepper state, trial state */
+  double *y, *ytry;         /* (n + k + b) stepper state, trial state */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
   int rhs_status;           /* last failure of the right-hand side */
   char rhs_msg[512];
@@ -157,8 +159,21 @@ static int after_step_projected(ap_sim *s, double t) {
   return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
 }
 
+/* DAE mode: record the velocity-constraint residual at the accepted step. */
+static int after_step_dae(ap_sim *s, double t) {
+  ap_data *d = s->d;
+  if (s->m->b == 0) return AP_OK;
+  load_state(s, t, s->y);
+  d->basis = AP_BASIS_NONE;
+  int rc = ap_fwd_position(s->m, d);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
+  return AP_OK;
+}
+
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 static int evaluate_current(ap_sim *s) {
+  s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   int rc = rhs(s->t, s->y, s->ytry, s);
   if (rc != 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
   memcpy(s->q, s->d->q, sizeof(double) * (size_t)s->n);
@@ -169,11 +184,10 @@ static int evaluate_current(ap_sim *s) {
 /* ---- creation ----------------------------------------------------------------------------- */
 
 static int check_def(ap_sim *s, const ap_sim_def *def) {
-  if (def->mode == AP_MODE_DAE)
-    return sim_fail(s, AP_ERR_UNSUPPORTED, "mode DAE is not available yet");
-  if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED)
+  if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED &&
+      def->mode != AP_MODE_DAE)
     return sim_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);
-  s->meth = ap_step_method_find(def->method ? def->method : "");
+  s->meth = ap_step_method_find(def->mode == AP_MODE_DAE ? "bdf" : def->method ? def->method : "");
   if (!s->meth)
     return sim_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
                     def->method ? def->method : "(null)");
@@ -230,6 +244,22 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   return AP_OK;
 }
 
+/* DAE mode: y = (q, v, lambda), y' = (q', v', 0), all from the Appell solve at t0. */
+static int setup_dae(ap_sim *s) {
+  ap_data *d = s->d;
+  int rc = ap_fwd_reactions(s->m, d);
+  if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+  s->ny = s->n + s->k + s->b;
+  double *yp = s->ytry;
+  memcpy(s->y + s->n + s->k, d->lambda, sizeof(double) * (size_t)s->b);
+  memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
+  memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
+  memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)s->b);
+  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, s->def.h_init, s->def.h_max,
+                    s->def.max_steps};
+  return ap_dae_create(s->m, d, s->t, s->y, yp, &o, &s->dae, s->msg, sizeof s->msg);
+}
+
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   int rc = check_initial(s, q0, v0);
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
@@ -249,8 +279,11 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   }
   rc = evaluate_current(s);
   if (rc != AP_OK) return rc;
-  ap_step_opts o = {s->def.rtol, s->def.atol, s->def.h_fixed, s->def.h_init, s->def.h_max,
-                    s->def.max_steps};
+  if (s->def.mode == AP_MODE_DAE) return setup_dae(s);
+  /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
+   * control off. */
+  ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
+                    s->def.h_init, s->def.h_max, s->def.max_steps};
   return ap_step_create(s->meth, s->ny, rhs, s, t0, s->y, &o, &s->st, s->msg, sizeof s->msg);
 }
 
@@ -263,18 +296,18 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
     return AP_ERR_ARG;
   }
   ap_sim *s = calloc(1, sizeof *s);
-  size_t nk = (size_t)(m->n + m->k);
+  size_t nk = (size_t)(m->n + m->k + m->b);
   double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
     return AP_ERR_NOMEM;
   }
-  s->m = m, s->n = m->n, s->k = m->k;
+  s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;
   s->y = buf, s->ytry = buf + nk, s->q = buf + 2 * nk, s->v = s->q + m->n;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
     s->def = *def;
-    s->def.method = s->meth->name;
+    s->def.method = def->mode == AP_MODE_DAE ? "ida" : s->meth->name;
     rc = setup(s, t0, q0, v0);
   }
   if (rc != AP_OK) {
@@ -289,6 +322,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
 void ap_sim_free(ap_sim *s) {
   if (!s) return;
   ap_step_free(s->st);
+  ap_dae_free(s->dae);
   ap_data_free(s->d);
   free(s->y);
   free(s);
@@ -306,6 +340,15 @@ int ap_sim_advance(ap_sim *s, double tout) {
                       "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
     double t = s->t;
     s->rhs_status = AP_OK;
+    if (s->dae) {
+      int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
+      if (rc != AP_OK) return sim_fail(s, rc, "%s", ap_dae_message(s->dae));
+      s->t = t;
+      memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
+      rc = after_step_dae(s, t);
+      if (rc != AP_OK) return rc;
+      continue;
+    }
     int rc = ap_step_one(s->st, tout, &t, s->ytry);
     if (rc != AP_OK) {
       if (s->rhs_status < 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
@@ -330,6 +373,10 @@ const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
 const char *ap_sim_message(const ap_sim *s) { return s->msg; }
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
+  if (s->dae) {   /* IDA's own multipliers: the cross-check compares them with Appell's */
+    if (lambda) *lambda = s->y + s->n + s->k;
+    return AP_OK;
+  }
   int rc = ap_fwd_reactions(s->m, s->d);   /* the pipeline holds the current state */
   if (rc != AP_OK) return sim_fail(s, rc, "%s", s->d->msg);
   if (lambda) *lambda = s->d->lambda;
@@ -338,7 +385,8 @@ int ap_sim_reactions(ap_sim *s, const double **lambda) {
 
 void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st) {
   ap_step_stats ss;
-  ap_step_get_stats(s->st, &ss);
+  if (s->dae) ap_dae_stats(s->dae, &ss);
+  else ap_step_get_stats(s->st, &ss);
   *st = s->stats;
   st->steps = ss.steps;
   st->rhs_evals = ss.rhs_evals;

@@ -1,0 +1,172 @@
+/* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (DESIGN.md §1, "The DAE
+ * cross-check").
+ *
+ * Variables y = (q, v, lambda), n + k + b of them, and the index-2 residual
+ *
+ *     F_q = q' - N(q) v
+ *     F_v = g v' + h - Q - A^T lambda
+ *     F_c = A v + a0
+ *
+ * lambda is algebraic (IDASetId 0) and left out of the error test (IDASetSuppressAlg), as an
+ * index-2 multiplier must be. Consistent initial values come from the Appell solve (v' and
+ * lambda are known exactly there), so IDACalcIC is never called. The residual runs the core's
+ * position and velocity stages with AP_BASIS_NONE: no null-space basis is built. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <ida/ida.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+
+#include "core/core.h"
+#include "integrate/dae.h"
+#include "linalg/linalg.h"
+
+struct ap_dae {
+  const ap_model *m;
+  ap_data *d;
+  SUNContext ctx;
+  void *mem;
+  N_Vector yy, yp, id;
+  SUNMatrix J;
+  SUNLinearSolver LS;
+  int ny;
+  int res_status;           /* last failure of the residual */
+  char res_msg[512];
+  char msg[1024];
+};
+
+static int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user) {
+  ap_dae *s = user;
+  const ap_model *m = s->m;
+  ap_data *d = s->d;
+  int n = m->n, k = m->k, b = m->b;
+  const double *y = N_VGetArrayPointer(yy), *y1 = N_VGetArrayPointer(yp);
+  double *r = N_VGetArrayPointer(rr);
+  d->t = t;
+  memcpy(d->q, y, sizeof(double) * (size_t)n);
+  memcpy(d->v, y + n, sizeof(double) * (size_t)k);
+  d->basis = AP_BASIS_NONE, d->speeds_from_e = 0;
+  int rc = ap_fwd_position(m, d);
+  if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
+  if (rc != AP_OK) {
+    s->res_status = rc;
+    memcpy(s->res_msg, d->msg, sizeof s->res_msg);
+    return rc > 0 ? 1 : -1;
+  }
+  const double *lambda = y + n + k;
+  ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v */
+  for (int i = 0; i < n; i++) r[i] = y1[i] - r[i];
+  ap_la_gemv(k, k, d->g, y1 + n, r + n);                   /* F_v = g v' + h - Q - A^T l */
+  if (b > 0) {
+    ap_la_gemv_t(b, k, d->A, lambda, d->w);                /* w is free here: A^T lambda */
+    ap_la_gemv(b, k, d->A, d->v, r + n + k);               /* F_c = A v + a0 */
+    for (int s2 = 0; s2 < b; s2++) r[n + k + s2] += d->a0[s2];
+  } else {
+    memset(d->w, 0, sizeof(double) * (size_t)k);
+  }
+  for (int i = 0; i < k; i++) r[n + i] += d->h[i] - d->Q[i] - d->w[i];
+  return 0;
+}
+
+static void err_handler(int code, const char *module, const char *function, char *text,
+                        void *user) {
+  ap_dae *s = user;
+  snprintf(s->msg, sizeof s->msg, "%s.%s (flag %d): %s", module, function, code, text);
+}
+
+int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
+                  const double *yp0, const ap_step_opts *o, ap_dae **out, char *msg,
+                  size_t msg_len) {
+  *out = NULL;
+  ap_dae *s = calloc(1, sizeof *s);
+  if (!s) return AP_ERR_NOMEM;
+  s->m = m, s->d = d, s->ny = m->n + m->k + m->b;
+  int ok = SUNContext_Create(NULL, &s->ctx) == 0;
+  if (ok) {
+    s->yy = N_VNew_Serial(s->ny, s->ctx), s->yp = N_VNew_Serial(s->ny, s->ctx);
+    s->id = N_VNew_Serial(s->ny, s->ctx);
+    s->mem = IDACreate(s->ctx);
+    ok = s->yy && s->yp && s->id && s->mem;
+  }
+  if (ok) {
+    memcpy(N_VGetArrayPointer(s->yy), y0, sizeof(double) * (size_t)s->ny);
+    memcpy(N_VGetArrayPointer(s->yp), yp0, sizeof(double) * (size_t)s->ny);
+    double *id = N_VGetArrayPointer(s->id);
+    for (int i = 0; i < s->ny; i++) id[i] = i < m->n + m->k ? 1.0 : 0.0;
+    ok = IDASetErrHandlerFn(s->mem, err_handler, s) == IDA_SUCCESS &&
+         IDAInit(s->mem, residual, t0, s->yy, s->yp) == IDA_SUCCESS &&
+         IDASStolerances(s->mem, o->rtol, o->atol) == IDA_SUCCESS &&
+         IDASetUserData(s->mem, s) == IDA_SUCCESS &&
+         IDASetId(s->mem, s->id) == IDA_SUCCESS &&
+         IDASetSuppressAlg(s->mem, SUNTRUE) == IDA_SUCCESS &&
+         IDASetMaxNumSteps(s->mem, o->max_steps > 0 ? o->max_steps : 100000) == IDA_SUCCESS;
+    if (ok && o->h_init > 0) ok = IDASetInitStep(s->mem, o->h_init) == IDA_SUCCESS;
+    if (ok && o->h_max > 0) ok = IDASetMaxStep(s->mem, o->h_max) == IDA_SUCCESS;
+  }
+  if (ok) {
+    s->J = SUNDenseMatrix(s->ny, s->ny, s->ctx);
+    s->LS = s->J ? SUNLinSol_Dense(s->yy, s->J, s->ctx) : NULL;
+    ok = s->LS && IDASetLinearSolver(s->mem, s->LS, s->J) == IDA_SUCCESS;
+  }
+  if (!ok) {
+    if (msg && msg_len)
+      snprintf(msg, msg_len, "IDA setup failed for system '%s': %.300s", m->name,
+               s->msg[0] ? s->msg : "out of memory");
+    ap_dae_free(s);
+    return AP_ERR_SOLVER;
+  }
+  *out = s;
+  return AP_OK;
+}
+
+int ap_dae_one(ap_dae *s, double tstop, double *t, double *y) {
+  s->res_status = AP_OK;
+  if (IDASetStopTime(s->mem, tstop) != IDA_SUCCESS) return AP_ERR_SOLVER;
+  double tret = *t;
+  int flag = IDASolve(s->mem, tstop, &tret, s->yy, s->yp, IDA_ONE_STEP);
+  if (flag < 0) {
+    if (s->res_status < 0) {
+      snprintf(s->msg, sizeof s->msg, "%s", s->res_msg);
+      return s->res_status;
+    }
+    char tmp[256];
+    memcpy(tmp, s->msg, sizeof tmp);   /* the handler's text, cut to fit */
+    tmp[sizeof tmp - 1] = '\0';
+    snprintf(s->msg, sizeof s->msg, "IDA failed at t = %.17g for system '%s': %.200s%s%.200s",
+             tret, s->m->name, tmp, s->res_status > 0 ? "; last residual failure: " : "",
+             s->res_status > 0 ? s->res_msg : "");
+    return AP_ERR_SOLVER;
+  }
+  *t = tret;
+  memcpy(y, N_VGetArrayPointer(s->yy), sizeof(double) * (size_t)s->ny);
+  return AP_OK;
+}
+
+void ap_dae_stats(const ap_dae *s, ap_step_stats *st) {
+  long v = 0;
+  memset(st, 0, sizeof *st);
+  if (IDAGetNumSteps(s->mem, &v) == IDA_SUCCESS) st->steps = v;
+  if (IDAGetNumResEvals(s->mem, &v) == IDA_SUCCESS) st->rhs_evals = v;
+  if (IDAGetNumErrTestFails(s->mem, &v) == IDA_SUCCESS) st->err_fails = v;
+  if (IDAGetNumNonlinSolvConvFails(s->mem, &v) == IDA_SUCCESS) st->rhs_fails = v;
+  double h = 0;
+  if (IDAGetLastStep(s->mem, &h) == IDA_SUCCESS) st->h_last = h;
+}
+
+const char *ap_dae_message(const ap_dae *s) { return s->msg; }
+
+void ap_dae_free(ap_dae *s) {
+  if (!s) return;
+  if (s->mem) IDAFree(&s->mem);
+  if (s->LS) SUNLinSolFree(s->LS);
+  if (s->J) SUNMatDestroy(s->J);
+  if (s->yy) N_VDestroy(s->yy);
+  if (s->yp) N_VDestroy(s->yp);
+  if (s->id) N_VDestroy(s->id);
+  if (s->ctx) SUNContext_Free(&s->ctx);
+  free(s);
+}
