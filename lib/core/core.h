@@ -10,8 +10,28 @@
 
 #include "appell/system.h"
 
+/* A model compiled from bodies (lib/model) evaluates its own g, N, A, a0 and h, Q, gamma in
+ * place of user callbacks. Its per-data scratch (ev.scratch doubles) lives in the data, so one
+ * model can serve many data at once. Every hook returns AP_OK, AP_RECOVERABLE or AP_ERR_*
+ * and writes d->msg on failure. */
+typedef struct ap_evaluator {
+  size_t scratch;           /* doubles of scratch per data */
+  /* position stage: g (k x k), N (n x k), A (b x k), a0 (b) at (d->t, d->q); the arrays are
+   * zeroed before the call */
+  int (*position)(const ap_model *m, ap_data *d, double *scratch);
+  /* velocity stage: h (k), Q (k), gamma (b) at (d->t, d->q, d->v), after position; zeroed
+   * before the call */
+  int (*velocity)(const ap_model *m, ap_data *d, double *scratch);
+  /* after an accepted step: put q back on its manifold (unit quaternions, loop closures);
+   * *change = size of the correction. May be NULL. */
+  int (*project_q)(const ap_model *m, ap_data *d, double *q, double *scratch, double *change);
+  void (*destroy)(void *impl);   /* frees impl with the model */
+  void *impl;
+} ap_evaluator;
+
 struct ap_model {
   ap_system_def sys;        /* callbacks and sizes; names point into the arrays below */
+  ap_evaluator ev;          /* set by the body layer; all NULL for math-level systems */
   int n, k, b;
   char name[64];
   char **coord_names;       /* (n) */
@@ -30,6 +50,7 @@ typedef struct ap_scratch {
   double *tk1, *tk2;        /* k-vectors */
   double *tl;               /* l-vector */
   double *work;             /* linalg scratch, ap_la_work_size(b, k) doubles */
+  double *ev;               /* evaluator scratch, m->ev.scratch doubles (may be NULL) */
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
 } ap_scratch;
 

@@ -88,6 +88,9 @@ static void name_redundant(const ap_model *m, ap_data *d, const int *jpvt, int r
 
 /* ---- partition ---------------------------------------------------------------------------- */
 
+static int position_callbacks(const ap_model *m, ap_data *d);
+static int position_evaluator(const ap_model *m, ap_data *d);
+
 int ap_partition(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
   d->cnt.partitions++;
@@ -96,9 +99,7 @@ int ap_partition(const ap_model *m, ap_data *d) {
     for (int i = 0; i < m->k; i++) d->perm[i] = i;
     return AP_OK;
   }
-  memset(d->a0, 0, sizeof(double) * (size_t)m->b);
-  CALL(constraint, d->A, m->b, m->k, m->sys.constraint(d->t, d->q, d->A, d->a0, m->sys.user));
-  int rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
+  int rc = m->ev.position ? position_evaluator(m, d) : position_callbacks(m, d);
   if (rc != AP_OK) return rc;
   int r = 0;
   rc = ap_la_pivot_select(m->b, m->k, d->A, d->rank_rtol, d->perm, &r, s->work, s->iwork);
@@ -167,16 +168,37 @@ static int basis_orthonormal(const ap_model *m, ap_data *d) {
   return AP_OK;
 }
 
-int ap_fwd_position(const ap_model *m, ap_data *d) {
-  d->cnt.position++;
+/* g, N, A, a0 from the user's callbacks. */
+static int position_callbacks(const ap_model *m, ap_data *d) {
   CALL(metric, d->g, m->k, m->k, m->sys.metric(d->t, d->q, d->g, m->sys.user));
   if (m->sys.kinematic)
     CALL(kinematic, d->N, m->n, m->k, m->sys.kinematic(d->t, d->q, d->N, m->sys.user));
-  if (m->b == 0) return AP_OK;   /* B = I, b0 = 0 since ap_data_create */
+  if (m->b == 0) return AP_OK;
   memset(d->a0, 0, sizeof(double) * (size_t)m->b);
   CALL(constraint, d->A, m->b, m->k, m->sys.constraint(d->t, d->q, d->A, d->a0, m->sys.user));
-  int rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
-  if (rc != AP_OK || d->basis == AP_BASIS_NONE) return rc;
+  return ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
+}
+
+/* g, N, A, a0 from a compiled evaluator (body models). N is rewritten only when the model has
+ * its own kinematics; otherwise it stays the identity written by ap_data_create. */
+static int position_evaluator(const ap_model *m, ap_data *d) {
+  size_t kk = (size_t)m->k * m->k;
+  memset(d->g, 0, sizeof(double) * kk);
+  if (m->n != m->k || m->sys.kinematic) memset(d->N, 0, sizeof(double) * (size_t)m->n * m->k);
+  memset(d->A, 0, sizeof(double) * (size_t)m->b * m->k);
+  memset(d->a0, 0, sizeof(double) * (size_t)m->b);
+  int rc = m->ev.position(m, d, SCRATCH(d)->ev);
+  if (rc != AP_OK) return rc;
+  rc = ap_core_check_finite(m, d, "metric", d->g, m->k, m->k);
+  if (rc == AP_OK) rc = ap_core_check_finite(m, d, "constraint", d->A, m->b, m->k);
+  if (rc == AP_OK) rc = ap_core_check_finite(m, d, "constraint (a0)", d->a0, m->b, 1);
+  return rc;
+}
+
+int ap_fwd_position(const ap_model *m, ap_data *d) {
+  d->cnt.position++;
+  int rc = m->ev.position ? position_evaluator(m, d) : position_callbacks(m, d);
+  if (rc != AP_OK || m->b == 0 || d->basis == AP_BASIS_NONE) return rc;  /* b == 0: B = I */
   rc = d->basis == AP_BASIS_ORTHONORMAL ? basis_orthonormal(m, d) : basis_partitioned(m, d);
   if (rc != AP_OK) return rc;
   double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
@@ -232,6 +254,17 @@ int ap_fwd_velocity(const ap_model *m, ap_data *d) {
   if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) {
     ap_la_gemv(k, l, d->B, d->e, d->v);           /* v = B e' + b0 */
     for (int i = 0; i < k; i++) d->v[i] += d->b0[i];
+  }
+  if (m->ev.velocity) {
+    memset(d->h, 0, sizeof(double) * (size_t)k);
+    memset(d->Q, 0, sizeof(double) * (size_t)k);
+    memset(d->gamma, 0, sizeof(double) * (size_t)m->b);
+    int rc = m->ev.velocity(m, d, s->ev);
+    if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, k, 1);
+    if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, k, 1);
+    if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
+    if (rc != AP_OK) return rc;
+    return m->b == 0 || d->basis == AP_BASIS_NONE ? AP_OK : particular(m, d);
   }
   switch (m->sys.bias_source) {
     case AP_BIAS_CALLBACK:

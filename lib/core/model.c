@@ -120,6 +120,7 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
 
 void ap_model_free(ap_model *m) {
   if (!m) return;
+  if (m->ev.destroy) m->ev.destroy(m->ev.impl);
   free_names(m->coord_names, m->n);
   free_names(m->speed_names, m->k);
   free_names(m->constraint_names, m->b);

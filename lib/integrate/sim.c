@@ -104,6 +104,21 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
 
 /* ---- after each accepted step ------------------------------------------------------------ */
 
+/* Body models: unit quaternions and loop closures back on their manifold after each step. The
+ * stepper restarts only when something moved. */
+static int project_coordinates(ap_sim *s, double t) {
+  if (!s->m->ev.project_q) return AP_OK;
+  double change = 0.0;
+  ap_data *d = s->d;
+  load_state(s, t, s->y);
+  int rc = s->m->ev.project_q(s->m, d, s->y, ((ap_scratch *)d->internal)->ev, &change);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+  if (change == 0.0) return AP_OK;
+  s->stats.restarts++;
+  rc = ap_step_reset(s->st, t, s->y);
+  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
+}
+
 /* Minimal mode: re-partition when the frozen basis has degraded. */
 static int after_step_minimal(ap_sim *s, double t) {
   ap_data *d = s->d;
@@ -358,7 +373,9 @@ int ap_sim_advance(ap_sim *s, double tout) {
     }
     s->t = t;
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-    rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t) : after_step_projected(s, t);
+    rc = project_coordinates(s, t);
+    if (rc == AP_OK)
+      rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t) : after_step_projected(s, t);
     if (rc != AP_OK) return rc;
   }
   return evaluate_current(s);
