@@ -4,13 +4,17 @@
  * size is given by ap_la_work_size / ap_la_iwork_size. LAPACKE _work routines, column-major.
  *
  * Notation (DESIGN.md §1): A is b x k (b constraint rows, k speeds), r = numerical rank of A,
- * l = k - r free speeds. Return values: AP_OK, or AP_ERR_SINGULAR / AP_ERR_ARG. */
+ * l = k - r free speeds. Return values: AP_OK, or AP_ERR_SINGULAR / AP_ERR_ARG.
+ * AP_ERR_ARG: bad sizes, rtol negative or not finite, or a non-finite entry of A in the routines
+ * that decide the rank (pivot_select, orth_basis, lstsq_At). AP_ERR_SINGULAR: a triangular
+ * pivot that is exactly 0 or not finite (never divided by), or G not positive definite. */
 #ifndef AP_LINALG_H
 #define AP_LINALG_H
 
 #include <stddef.h>
 
-/* Doubles of scratch that suffice for every routine below with these sizes. */
+/* Doubles of scratch that suffice for every routine below with these sizes (the maximum over
+ * the routines; LAPACK gets workspace lengths by formula, never by a run-time query). */
 size_t ap_la_work_size(int b, int k);
 /* Ints of scratch that suffice for every routine below with these sizes. */
 size_t ap_la_iwork_size(int b, int k);
@@ -34,6 +38,7 @@ int ap_la_pivot_select(int b, int k, const double *A, double rtol, int *perm, in
  * rcond  = reciprocal 1-norm condition estimate of R11 (dtrcon; 1 when r == 0);
  * resid  = max |(Q^T [A_i a0])_{r..b-1, :}| : how far the dropped rows are from consistent
  *          (0 when b == r).
+ * a0 may be NULL (resid then covers A_i only). B is not written when l == 0.
  * Returns AP_ERR_SINGULAR (outputs unspecified) when some R11_ii is exactly 0 or not finite. */
 int ap_la_partition_basis(int b, int k, int r, const int *perm, const double *A,
                           const double *a0, double *F, double *tau, double *B, double *b0,
@@ -54,7 +59,8 @@ int ap_la_partition_particular(int b, int k, int r, const int *perm, const doubl
  * F (k x b, ld k) and tau (min(k,b)) keep the factorization, jpvt (b) the row order of A
  * (0-based), for ap_la_orth_particular.
  * b0 (k) if a0 and b0 are not NULL: the minimum-norm solution of A b0 = -a0.
- * resid = max over dropped rows of |A b0 + a0| (0 when rank == b). */
+ * resid = max over dropped rows of |A b0 + a0| (0 when rank == b or a0 is NULL).
+ * b == 0 gives rank 0 and Qf = Z = I. iwork is not used. */
 int ap_la_orth_basis(int b, int k, const double *A, const double *a0, double rtol, int *rank,
                      double *F, double *tau, int *jpvt, double *Qf, double *Z, double *b0,
                      double *resid, double *work, int *iwork);
@@ -80,7 +86,7 @@ void ap_la_congruence(int k, int l, const double *g, const double *B, double *G,
 
 /* Minimum-norm least-squares solution of A^T lambda = rhs (A is b x k, rhs has k entries,
  * lambda b entries), rank decided with rtol as above. resid = max |A^T lambda - rhs|.
- * Used for the reactions. Does not modify A or rhs. */
+ * Used for the reactions. Does not modify A or rhs. lambda = 0 when the rank is 0. */
 int ap_la_lstsq_At(int b, int k, const double *A, const double *rhs, double rtol,
                    double *lambda, double *resid, double *work, int *iwork);
 
