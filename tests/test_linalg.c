@@ -445,7 +445,8 @@ static void test_growth(void) {
 }
 
 /* A = [1 0 0; 0 1e-6 0]: |R_11| / |R_00| = 1e-6, so the rank is 2 below that tolerance and 1
- * above it, in every routine that decides it. R11 = [1 1; 0 1e-4]: rcond 1 / (1.0001 * 2e4), growth 1e4. */
+ * above it, in every routine that decides it. A2 has R11 = [1 1; 0 1e-4]:
+ * rcond = 1 / (1.0001 * 2e4), growth 1e4. */
 static void test_rank_tolerance(void) {
   double A[6] = {1, 0, 0, 1e-6, 0, 0}, rhs[3] = {1, 1, 0}, lam[2], resid = -1;
   double F[6], tau[3], Qf[9], Z[9];
