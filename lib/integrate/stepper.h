@@ -12,13 +12,20 @@
 
 typedef int (*ap_rhs_fn)(double t, const double *y, double *ydot, void *user);
 
+/* Options; every field 0 means its default, and o == NULL means all defaults.
+ * h_fixed: required (> 0) by fixed-step methods (rk4). With an adaptive ERK method
+ * (heun2 ... fehlberg8), h_fixed > 0 switches error control off and takes steps of exactly
+ * h_fixed (the last step before a tstop is shortened to land on it); tolerances are then
+ * unused. CVODE methods (adams, bdf) have no fixed-step mode: h_fixed > 0 gives
+ * AP_ERR_UNSUPPORTED. */
 typedef struct ap_step_opts {
-  double rtol;        /* relative tolerance (adaptive methods) */
-  double atol;        /* absolute tolerance, scalar (adaptive methods) */
-  double h_fixed;     /* step size for fixed-step methods (> 0) */
+  double rtol;        /* relative tolerance (adaptive methods); 0 = 1e-6 */
+  double atol;        /* absolute tolerance, scalar (adaptive methods); 0 = 1e-9 */
+  double h_fixed;     /* step size for fixed-step methods (> 0), see above */
   double h_init;      /* first step, 0 = stepper's choice */
   double h_max;       /* largest step, 0 = unlimited */
-  long max_steps;     /* most internal steps per ap_step_one call sequence; 0 = default */
+  long max_steps;     /* most internal steps while heading for one tstop (consecutive
+                         ap_step_one calls with the same tstop); 0 = 100000 */
 } ap_step_opts;
 
 typedef struct ap_step_stats {
@@ -47,9 +54,10 @@ typedef struct ap_step_backend {
 
 /* One method on offer: a backend plus its configuration. */
 struct ap_step_method {
-  const char *name;           /* "dopri5", "bs3", "verner6", "fehlberg8", "rk4", "adams", "bdf" */
+  const char *name;           /* "heun2", "bs3", "dopri5", "verner6", "fehlberg8", "rk4", ... */
   const char *summary;        /* one line for users */
-  int order;                  /* order of the propagated solution, verified by a test */
+  int order;                  /* order of the propagated solution, verified by a test
+                                 (CVODE: the highest order of the variable-order family) */
   int adaptive;               /* 1 error-controlled, 0 fixed step (opts.h_fixed) */
   int table;                  /* backend-specific selector (ARKODE table id, CVODE lmm, ...) */
   const ap_step_backend *backend;
@@ -70,9 +78,12 @@ int ap_step_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, d
 int ap_step_reset(ap_stepper *s, double t, const double *y);
 
 /* Take one internal step, never past tstop (the step is shortened to land on tstop exactly).
+ * tstop must lie after the current time (forward integration only).
  * On return *t is the time reached and y (n) the solution there. Returns AP_OK, or a negative
- * AP_ERR_* (AP_ERR_CALLBACK when f returned < 0, AP_ERR_SOLVER otherwise) with the message
- * available from ap_step_message. */
+ * AP_ERR_* (AP_ERR_CALLBACK when f returned < 0, AP_ERR_NAN when f kept producing NaN/Inf
+ * (treated as recoverable until retries run out), AP_ERR_SOLVER otherwise) with the message
+ * available from ap_step_message. On failure *t and y hold the last accepted state and the
+ * stepper can continue from it. */
 int ap_step_one(ap_stepper *s, double tstop, double *t, double *y);
 
 /* Dense output: y at time t inside the last step. */
@@ -81,5 +92,58 @@ int ap_step_dky(ap_stepper *s, double t, double *y);
 void ap_step_get_stats(const ap_stepper *s, ap_step_stats *st);
 const char *ap_step_message(const ap_stepper *s);
 void ap_step_free(ap_stepper *s);
+
+/* The Butcher table an ERK method really hands to ARKODE (after the FSAL repair described
+ * in stepper_arkode.c): s stages (s <= max_s), A (s x s, row-major), b, c (s) and the
+ * embedding d (s; zeros when the method has none). q = order of b. AP_ERR_UNSUPPORTED for
+ * non-RK methods. For tests and docs/steppers.md. */
+int ap_step_butcher(const ap_step_method *meth, int max_s, int *s, int *q, double *A,
+                    double *b, double *c, double *d);
+
+/* ---- for the backends only (stepper.c, stepper_arkode.c, stepper_cvode.c) ---------------
+ * sim.c treats ap_stepper as opaque. SUNDIALS objects are held as void * so that no
+ * SUNDIALS type appears here. */
+extern const ap_step_backend ap_step_arkode;
+extern const ap_step_backend ap_step_cvode;
+
+struct ap_stepper {
+  const ap_step_method *meth;
+  int n;
+  ap_rhs_fn f;
+  void *user;
+  ap_step_opts o;        /* options with defaults filled in */
+  void *ctx;             /* SUNContext, one per stepper */
+  void *mem;             /* ERKStep or CVODE memory */
+  void *y;               /* N_Vector (n): the state SUNDIALS advances */
+  void *tmp;             /* N_Vector (n): dense output */
+  void *obj[3];          /* backend objects (CVODE: SUNMatrix, SUNLinearSolver, SUNNonlinSol) */
+  double t;              /* time of the last accepted state */
+  double *yacc;          /* (n) the last accepted state: returned and restored on failure */
+  double tstop;          /* the tstop of the current ap_step_one sequence */
+  long nto;              /* steps taken towards tstop */
+  long nfe;              /* calls of f */
+  long nrecov;           /* calls of f that returned > 0 or a non-finite ydot */
+  int rhs_neg, rhs_pos, rhs_nan; /* since the current ap_step_one began: f < 0, f > 0, NaN */
+  int rhs_code;          /* f's last nonzero return code */
+  ap_step_stats base;    /* SUNDIALS counters accumulated before the last re-init */
+  char sun_msg[256];     /* last message of SUNDIALS' error handler (never printed) */
+  char msg[512];         /* last failure, for ap_step_message */
+};
+
+/* Allocate a stepper with its SUNContext and vectors y = y0, tmp; options defaulted. */
+int ap_step_alloc(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, double t0,
+                  const double *y0, const ap_step_opts *o, ap_stepper **out, char *msg,
+                  size_t msg_len);
+/* Free what ap_step_alloc made (the backend frees mem and obj first). */
+void ap_step_release(ap_stepper *s);
+/* Call f with counting, NaN/Inf detection (turned into a recoverable failure, 1). */
+int ap_step_rhs_eval(ap_stepper *s, double t, const double *y, double *ydot);
+/* Store a SUNDIALS error-handler message instead of printing it. */
+void ap_step_sun_message(ap_stepper *s, const char *function, const char *msg);
+/* Record a failed step: status from the rhs flags (or AP_ERR_SOLVER), message naming the
+ * method, time, SUNDIALS flag name and SUNDIALS' own words. Returns the status. */
+int ap_step_fail(ap_stepper *s, int sun_flag, const char *flag_name);
+/* Accept the state the backend reached: s->t = t, yacc = y (SUNDIALS' vector contents). */
+void ap_step_accept(ap_stepper *s, double t, const double *y);
 
 #endif
