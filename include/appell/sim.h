@@ -80,6 +80,25 @@ AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
 AP_API const char *ap_sim_message(const ap_sim *s);
 AP_API void ap_sim_free(ap_sim *s);
 
+/* The cross-check (DESIGN.md §1): the same model run in minimal, projected and DAE modes with
+ * the same tolerances, compared at n_out equally spaced times in (t0, t_end]. Differences are
+ * absolute, the largest over all compared times and entries. */
+typedef struct ap_crosscheck_report {
+  double dq_projected, dq_dae;      /* max |q - q_minimal| */
+  double dv_projected, dv_dae;      /* max |v - v_minimal| */
+  double dlambda_projected, dlambda_dae; /* max |lambda - lambda_minimal| (0 when b == 0) */
+  double max_q, max_v, max_lambda;  /* max |q|, |v|, |lambda| of the minimal run (for scale) */
+  double residual[3];               /* max |A v + a0| per mode: minimal, projected, DAE */
+  ap_sim_stats stats[3];            /* per mode: minimal, projected, DAE */
+  double t_fail;                    /* time reached when a mode failed, else t_end */
+} ap_crosscheck_report;
+
+/* Run all three modes from (t0, q0, v0) to t_end. def gives the tolerances and the stepper of
+ * the two Appell modes (def->mode is ignored). On failure the message names the mode. */
+AP_API int ap_crosscheck(const ap_model *m, const ap_sim_def *def, double t0,
+                         const double *q0, const double *v0, double t_end, int n_out,
+                         ap_crosscheck_report *rep, char *msg, size_t msg_len);
+
 /* Methods (steppers) on offer. */
 typedef struct ap_method_info {
   const char *name;        /* e.g. "dopri5" */

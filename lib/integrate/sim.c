@@ -270,8 +270,16 @@ static int setup_dae(ap_sim *s) {
   memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)s->b);
-  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, s->def.h_init, s->def.h_max,
-                    s->def.max_steps};
+  /* First step: IDA's own guess from |y'| is far too small at tight tolerances, and an index-2
+   * Newton iteration fails there (its matrix conditions like 1/h^2). Use the BDF1 local error
+   * h^2 |q''| / 2 = rtol |q| + atol with q'' ~ N v' from the Appell solve. */
+  double qmax = 0.0, amax = 0.0;
+  for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(s->y[i]));
+  for (int i = 0; i < s->k; i++) amax = fmax(amax, fabs(d->vdot[i]));
+  double h0 = s->def.h_init;
+  if (!(h0 > 0) && amax > 0)
+    h0 = sqrt(2.0 * (s->def.rtol * fmax(1.0, qmax) + s->def.atol) / amax);
+  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps};
   return ap_dae_create(s->m, d, s->t, s->y, yp, &o, &s->dae, s->msg, sizeof s->msg);
 }
 
