@@ -74,7 +74,7 @@ static double err_at(double t, const double *y) {
 }
 
 static ap_step_opts opts(double rtol, double h_fixed) {
-  ap_step_opts o = {rtol, rtol * 1e-2, h_fixed, 0.0, 0.0, 10000000L};
+  ap_step_opts o = {rtol, rtol * 1e-2, h_fixed, 0.0, 0.0, 10000000L, NULL};
   return o;
 }
 

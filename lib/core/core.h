@@ -61,6 +61,13 @@ int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const 
 /* Translate a callback's return code into a status with a message. */
 int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int rc);
 
+/* ap_project_speeds without the position stage: the data's g, B, b0 must be current. */
+int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *change);
+
+/* x <- B G^-1 B^T g x: the g-orthogonal projection onto the null space of A, with the factor
+ * of G left by ap_core_project_here. */
+void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x);
+
 /* printf into d->msg. */
 void ap_core_msg(ap_data *d, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -357,11 +357,13 @@ int ap_forward(const ap_model *m, ap_data *d) {
 /* ---- projection and diagnostics ---------------------------------------------------------- */
 
 int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) {
-  ap_scratch *s = SCRATCH(d);
-  int k = m->k, l;
   int rc = ap_fwd_position(m, d);
-  if (rc != AP_OK) return rc;
-  l = d->l;
+  return rc == AP_OK ? ap_core_project_here(m, d, v, change) : rc;
+}
+
+int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *change) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k, l = d->l, rc;
   for (int i = 0; i < k; i++) s->tk1[i] = v[i] - d->b0[i];   /* tk1 = v - b0 */
   ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g (v - b0) */
   ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g (v - b0) */
@@ -384,6 +386,15 @@ int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) 
   for (int i = 0; i < k; i++) c2 += s->tk1[i] * s->tk2[i];
   if (change) *change = sqrt(fmax(c2, 0.0));
   return AP_OK;
+}
+
+void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x) {
+  ap_scratch *s = SCRATCH(d);
+  int k = m->k, l = d->l;
+  ap_la_gemv(k, k, d->g, x, s->tk1);                         /* tk1 = g x */
+  ap_la_gemv_t(k, l, d->B, s->tk1, s->tl);                   /* tl = B^T g x */
+  ap_la_chol_solve(l, d->G, s->tl);                          /* G^-1 B^T g x */
+  ap_la_gemv(k, l, d->B, s->tl, x);                          /* x = B G^-1 B^T g x */
 }
 
 double ap_constraint_residual(const ap_data *d, const double *v) {

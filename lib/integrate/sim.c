@@ -157,13 +157,44 @@ static int after_step_minimal(ap_sim *s, double t) {
   return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
 }
 
-/* Projected mode: put v back on the constraint set, nearest in the metric g. */
+/* CVODE's projection hook (projected mode): v onto A v + a0 = 0 nearest in g, and the error
+ * estimate onto the tangent space, inside CVODE's step so its history stays consistent. */
+static int sim_proj(double t, const double *y, double *corr, double *err, void *user) {
+  ap_sim *s = user;
+  ap_data *d = s->d;
+  load_state(s, t, y);
+  int rc = ap_fwd_position(s->m, d);
+  double change = 0.0, *v = corr + s->n;
+  memset(corr, 0, sizeof(double) * (size_t)s->n);
+  memcpy(v, y + s->n, sizeof(double) * (size_t)s->k);
+  if (rc == AP_OK) rc = ap_core_project_here(s->m, d, v, &change);
+  if (rc != AP_OK) {
+    s->rhs_status = rc;
+    memcpy(s->rhs_msg, d->msg, sizeof s->rhs_msg);
+    return rc > 0 ? 1 : -1;
+  }
+  for (int i = 0; i < s->k; i++) v[i] -= y[s->n + i];
+  if (err) ap_core_project_tangent(s->m, d, err + s->n);
+  s->stats.projections++;
+  s->stats.max_projection = fmax(s->stats.max_projection, change);
+  return 0;
+}
+
+/* Projected mode: put v back on the constraint set, nearest in the metric g. One-step methods
+ * project after every accepted step and restart (it costs them one evaluation); CVODE
+ * projects inside its own step through sim_proj (a restart would drop it to order 1). */
 static int after_step_projected(ap_sim *s, double t) {
   ap_data *d = s->d;
   if (s->m->b == 0) return AP_OK;
   load_state(s, t, s->y);
   double change = 0.0, *v = s->y + s->n;
-  int rc = ap_project_speeds(s->m, d, v, &change);
+  int rc = ap_fwd_position(s->m, d);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
+  if (s->meth->backend == &ap_step_cvode) {   /* CVODE projected inside the step (sim_proj) */
+    s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, v));
+    return AP_OK;
+  }
+  rc = ap_core_project_here(s->m, d, v, &change);
   if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
   s->stats.projections++;
   s->stats.max_projection = fmax(s->stats.max_projection, change);
@@ -206,6 +237,11 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (!s->meth)
     return sim_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
                     def->method ? def->method : "(null)");
+  if (def->mode == AP_MODE_PROJECTED && s->meth->backend == &ap_step_cvode &&
+      !ap_step_native_projection(s->meth))
+    return sim_fail(s, AP_ERR_UNSUPPORTED, "method '%s' cannot run in projected mode: CVODE "
+                    "projects only with BDF (use method 'bdf', an ERK method, or minimal "
+                    "mode)", s->meth->name);
   if (!(def->rtol > 0) || !(def->atol > 0))
     return sim_fail(s, AP_ERR_ARG, "tolerances must be positive (rtol %g, atol %g)",
                     def->rtol, def->atol);
@@ -279,7 +315,7 @@ static int setup_dae(ap_sim *s) {
   double h0 = s->def.h_init;
   if (!(h0 > 0) && amax > 0)
     h0 = sqrt(2.0 * (s->def.rtol * fmax(1.0, qmax) + s->def.atol) / amax);
-  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps};
+  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL};
   return ap_dae_create(s->m, d, s->t, s->y, yp, &o, &s->dae, s->msg, sizeof s->msg);
 }
 
@@ -306,7 +342,8 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
-                    s->def.h_init, s->def.h_max, s->def.max_steps};
+                    s->def.h_init, s->def.h_max, s->def.max_steps, NULL};
+  if (s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) o.proj = sim_proj;
   return ap_step_create(s->meth, s->ny, rhs, s, t0, s->y, &o, &s->st, s->msg, sizeof s->msg);
 }
 

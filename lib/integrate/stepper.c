@@ -241,3 +241,7 @@ void ap_step_accept(ap_stepper *s, double t, const double *y) {
   s->t = t;
   memcpy(s->yacc, y, sizeof(double) * (size_t)s->n);
 }
+
+int ap_step_native_projection(const ap_step_method *meth) {
+  return meth && meth->backend == &ap_step_cvode && meth->table == CV_BDF;
+}

@@ -18,6 +18,11 @@ typedef int (*ap_rhs_fn)(double t, const double *y, double *ydot, void *user);
  * h_fixed (the last step before a tstop is shortened to land on it); tolerances are then
  * unused. CVODE methods (adams, bdf) have no fixed-step mode: h_fixed > 0 gives
  * AP_ERR_UNSUPPORTED. */
+/* Projection onto a constraint manifold, for steppers that support it natively (CVODE:
+ * CVodeSetProjFn). corr (n) receives proj(y) - y; when err is not NULL it is replaced by its
+ * projection onto the manifold's tangent space. Return codes as for ap_rhs_fn. */
+typedef int (*ap_proj_fn)(double t, const double *y, double *corr, double *err, void *user);
+
 typedef struct ap_step_opts {
   double rtol;        /* relative tolerance (adaptive methods); 0 = 1e-6 */
   double atol;        /* absolute tolerance, scalar (adaptive methods); 0 = 1e-9 */
@@ -26,6 +31,8 @@ typedef struct ap_step_opts {
   double h_max;       /* largest step, 0 = unlimited */
   long max_steps;     /* most internal steps while heading for one tstop (consecutive
                          ap_step_one calls with the same tstop); 0 = 100000 */
+  ap_proj_fn proj;    /* CVODE: project after every step inside the method (NULL = none);
+                         ignored by the other backends */
 } ap_step_opts;
 
 typedef struct ap_step_stats {
@@ -62,6 +69,10 @@ struct ap_step_method {
   int table;                  /* backend-specific selector (ARKODE table id, CVODE lmm, ...) */
   const ap_step_backend *backend;
 };
+
+/* 1 when the method projects natively through ap_step_opts.proj (CVODE BDF only: CVODE
+ * refuses projection with Adams). */
+int ap_step_native_projection(const ap_step_method *meth);
 
 /* The methods on offer, in a fixed order. */
 int ap_step_method_count(void);

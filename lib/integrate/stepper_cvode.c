@@ -22,6 +22,7 @@
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
+#include <cvode/cvode_proj.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
@@ -63,6 +64,15 @@ static int cv_solver(ap_stepper *s) {
   return ls ? CVodeSetLinearSolver(s->mem, ls, A) : CV_MEM_FAIL;
 }
 
+/* Native projection: CVODE projects the corrected state and its error estimate itself, so
+ * the history stays consistent (no restart at order 1). */
+static int cv_proj(realtype t, N_Vector ycur, N_Vector corr, realtype eps, N_Vector err,
+                   void *user) {
+  (void)eps;
+  ap_stepper *s = user;
+  return s->o.proj(t, NV(ycur), NV(corr), err ? NV(err) : NULL, s->user);
+}
+
 static int cv_configure(ap_stepper *s, double t0) {
   const ap_step_opts *o = &s->o;
   int flag = CVodeInit(s->mem, cv_rhs, t0, s->y);
@@ -72,6 +82,7 @@ static int cv_configure(ap_stepper *s, double t0) {
   if (flag == CV_SUCCESS) flag = CVodeSetMaxNumSteps(s->mem, o->max_steps);
   if (flag == CV_SUCCESS && o->h_init > 0) flag = CVodeSetInitStep(s->mem, o->h_init);
   if (flag == CV_SUCCESS && o->h_max > 0) flag = CVodeSetMaxStep(s->mem, o->h_max);
+  if (flag == CV_SUCCESS && o->proj) flag = CVodeSetProjFn(s->mem, cv_proj);
   return flag;
 }
 
