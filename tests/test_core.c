@@ -12,6 +12,13 @@
 #include "refsys.h"
 
 /* ---- counting allocations: this program's malloc wraps glibc's --------------------------- */
+/* AddressSanitizer owns malloc itself: under it the count is not taken (the plain build of
+ * scripts/test runs it). */
+#if defined(__SANITIZE_ADDRESS__)
+#define AP_COUNT_ALLOC 0
+static long n_alloc = 0;
+#else
+#define AP_COUNT_ALLOC 1
 extern void *__libc_malloc(size_t);
 extern void *__libc_calloc(size_t, size_t);
 extern void *__libc_realloc(void *, size_t);
@@ -19,6 +26,7 @@ static long n_alloc = 0;
 void *malloc(size_t size) { n_alloc++; return __libc_malloc(size); }
 void *calloc(size_t a, size_t b) { n_alloc++; return __libc_calloc(a, b); }
 void *realloc(void *p, size_t size) { n_alloc++; return __libc_realloc(p, size); }
+#endif
 
 /* ---- a random algebraic system: constant g, A, a0, gamma, h, Q at one state -------------- */
 enum { RK = 6, RB = 4 };
@@ -238,6 +246,10 @@ static void test_nan_mid_run(void) {
 }
 
 static void test_no_alloc_in_step(void) {
+  if (!AP_COUNT_ALLOC) {
+    printf("allocation count skipped under AddressSanitizer\n");
+    return;
+  }
   rand_sys s;
   rand_fill(&s, 3, 0);
   ap_model *m = rand_model(&s);
