@@ -7,6 +7,7 @@
 #include "appell/status.h"
 #include "appell/system.h"
 #include "appell/sim.h"
+#include "appell/body.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

@@ -1,0 +1,316 @@
+/* Appell: rigid bodies, joints, shapes, constraints and effects, compiled into a model.
+ *
+ * Users describe bodies joined to a parent (another body or the ground) by joints whose
+ * coordinates become the generalized coordinates q, constraint rows (rolling, knife edge,
+ * prescribed speed, loop closures, user callbacks) and effects (gravity, springs, damping,
+ * applied forces). ap_builder_compile validates everything once and produces an ap_model that
+ * the core (system.h) and the drivers (sim.h) use like any other: it evaluates
+ *
+ *     g = sum_b J_b^T M_b J_b,   h = sum_b J_b^T (M_b a_b + [w_b x I_b w_b; 0]),   Q,
+ *     A, a0 and gamma = -(A' v + a0')
+ *
+ * from the bodies (DESIGN.md §1 "Holonomic reduction from bodies"; docs/bodies.md).
+ *
+ * Conventions: SI units; world z is up and the ground plane is z = 0; vectors "in body axes"
+ * are components in the body frame, everything else in world axes; 3 x 3 matrices are
+ * column-major; quaternions are [w x y z] and map body components to parent components.
+ * Definitions are filled by their *_default() function and then edited (Box2D style); ids
+ * are small integers in the order of creation. */
+#ifndef APPELL_BODY_H
+#define APPELL_BODY_H
+
+#include <stddef.h>
+
+#include "appell/export.h"
+#include "appell/status.h"
+#include "appell/system.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The parent id of a joint to the fixed world, and the "body" of a loop point in the world. */
+#define AP_GROUND (-1)
+/* An id field that has not been set. */
+#define AP_NONE (-2)
+
+/* A prescribed function of time: fill f[0] = value, f[1] = first and f[2] = second time
+ * derivative at t. Returns 0 = ok, > 0 = recoverable (retry with a smaller step), < 0 = stop. */
+typedef int (*ap_time_fn)(double t, double f[3], void *user);
+
+/* A force (N, world axes) and torque (N m, world axes) at time t, for an applied effect.
+ * Both arrays are zeroed before the call. Return codes as above. */
+typedef int (*ap_wrench_fn)(double t, double force[3], double torque[3], void *user);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Bodies and shapes.                                                                          */
+
+/* Convex shapes, centred at the body origin with their symmetry axis along body z. Only the
+ * plane-contact joint uses the shape (its support function sigma gives the height). */
+typedef enum ap_shape_kind {
+  AP_SHAPE_NONE = 0,       /* no shape (default) */
+  AP_SHAPE_POINT = 1,      /* the body origin itself */
+  AP_SHAPE_SPHERE = 2,     /* radius */
+  AP_SHAPE_ELLIPSOID = 3,  /* semi_axes along body x, y, z */
+  AP_SHAPE_DISK = 4,       /* thin disk of radius `radius` in the body xy plane */
+  AP_SHAPE_TORUS = 5       /* wheel with a rounded rim: tube of radius `tube` around the circle of
+                              radius `radius` in the body xy plane */
+} ap_shape_kind;
+
+typedef struct ap_shape {
+  ap_shape_kind kind;      /* default AP_SHAPE_NONE */
+  double radius;           /* sphere, disk, torus (m); default 0 */
+  double tube;             /* torus tube radius (m); default 0 */
+  double semi_axes[3];     /* ellipsoid (m); default 0 */
+  double flat_tol;         /* disk, torus: lying flat (|sin| of the axis tilt from the vertical
+                              below flat_tol) is reported as an error; default 1e-6 */
+} ap_shape;
+
+typedef struct ap_body_def {
+  const char *name;        /* used in coordinate names and messages; default "body<id>" */
+  double mass;             /* kg, > 0; default 1 */
+  double com[3];           /* centre of mass in body axes (m); default 0 */
+  double inertia[9];       /* inertia tensor about the centre of mass in body axes (kg m^2),
+                              3 x 3 column-major, symmetric positive definite; default 0 (must
+                              be set, or filled by ap_body_def_uniform) */
+  ap_shape shape;          /* default none */
+} ap_body_def;
+
+AP_API ap_body_def ap_body_def_default(void);
+/* Set mass and the inertia of a uniform solid of def->shape (disk: a thin lamina) about its
+ * centre, and put the centre of mass at the body origin. AP_ERR_ARG for a point or no shape,
+ * or a non-positive mass. */
+AP_API int ap_body_def_uniform(ap_body_def *def, double mass);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Joints.                                                                                     */
+
+/* Coordinates (q) and speeds (v) of each kind, with q' = N v:
+ *   FIXED          none
+ *   REVOLUTE       angle about axis                  ; its rate                      (1, 1)
+ *   PRISMATIC      displacement along axis           ; its rate                      (1, 1)
+ *   PLANAR         x, y, heading in the parent frame's xy plane ; their rates        (3, 3)
+ *   BALL           quaternion [w x y z]               ; angular velocity wx, wy, wz   (4, 3)
+ *   FREE           x, y, z, quaternion                ; vx, vy, vz, wx, wy, wz        (7, 6)
+ *   PLANE_CONTACT  x, y, quaternion                   ; vx, vy, wx, wy, wz            (6, 5)
+ * Rates and velocities are in the parent joint frame's axes (world axes for joints to the
+ * ground). The angular velocity is the child's relative to the parent; the quaternion maps the
+ * child joint frame to the parent joint frame.
+ * PLANE_CONTACT: a convex body resting on the ground plane z = 0. (x, y) is the horizontal
+ * position of the body origin (the shape centre); its height is z = sigma(-R^T e_z), sigma the
+ * shape's support function, and the contact point is grad sigma(-R^T e_z) in body axes. Its
+ * parent must be AP_GROUND and its frames must stay at their defaults. */
+typedef enum ap_joint_kind {
+  AP_JOINT_FREE = 0,       /* default */
+  AP_JOINT_FIXED = 1,
+  AP_JOINT_REVOLUTE = 2,
+  AP_JOINT_PRISMATIC = 3,
+  AP_JOINT_PLANAR = 4,
+  AP_JOINT_BALL = 5,
+  AP_JOINT_PLANE_CONTACT = 6
+} ap_joint_kind;
+
+/* A frame fixed on a body (or the world): origin in body axes (m) and orientation. */
+typedef struct ap_frame {
+  double pos[3];           /* default 0 */
+  double quat[4];          /* [w x y z], normalized at compile; default [1 0 0 0] */
+} ap_frame;
+
+typedef struct ap_joint_def {
+  const char *name;        /* for messages; default "joint<id>" */
+  ap_joint_kind kind;      /* default AP_JOINT_FREE */
+  int parent;              /* body id or AP_GROUND (default) */
+  int child;               /* body id; required */
+  ap_frame parent_frame;   /* joint frame on the parent (world frame for the ground) */
+  ap_frame child_frame;    /* joint frame on the child; the joint moves it relative to the
+                              parent frame */
+  double axis[3];          /* revolute and prismatic axis in the parent joint frame; default
+                              (0, 0, 1); normalized at compile */
+  /* Driven coordinates: drive[i] != NULL prescribes scalar coordinate i of the joint as a
+   * function of time (value, rate, acceleration). The coordinate and its speed are then
+   * eliminated from q and v (the system becomes rheonomic; their motion enters the bias h and
+   * the free terms a0). Drivable: revolute and prismatic 0; planar 0..2; free 0..2 (position);
+   * plane contact 0..1 (x, y). Quaternions cannot be driven (use a prescribed-speed constraint
+   * on the angular velocity instead). */
+  ap_time_fn drive[3];
+  void *drive_user[3];
+} ap_joint_def;
+
+AP_API ap_joint_def ap_joint_def_default(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Constraints: rows of A v + a0 = 0.                                                          */
+
+typedef enum ap_constraint_kind {
+  AP_CON_ROLLING = 0,      /* body on a PLANE_CONTACT joint: the material contact point has no
+                              horizontal velocity relative to the ground surface (2 rows:
+                              .x, .y); with no_spin a third row (.spin): no angular velocity
+                              about the vertical relative to the ground */
+  AP_CON_KNIFE_EDGE = 1,   /* the body point `point` has no velocity (relative to the ground
+                              surface) along the body-fixed `direction` (1 row) */
+  AP_CON_PRESCRIBED_SPEED = 2, /* speed `speed` of joint `joint` equals f(t) (1 row) */
+  AP_CON_USER = 3,         /* `rows` rows from user callbacks */
+  AP_CON_COINCIDENT = 4,   /* loop closure: point of body equals point2 of body2, along the
+                              world axes selected by `axes` (up to 3 rows .x .y .z) */
+  AP_CON_POINT_ON_LINE = 5,  /* loop closure: point of body lies on the line through point2 of
+                                body2 along `direction` (body2 axes) (2 rows .n1 .n2) */
+  AP_CON_POINT_ON_PLANE = 6  /* loop closure: point of body lies on the plane through point2 of
+                                body2 with normal `direction` (body2 axes) (1 row) */
+} ap_constraint_kind;
+
+/* How the ground surface moves (rolling and knife edge only). The surface velocity at the
+ * world point p is  V(t) + Omega(t) e_z x (p - center). */
+typedef enum ap_ground_kind {
+  AP_GROUND_FIXED = 0,     /* default */
+  AP_GROUND_TURNTABLE = 1, /* rotates about the vertical through (center, 0) at Omega(t) */
+  AP_GROUND_TRANSLATING = 2 /* translates horizontally with velocity V(t) */
+} ap_ground_kind;
+
+typedef struct ap_ground_motion {
+  ap_ground_kind kind;     /* default AP_GROUND_FIXED */
+  double center[2];        /* turntable axis (m); default 0 */
+  double omega;            /* turntable rate (rad/s) when omega_fn is NULL; default 0 */
+  ap_time_fn omega_fn;     /* Omega(t): f[0] = Omega, f[1] = dOmega/dt; default NULL */
+  double velocity[2];      /* plane velocity (m/s) when velocity_fn is NULL; default 0 */
+  ap_time_fn velocity_fn[2]; /* V_x(t), V_y(t): f[0] velocity, f[1] acceleration */
+  void *user;              /* passed to omega_fn and velocity_fn */
+} ap_ground_motion;
+
+typedef struct ap_constraint_def {
+  const char *name;        /* row names are name, or name.x ...; default "constraint<id>" */
+  ap_constraint_kind kind; /* default AP_CON_ROLLING */
+  int body;                /* rolling, knife edge; loops: the body carrying `point` */
+  int no_spin;             /* rolling: add the no-spin row; default 0 */
+  ap_ground_motion ground; /* rolling, knife edge */
+  double point[3];         /* knife edge, loops: point in body axes (m); default 0 */
+  double direction[3];     /* knife edge: body axes; line direction or plane normal: body2 axes;
+                              default (0, 1, 0) */
+  int body2;               /* loops: the other body or AP_GROUND (default) */
+  double point2[3];        /* loops: point in body2 axes (world for AP_GROUND) (m) */
+  unsigned axes;           /* coincident: world axes kept, bit 0 = x, 1 = y, 2 = z; default 7 */
+  int joint;               /* prescribed speed: the joint */
+  int speed;               /* prescribed speed: index of the speed within the joint; default 0 */
+  double speed_value;      /* prescribed speed: f(t) = speed_value when speed_fn is NULL */
+  ap_time_fn speed_fn;     /* prescribed speed: f(t), f'(t) */
+  int rows;                /* user: number of rows */
+  ap_constraint_fn user_constraint; /* user: A (rows x k, ld rows) and a0 (rows) */
+  ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
+  void *user;              /* passed to speed_fn and the user callbacks */
+} ap_constraint_def;
+
+AP_API ap_constraint_def ap_constraint_def_default(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Effects: contributions to Q. Only the effects added are evaluated.                          */
+
+typedef enum ap_effect_kind {
+  AP_EFFECT_GRAVITY = 0,   /* uniform field `gravity` on every body (default) */
+  AP_EFFECT_SPRING = 1,    /* spring-damper between point of body and point2 of body2:
+                              tension f = stiffness (L - rest_length) + damping L'; with
+                              rest_length 0 the force is the vector stiffness d + damping d' */
+  AP_EFFECT_JOINT_DAMPING = 2, /* generalized force -damping v_i on every speed of `joint` */
+  AP_EFFECT_APPLIED = 3,   /* force and torque (world axes) at `point` of `body`: the constants
+                              force, torque, or wrench(t) when given */
+  AP_EFFECT_USER = 4       /* user callback adding to Q (k entries) */
+} ap_effect_kind;
+
+typedef struct ap_effect_def {
+  const char *name;        /* default "effect<id>" */
+  ap_effect_kind kind;     /* default AP_EFFECT_GRAVITY */
+  double gravity[3];       /* m/s^2; default (0, 0, -9.81) */
+  int body;                /* spring end A, applied body */
+  int body2;               /* spring end B; AP_GROUND (default) */
+  double point[3];         /* body axes (m) */
+  double point2[3];        /* body2 axes, world for the ground (m) */
+  double stiffness;        /* N/m, >= 0 */
+  double damping;          /* spring: N s/m; joint damping: N s/m or N m s/rad; >= 0 */
+  double rest_length;      /* m, >= 0 */
+  int joint;               /* joint damping */
+  double force[3];         /* applied (N) */
+  double torque[3];        /* applied (N m) */
+  ap_wrench_fn wrench;     /* applied: overrides force and torque when given */
+  ap_force_fn generalized; /* user: add to Q (the array holds the other effects' sum) */
+  void *user;              /* passed to wrench and generalized */
+} ap_effect_def;
+
+AP_API ap_effect_def ap_effect_def_default(void);
+
+/* ------------------------------------------------------------------------------------------ */
+/* The builder.                                                                                */
+
+typedef struct ap_builder ap_builder;
+
+AP_API int ap_builder_create(const char *name, ap_builder **out);
+AP_API void ap_builder_free(ap_builder *b);
+/* Add an element; *id (may be NULL) receives its id. Definitions are copied (names too);
+ * user pointers are kept. Validation happens in ap_builder_compile. */
+AP_API int ap_builder_add_body(ap_builder *b, const ap_body_def *def, int *id);
+AP_API int ap_builder_add_joint(ap_builder *b, const ap_joint_def *def, int *id);
+AP_API int ap_builder_add_constraint(ap_builder *b, const ap_constraint_def *def, int *id);
+AP_API int ap_builder_add_effect(ap_builder *b, const ap_effect_def *def, int *id);
+/* Validate and compile. On failure *out is NULL, the status is AP_ERR_ARG (or AP_ERR_NOMEM)
+ * and ap_builder_message names the element and the offending number. The builder may be
+ * compiled again or freed; the model does not refer to it. */
+AP_API int ap_builder_compile(ap_builder *b, ap_model **out);
+AP_API const char *ap_builder_message(const ap_builder *b);
+
+/* ------------------------------------------------------------------------------------------ */
+/* Queries on a compiled body model (AP_ERR_ARG for math-level models or bad ids).             */
+
+AP_API int ap_model_is_body_model(const ap_model *m);
+AP_API int ap_model_body_count(const ap_model *m);
+AP_API int ap_model_find_body(const ap_model *m, const char *name);    /* -1 if none */
+AP_API int ap_model_find_coord(const ap_model *m, const char *name);   /* -1 if none */
+AP_API int ap_model_find_speed(const ap_model *m, const char *name);   /* -1 if none */
+/* Index in q (v) of the joint's first free coordinate (speed); -1 when it has none. */
+AP_API int ap_joint_coord_index(const ap_model *m, int joint);
+AP_API int ap_joint_speed_index(const ap_model *m, int joint);
+/* First row of the constraint in A. */
+AP_API int ap_constraint_row_index(const ap_model *m, int constraint);
+
+/* Kinematics at the data's (t, q, v) into its scratch, without any solve. The state queries
+ * below read what the last ap_body_eval or pipeline run (ap_forward, ap_sim_advance) left. */
+AP_API int ap_body_eval(const ap_model *m, ap_data *d);
+
+typedef struct ap_body_state {
+  double pos[3];           /* body origin (m) */
+  double R[9];             /* body axes in world axes (column-major) */
+  double com[3];           /* centre of mass (m) */
+  double omega[3];         /* angular velocity (rad/s) */
+  double vel[3];           /* velocity of the centre of mass (m/s) */
+  int has_contact;         /* body on a plane-contact joint */
+  double contact[3];       /* its contact point on z = 0 (m) */
+} ap_body_state;
+
+AP_API int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out);
+/* Jacobians of a body point p (body axes): angular Jw and linear Jv (each 3 x k, ld 3) with
+ * w = Jw v + rw, v_p = Jv v + rv (rw, rv: rheonomic parts from driven coordinates), and the
+ * bias accelerations aw = Jw' v + rw', av = Jv' v + rv' (after a velocity stage). Any output
+ * may be NULL. */
+AP_API int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body,
+                                  const double p[3], double *Jw, double *Jv, double rw[3],
+                                  double rv[3], double aw[3], double av[3]);
+/* Kinetic energy (from the full body velocities) and potential energy of the gravity and
+ * spring effects at the data's (t, q, v). Evaluates the kinematics itself. */
+AP_API int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *potential);
+/* How many times effect `effect` was evaluated with this data. */
+AP_API long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect);
+/* Put q on its manifold: unit quaternions and loop closures (Gauss-Newton, minimum-norm
+ * steps) at time d->t. *change (may be NULL) receives the size of the correction. The
+ * drivers call the same after each accepted step; call it to assemble an initial state. */
+AP_API int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change);
+/* Complete speeds: keep v[i] where given[i] != 0 and set the others (minimum norm) so that
+ * A v + a0 = 0 at (d->t, q). AP_ERR_INCONSISTENT when that leaves a residual. */
+AP_API int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q,
+                                   const int *given, double *v);
+
+/* Quaternion helpers ([w x y z]). */
+AP_API void ap_quat_from_axis_angle(const double axis[3], double angle, double q[4]);
+AP_API void ap_quat_mul(const double a[4], const double b[4], double out[4]);
+AP_API void ap_quat_to_matrix(const double q[4], double R[9]);
+AP_API void ap_quat_from_matrix(const double R[9], double q[4]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,167 @@
+/* Effects: generalized active forces Q from the effects a model lists, and their potential.
+ *
+ * A force F at a body point with Jacobian JP and a torque T on a body give Q += JP^T F + Jw^T T
+ * (first k columns; the rheonomic column does no virtual work). Per effect:
+ *   gravity         Q += sum_b m_b Jc_b^T gvec;          V = -sum_b m_b gvec . x_com
+ *   spring-damper   d = xB - xA, L = |d|, e = d/L: tension f = ks (L - L0) + c e . (vB - vA),
+ *                   F_A = f e = -F_B; with L0 = 0: F_A = ks d + c (vB - vA);  V = ks (L - L0)^2/2
+ *   joint damping   Q_i -= c v_i for every free speed of the joint
+ *   applied         F, T (constants or wrench(t)) at a body point
+ *   user            the callback adds to a zeroed k-vector
+ * Each evaluation increments the effect's counter in the data's scratch (only listed effects
+ * run: a model without springs never touches spring code). */
+#include <string.h>
+
+#include "model/model.h"
+
+static void add_JtF(const ap_bmodel *M, const ap_mbody *B, const double *J, const double *F,
+                    double *Q) {
+  for (int i = 0; i < B->ncols; i++) {
+    int c = B->cols[i];
+    Q[c] += v3_dot(J + 3 * c, F);
+  }
+  (void)M;
+}
+
+/* The bodies a force between A and B (either may be the ground) can move: their union. */
+static void add_pair(const ap_bmodel *M, int a, int b, const double *JA, const double *JB,
+                     const double *F, double *Q) {
+  for (int c = 0; c < M->k; c++) {
+    double s = 0.0;
+    if (a >= 0) s += v3_dot(JA + 3 * c, F);
+    if (b >= 0) s -= v3_dot(JB + 3 * c, F);
+    Q[c] += s;
+  }
+}
+
+static void gravity(const ap_bmodel *M, const ap_effect_def *e, double *S, double *Q) {
+  for (int b = 0; b < M->nb; b++) {
+    const ap_mbody *B = &M->bodies[b];
+    kbody C = ap_kin_body(M, S, b);
+    double F[3] = {B->mass * e->gravity[0], B->mass * e->gravity[1], B->mass * e->gravity[2]};
+    add_JtF(M, B, C.Jc, F, Q);
+  }
+}
+
+static int spring(const ap_model *m, ap_data *d, const ap_meff *ef, double *S, double *Q) {
+  const ap_bmodel *M = ap_bm(m);
+  const ap_effect_def *e = &ef->def;
+  double *JA = S + M->off_tmp, *JB = JA + 3 * M->K1;
+  double xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], dd[3], dv[3], F[3];
+  ap_kin_point(M, S, e->body, e->point, xA, rA, JA);
+  ap_kin_point(M, S, e->body2, e->point2, xB, rB, JB);
+  ap_kin_point_motion(M, S, e->body, rA, vA, NULL);
+  ap_kin_point_motion(M, S, e->body2, rB, vB, NULL);
+  for (int i = 0; i < 3; i++) dd[i] = xB[i] - xA[i], dv[i] = vB[i] - vA[i];
+  if (e->rest_length == 0.0) {
+    for (int i = 0; i < 3; i++) F[i] = e->stiffness * dd[i] + e->damping * dv[i];
+  } else {
+    double L = v3_norm(dd);
+    if (!(L > 1e-12 * M->lscale)) {
+      AP_BM_MSG(d, "model '%s': spring '%s': its two points coincide (length %g m) at "
+                "t = %.17g: the direction of its force is undefined", m->name, ef->name, L,
+                d->t);
+      return AP_RECOVERABLE;
+    }
+    double f = e->stiffness * (L - e->rest_length) + e->damping * v3_dot(dd, dv) / L;
+    for (int i = 0; i < 3; i++) F[i] = f * dd[i] / L;
+  }
+  add_pair(M, e->body, e->body2, JA, JB, F, Q);
+  return AP_OK;
+}
+
+static void joint_damping(const ap_bmodel *M, const ap_effect_def *e, const double *v,
+                          double *Q) {
+  const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
+  for (int i = 0; i < j->nv; i++)
+    if (j->vidx[i] >= 0) Q[j->vidx[i]] -= e->damping * v[j->vidx[i]];
+}
+
+static int applied(const ap_model *m, ap_data *d, const ap_meff *ef, double t, double *S,
+                   double *Q) {
+  const ap_bmodel *M = ap_bm(m);
+  const ap_effect_def *e = &ef->def;
+  double F[3], T[3], *JP = S + M->off_tmp;
+  v3_copy(e->force, F);
+  v3_copy(e->torque, T);
+  if (e->wrench) {
+    memset(F, 0, sizeof F);
+    memset(T, 0, sizeof T);
+    int rc = e->wrench(t, F, T, e->user);
+    if (rc != 0) {
+      AP_BM_MSG(d, "model '%s': effect '%s': the wrench callback %s (returned %d) at "
+                "t = %.17g", m->name, ef->name, rc > 0 ? "asked for a smaller step" : "failed",
+                rc, t);
+      return rc > 0 ? AP_RECOVERABLE : AP_ERR_CALLBACK;
+    }
+    for (int i = 0; i < 3; i++)
+      if (!isfinite(F[i]) || !isfinite(T[i])) {
+        AP_BM_MSG(d, "model '%s': effect '%s': the wrench callback gave a non-finite value "
+                  "at t = %.17g", m->name, ef->name, t);
+        return AP_ERR_NAN;
+      }
+  }
+  const ap_mbody *B = &M->bodies[e->body];
+  kbody C = ap_kin_body(M, S, e->body);
+  ap_kin_point(M, S, e->body, e->point, NULL, NULL, JP);
+  add_JtF(M, B, JP, F, Q);
+  add_JtF(M, B, C.Jw, T, Q);
+  return AP_OK;
+}
+
+static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double t,
+                       const double *q, const double *v, double *S, double *Q) {
+  const ap_bmodel *M = ap_bm(m);
+  double *Qu = S + M->off_tmp + 6 * (size_t)M->K1;
+  memset(Qu, 0, (size_t)M->k * sizeof *Qu);
+  int rc = ef->def.generalized(t, q, v, Qu, ef->def.user);
+  if (rc != 0) {
+    AP_BM_MSG(d, "model '%s': effect '%s': the user force callback %s (returned %d) at "
+              "t = %.17g", m->name, ef->name, rc > 0 ? "asked for a smaller step" : "failed",
+              rc, t);
+    return rc > 0 ? AP_RECOVERABLE : AP_ERR_CALLBACK;
+  }
+  for (int c = 0; c < M->k; c++) Q[c] += Qu[c];
+  return AP_OK;
+}
+
+int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
+                  double *S, double *Q) {
+  const ap_bmodel *M = ap_bm(m);
+  for (int i = 0; i < M->ne; i++) {
+    const ap_meff *ef = &M->effs[i];
+    int rc = AP_OK;
+    S[M->off_cnt + i] += 1.0;
+    switch (ef->def.kind) {
+      case AP_EFFECT_GRAVITY: gravity(M, &ef->def, S, Q); break;
+      case AP_EFFECT_SPRING: rc = spring(m, d, ef, S, Q); break;
+      case AP_EFFECT_JOINT_DAMPING: joint_damping(M, &ef->def, v, Q); break;
+      case AP_EFFECT_APPLIED: rc = applied(m, d, ef, t, S, Q); break;
+      case AP_EFFECT_USER: rc = user_effect(m, d, ef, t, q, v, S, Q); break;
+    }
+    if (rc != AP_OK) return rc;
+  }
+  return AP_OK;
+}
+
+double ap_eff_potential(const ap_bmodel *M, double *S) {
+  double V = 0.0;
+  for (int i = 0; i < M->ne; i++) {
+    const ap_effect_def *e = &M->effs[i].def;
+    if (e->kind == AP_EFFECT_GRAVITY) {
+      for (int b = 0; b < M->nb; b++) {
+        kbody C = ap_kin_body(M, S, b);
+        double x[3] = {C.o[0] + C.rcom[0], C.o[1] + C.rcom[1], C.o[2] + C.rcom[2]};
+        V -= M->bodies[b].mass * v3_dot(e->gravity, x);
+      }
+    } else if (e->kind == AP_EFFECT_SPRING) {
+      double xA[3], xB[3], dd[3];
+      ap_kin_point(M, S, e->body, e->point, xA, NULL, NULL);
+      ap_kin_point(M, S, e->body2, e->point2, xB, NULL, NULL);
+      for (int j = 0; j < 3; j++) dd[j] = xB[j] - xA[j];
+      double ext = v3_norm(dd) - e->rest_length;
+      V += 0.5 * e->stiffness * ext * ext;
+    }
+  }
+  return V;
+}

@@ -1,0 +1,311 @@
+/* The body model's evaluator hooks (core/core.h) and the public queries of body.h.
+ *
+ * Position stage: kinematics at (t, q) -> g, N (quaternion blocks), A, a0.
+ * Velocity stage: body velocities and bias accelerations at v -> h, Q, gamma.
+ * project_q (after each accepted step): quaternions back to unit norm when they drifted by more
+ * than AP_QUAT_TOL, then loop closures phi(q, t) = 0 by Gauss-Newton with minimum-norm steps
+ * dv (lstsq on the loop Jacobian) mapped to q through N. Corrections below the tolerances are
+ * not applied, so the stepper restarts only when something really moved.
+ * Everything writes into the data's scratch; the model is never modified. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "linalg/linalg.h"
+#include "model/model.h"
+
+/* ---- hooks ------------------------------------------------------------------------------- */
+
+int ap_bm_position(const ap_model *m, ap_data *d, double *S) {
+  const ap_bmodel *M = ap_bm(m);
+  int rc = ap_kin_position(m, d, d->t, d->q, S);
+  if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
+  if (rc != AP_OK) return rc;
+  ap_kin_metric(M, S, d->g);
+  if (M->n != M->k)
+    for (int j = 0; j < M->nj; j++) ap_joint_fill_N(&M->joints[j], d->q, d->N, M->n);
+  return M->b ? ap_con_rows(m, d, d->t, d->q, S, d->A, d->a0) : AP_OK;
+}
+
+int ap_bm_velocity(const ap_model *m, ap_data *d, double *S) {
+  const ap_bmodel *M = ap_bm(m);
+  ap_kin_velocity(M, d->v, S);
+  ap_kin_bias(M, S, d->h);
+  int rc = ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q);
+  if (rc == AP_OK && M->b) rc = ap_con_gamma(m, d, d->t, d->q, d->v, S, d->gamma);
+  return rc;
+}
+
+void ap_bm_destroy(void *impl) {
+  ap_bmodel *M = impl;
+  if (!M) return;
+  for (int b = 0; b < M->nb && M->bodies; b++) free(M->bodies[b].cols);
+  free(M->bodies);
+  free(M->joints);
+  free(M->joint_topo);
+  free(M->cons);
+  free(M->effs);
+  free(M);
+}
+
+/* ---- projection of q ---------------------------------------------------------------------- */
+
+static int normalize_quats(const ap_model *m, ap_data *d, double *q, double *change) {
+  const ap_bmodel *M = ap_bm(m);
+  for (int j = 0; j < M->nj; j++) {
+    const ap_mjoint *J = &M->joints[j];
+    if (J->quat < 0) continue;
+    double *p = q + J->qidx[J->quat];
+    double nn = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]);
+    if (!(nn > 1e-6) || !isfinite(nn)) {
+      AP_BM_MSG(d, "model '%s': joint '%s': its quaternion has norm %g at t = %.17g", m->name,
+                J->name, nn, d->t);
+      return AP_ERR_NAN;
+    }
+    if (fabs(nn - 1.0) <= AP_QUAT_TOL) continue;
+    for (int i = 0; i < 4; i++) p[i] /= nn;
+    *change += fabs(nn - 1.0);
+  }
+  return AP_OK;
+}
+
+/* q += N(q) dv, quaternions re-normalized. */
+static void step_q(const ap_bmodel *M, double *q, const double *dv) {
+  for (int j = 0; j < M->nj; j++) {
+    const ap_mjoint *J = &M->joints[j];
+    for (int i = 0; i < J->ndrivable; i++)
+      if (J->qidx[i] >= 0) q[J->qidx[i]] += dv[J->vidx[i]];
+    if (J->quat < 0) continue;
+    double *p = q + J->qidx[J->quat], N[12], dq[4] = {0, 0, 0, 0};
+    const double *w = dv + J->vidx[J->wofs];
+    ap_quat_N(p, N, 4, 0, 0);
+    for (int r = 0; r < 4; r++)
+      for (int c = 0; c < 3; c++) dq[r] += N[r + 4 * c] * w[c];
+    double nn = 0.0;
+    for (int r = 0; r < 4; r++) p[r] += dq[r], nn += p[r] * p[r];
+    nn = sqrt(nn);
+    for (int r = 0; r < 4; r++) p[r] /= nn;
+  }
+}
+
+static double max_abs(const double *x, int n) {
+  double mx = 0.0;
+  for (int i = 0; i < n; i++) mx = fmax(mx, fabs(x[i]));
+  return mx;
+}
+
+static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
+  const ap_bmodel *M = ap_bm(m);
+  int k = M->k, nl = M->nloop;
+  double *P = S + M->off_proj, *JlT = P, *phi = JlT + (size_t)nl * k, *rhs = phi + nl;
+  double *dv = rhs + nl, *work = dv + k;
+  int *iwork = (int *)(work + M->proj_work);
+  double tol = AP_LOOP_TOL * M->lscale, err = 0.0, resid = 0.0;
+  for (int it = 0; it <= AP_LOOP_ITER; it++) {
+    int rc = ap_kin_position(m, d, d->t, q, S);
+    if (rc != AP_OK) return rc;
+    ap_con_loops(M, S, phi, JlT);
+    err = max_abs(phi, nl);
+    if (err <= tol) return AP_OK;
+    if (it == AP_LOOP_ITER) break;
+    for (int s = 0; s < nl; s++) rhs[s] = -phi[s];
+    rc = ap_la_lstsq_At(k, nl, JlT, rhs, 1e-10, dv, &resid, work, iwork);
+    if (rc != AP_OK) break;
+    step_q(M, q, dv);
+    for (int c = 0; c < k; c++) *change += fabs(dv[c]);
+  }
+  AP_BM_MSG(d, "model '%s': the loop closures cannot be closed at t = %.17g: residual %.3g m "
+            "after %d Gauss-Newton steps (tolerance %.3g m)", m->name, d->t, err, AP_LOOP_ITER,
+            tol);
+  return AP_ERR_INCONSISTENT;
+}
+
+int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
+  const ap_bmodel *M = ap_bm(m);
+  *change = 0.0;
+  int rc = M->nquat ? normalize_quats(m, d, q, change) : AP_OK;
+  if (rc == AP_OK && M->nloop) rc = close_loops(m, d, q, S, change);
+  return rc;
+}
+
+/* ---- public queries ------------------------------------------------------------------------ */
+
+int ap_model_is_body_model(const ap_model *m) {
+  return m && m->ev.position == ap_bm_position;
+}
+
+int ap_model_body_count(const ap_model *m) {
+  return ap_model_is_body_model(m) ? ap_bm(m)->nb : AP_ERR_ARG;
+}
+
+int ap_model_find_body(const ap_model *m, const char *name) {
+  if (!ap_model_is_body_model(m) || !name) return -1;
+  const ap_bmodel *M = ap_bm(m);
+  for (int b = 0; b < M->nb; b++)
+    if (strcmp(M->bodies[b].name, name) == 0) return b;
+  return -1;
+}
+
+static int find_name(char **names, int count, const char *name) {
+  for (int i = 0; name && i < count; i++)
+    if (strcmp(names[i], name) == 0) return i;
+  return -1;
+}
+
+int ap_model_find_coord(const ap_model *m, const char *name) {
+  return m ? find_name(m->coord_names, m->n, name) : -1;
+}
+
+int ap_model_find_speed(const ap_model *m, const char *name) {
+  return m ? find_name(m->speed_names, m->k, name) : -1;
+}
+
+static const ap_mjoint *joint_by_id(const ap_model *m, int joint) {
+  if (!ap_model_is_body_model(m)) return NULL;
+  const ap_bmodel *M = ap_bm(m);
+  return joint >= 0 && joint < M->nj ? &M->joints[M->joint_topo[joint]] : NULL;
+}
+
+int ap_joint_coord_index(const ap_model *m, int joint) {
+  const ap_mjoint *j = joint_by_id(m, joint);
+  if (!j) return AP_ERR_ARG;
+  for (int i = 0; i < j->nq; i++)
+    if (j->qidx[i] >= 0) return j->qidx[i];
+  return -1;
+}
+
+int ap_joint_speed_index(const ap_model *m, int joint) {
+  const ap_mjoint *j = joint_by_id(m, joint);
+  if (!j) return AP_ERR_ARG;
+  for (int i = 0; i < j->nv; i++)
+    if (j->vidx[i] >= 0) return j->vidx[i];
+  return -1;
+}
+
+int ap_constraint_row_index(const ap_model *m, int constraint) {
+  if (!ap_model_is_body_model(m)) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  return constraint >= 0 && constraint < M->nc ? M->cons[constraint].row : AP_ERR_ARG;
+}
+
+int ap_body_eval(const ap_model *m, ap_data *d) {
+  if (!ap_model_is_body_model(m) || !d) return AP_ERR_ARG;
+  double *S = ap_bm_scratch(d);
+  int rc = ap_kin_position(m, d, d->t, d->q, S);
+  if (rc == AP_OK) ap_kin_velocity(ap_bm(m), d->v, S);
+  return rc;
+}
+
+int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out) {
+  if (!ap_model_is_body_model(m) || !d || !out || body < 0 || body >= ap_bm(m)->nb)
+    return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  double *S = ap_bm_scratch(d);
+  kbody C = ap_kin_body(M, S, body);
+  memset(out, 0, sizeof *out);
+  v3_copy(C.o, out->pos);
+  memcpy(out->R, C.R, sizeof out->R);
+  for (int i = 0; i < 3; i++) out->com[i] = C.o[i] + C.rcom[i];
+  v3_copy(C.w, out->omega);
+  v3_copy(C.vo, out->vel);
+  v3_cross_add(C.w, C.rcom, out->vel);
+  const ap_mjoint *j = &M->joints[M->bodies[body].joint];
+  if (j->kind == AP_JOINT_PLANE_CONTACT) {
+    kjoint J = ap_kin_joint(M, S, M->bodies[body].joint);
+    out->has_contact = 1;
+    for (int i = 0; i < 3; i++) out->contact[i] = C.o[i] + J.rc[i];
+  }
+  return AP_OK;
+}
+
+int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body, const double p[3],
+                           double *Jw, double *Jv, double rw[3], double rv[3], double aw[3],
+                           double av[3]) {
+  if (!ap_model_is_body_model(m) || !d || !p || body < 0 || body >= ap_bm(m)->nb)
+    return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  double *S = ap_bm_scratch(d), *JP = S + M->off_tmp, r[3];
+  kbody C = ap_kin_body(M, S, body);
+  size_t k = (size_t)M->k;
+  ap_kin_point(M, S, body, p, NULL, r, JP);
+  if (Jw) memcpy(Jw, C.Jw, 3 * k * sizeof *Jw);
+  if (Jv) memcpy(Jv, JP, 3 * k * sizeof *Jv);
+  if (rw) v3_copy(C.Jw + 3 * k, rw);
+  if (rv) v3_copy(JP + 3 * k, rv);
+  if (aw) v3_copy(C.al, aw);
+  if (av) ap_kin_point_motion(M, S, body, r, NULL, av);
+  return AP_OK;
+}
+
+int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *potential) {
+  int rc = ap_body_eval(m, d);
+  if (rc != AP_OK) return rc;
+  const ap_bmodel *M = ap_bm(m);
+  double *S = ap_bm_scratch(d), T = 0.0;
+  for (int b = 0; b < M->nb; b++) {
+    kbody C = ap_kin_body(M, S, b);
+    double vc[3], Iw[3];
+    v3_copy(C.vo, vc);
+    v3_cross_add(C.w, C.rcom, vc);
+    m3_mul_v(C.Iw, C.w, Iw);
+    T += 0.5 * M->bodies[b].mass * v3_dot(vc, vc) + 0.5 * v3_dot(C.w, Iw);
+  }
+  if (kinetic) *kinetic = T;
+  if (potential) *potential = ap_eff_potential(M, S);
+  return AP_OK;
+}
+
+long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect) {
+  if (!ap_model_is_body_model(m) || !d || effect < 0 || effect >= ap_bm(m)->ne) return -1;
+  return (long)ap_bm_scratch(d)[ap_bm(m)->off_cnt + (size_t)effect];
+}
+
+int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) {
+  if (!ap_model_is_body_model(m) || !d || !q) return AP_ERR_ARG;
+  double ch = 0.0;
+  int rc = ap_bm_project_q(m, d, q, ap_bm_scratch(d), &ch);
+  if (change) *change = ch;
+  return rc;
+}
+
+/* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T. */
+int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
+                            double *v) {
+  if (!ap_model_is_body_model(m) || !d || !q || !given || !v) return AP_ERR_ARG;
+  int k = m->k, b = m->b, nf = 0;
+  memcpy(d->q, q, (size_t)m->n * sizeof *q);
+  memset(d->g, 0, (size_t)k * k * sizeof *d->g);
+  memset(d->A, 0, (size_t)(b ? b : 1) * k * sizeof *d->A);
+  memset(d->a0, 0, (size_t)(b ? b : 1) * sizeof *d->a0);
+  int rc = ap_bm_position(m, d, ap_bm_scratch(d));
+  if (rc != AP_OK || b == 0) return rc;
+  for (int c = 0; c < k; c++) nf += !given[c];
+  size_t lw = ap_la_work_size(nf, b), liw = ap_la_iwork_size(nf, b);
+  double *AfT = calloc((size_t)nf * b + b + nf + lw + 1, sizeof *AfT);
+  int *iw = calloc(liw + 1, sizeof *iw);
+  if (!AfT || !iw) {
+    free(AfT), free(iw);
+    return AP_ERR_NOMEM;
+  }
+  double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 1.0;
+  for (int s = 0; s < b; s++) {
+    rhs[s] = -d->a0[s];
+    for (int c = 0, f = 0; c < k; c++) {
+      double a = d->A[s + (size_t)c * b];
+      scale = fmax(scale, fabs(a * v[c]));
+      if (given[c]) rhs[s] -= a * v[c];
+      else AfT[f++ + (size_t)s * nf] = a;
+    }
+  }
+  rc = nf ? ap_la_lstsq_At(nf, b, AfT, rhs, 1e-12, x, &resid, work, iw) : AP_OK;
+  for (int c = 0, f = 0; rc == AP_OK && c < k; c++)
+    if (!given[c]) v[c] = x[f++];
+  double res = rc == AP_OK ? ap_constraint_residual(d, v) : 0.0;
+  free(AfT), free(iw);
+  if (rc != AP_OK) return rc;
+  if (res > 1e-9 * fmax(scale, max_abs(d->a0, b))) {
+    AP_BM_MSG(d, "model '%s': the given speeds leave the constraints violated by %.3g",
+              m->name, res);
+    return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
+}

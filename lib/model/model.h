@@ -1,0 +1,255 @@
+/* Appell body layer (internal): the compiled body model and the layout of its per-data scratch.
+ *
+ * A body model is an ap_model (core/core.h) whose evaluator hooks (ev.position, ev.velocity,
+ * ev.project_q) point into this layer and whose ev.impl is an ap_bmodel: immutable copies of
+ * the bodies, the joints in topological order (parents first), the constraints and the
+ * effects, with every index resolved at compile time. All per-evaluation state lives in the
+ * data's evaluator scratch S (m->ev.scratch doubles), laid out as:
+ *
+ *   bodies       nb blocks of BODY_STRIDE(K1) doubles (kbody below)
+ *   joints       nj blocks of JOINT_STRIDE (kjoint below)
+ *   constraints  nc blocks of CON_STRIDE: ground motion and prescribed values at t
+ *   counters     ne effect evaluation counts (stored as doubles)
+ *   tmp          scratch for constraint and effect assembly
+ *   proj         loop-closure projection: Jacobian, residual, step, lstsq work
+ *
+ * Jacobians have K1 = k + 1 columns (3 x K1, column-major): columns 0..k-1 multiply the speeds,
+ * column k holds the rheonomic part (driven coordinates), so a full velocity is J [v; 1].
+ * Everything is in world axes. Invariant: the velocity stage reads what the position stage
+ * wrote at the same (t, q). */
+#ifndef AP_MODEL_MODEL_H
+#define AP_MODEL_MODEL_H
+
+#include <math.h>
+#include <stddef.h>
+
+#include "appell/body.h"
+#include "core/core.h"
+
+/* ---- tolerances (docs/bodies.md) -------------------------------------------------------- */
+#define AP_QUAT_TOL 1e-12      /* re-normalize a quaternion when ||q| - 1| exceeds this */
+#define AP_LOOP_TOL 1e-12      /* loop closure residual, relative to the model's length scale */
+#define AP_LOOP_ITER 25        /* Gauss-Newton steps allowed in the loop projection */
+
+/* ---- compiled elements ------------------------------------------------------------------ */
+
+typedef struct ap_mbody {
+  char name[64];
+  double mass, com[3], I[9];  /* inertia about the com, body axes */
+  ap_shape shape;
+  int joint;                  /* index (topological) of the joint whose child this is */
+  int *cols, ncols;           /* speeds that move the body (its ancestors' joints), ascending */
+} ap_mbody;
+
+typedef struct ap_mjoint {
+  char name[64];
+  ap_joint_kind kind;
+  int id;                     /* user id */
+  int parent, child;          /* body ids; parent AP_GROUND for the world */
+  double Rpf[9], ppf[3];      /* parent joint frame in parent axes */
+  double Rcf[9], pcf[3];      /* child joint frame in child axes */
+  double axis[3];             /* revolute, prismatic (unit, parent joint frame) */
+  int nq, nv;                 /* local coordinates and speeds */
+  int quat;                   /* local index of the quaternion's w, or -1 */
+  int wofs;                   /* local index of the first angular speed of the quaternion */
+  int ndrivable;              /* scalar coordinates that may be driven (local 0..ndrivable-1) */
+  int qidx[7], vidx[6];       /* global index of each local coordinate / speed; -1 = driven */
+  int ndriven;
+  ap_time_fn drive[3];
+  void *drive_user[3];
+} ap_mjoint;
+
+typedef struct ap_mcon {
+  char name[64];
+  ap_constraint_def def;      /* copy; def.name is not used */
+  int row, nrows;             /* first row in A and row count */
+  double dir[3];              /* unit direction (knife edge, line) or normal (plane) */
+  double n1[3], n2[3];        /* point on line: unit normals of the line (body2 axes) */
+  int col;                    /* prescribed speed: global speed index */
+  int timed;                  /* needs time functions evaluated (ground motion, speed fn) */
+  int loop;                   /* a loop closure (holonomic) */
+} ap_mcon;
+
+typedef struct ap_meff {
+  char name[64];
+  ap_effect_def def;
+} ap_meff;
+
+typedef struct ap_bmodel {
+  int nb, nj, nc, ne;
+  int n, k, b, K1;
+  ap_mbody *bodies;           /* by body id */
+  ap_mjoint *joints;          /* topological order */
+  int *joint_topo;            /* user joint id -> index in joints */
+  ap_mcon *cons;
+  ap_meff *effs;
+  int nloop;                  /* loop-closure rows */
+  int nquat;                  /* joints with a quaternion */
+  int has_drive;
+  double lscale;              /* length scale for the loop tolerance (m) */
+  int max_user_rows;
+  size_t off_body, off_joint, off_con, off_cnt, off_tmp, off_proj, scratch;
+  size_t body_stride, proj_work, proj_iwork;
+} ap_bmodel;
+
+#define JOINT_STRIDE 64
+#define CON_STRIDE 8
+
+/* ---- views into the scratch ------------------------------------------------------------- */
+
+typedef struct kbody {
+  double *R, *o, *Iw, *rcom;  /* rotation, origin, inertia (world), R com   (position stage) */
+  double *Jw, *Jo, *Jc;       /* 3 x K1: angular, origin, com Jacobians    (position stage) */
+  double *w, *vo, *al, *ao;   /* angular velocity, origin velocity, bias accelerations
+                                 (velocity stage) */
+} kbody;
+
+typedef struct kjoint {
+  double *qloc, *vloc;        /* local coordinates (7) and full speeds (6), driven included */
+  double *drv;                /* (3 x 3) value, rate, acceleration of each drivable coordinate */
+  double *r1, *r2, *r3;       /* R_p ppf, R_FP tj, R_c pcf (world) */
+  double *adw, *adv;          /* driven accelerations' angular / linear contributions */
+  double *RFP;                /* parent joint frame rotation (world) */
+  double *rc, *H, *u, *cb;    /* plane contact: contact vector (world), Hessian of sigma
+                                 (body), u = -R^T e_z, contact point (body) */
+} kjoint;
+
+static inline const ap_bmodel *ap_bm(const ap_model *m) { return (const ap_bmodel *)m->ev.impl; }
+static inline double *ap_bm_scratch(const ap_data *d) {
+  return ((ap_scratch *)d->internal)->ev;
+}
+
+kbody ap_kin_body(const ap_bmodel *M, double *S, int body);
+kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j);
+
+/* ---- 3-vectors and 3 x 3 matrices (column-major) ---------------------------------------- */
+
+static inline double v3_dot(const double *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void v3_cross(const double *a, const double *b, double *c) {
+  double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
+         z = a[0] * b[1] - a[1] * b[0];
+  c[0] = x, c[1] = y, c[2] = z;
+}
+static inline double v3_norm(const double *a) { return sqrt(v3_dot(a, a)); }
+static inline void v3_copy(const double *a, double *b) { b[0] = a[0], b[1] = a[1], b[2] = a[2]; }
+/* c += s a */
+static inline void v3_axpy(double s, const double *a, double *c) {
+  c[0] += s * a[0], c[1] += s * a[1], c[2] += s * a[2];
+}
+/* c += a x b */
+static inline void v3_cross_add(const double *a, const double *b, double *c) {
+  double t[3];
+  v3_cross(a, b, t);
+  c[0] += t[0], c[1] += t[1], c[2] += t[2];
+}
+/* y = M x */
+static inline void m3_mul_v(const double *M, const double *x, double *y) {
+  double a = M[0] * x[0] + M[3] * x[1] + M[6] * x[2], b = M[1] * x[0] + M[4] * x[1] + M[7] * x[2],
+         c = M[2] * x[0] + M[5] * x[1] + M[8] * x[2];
+  y[0] = a, y[1] = b, y[2] = c;
+}
+/* y = M^T x */
+static inline void m3t_mul_v(const double *M, const double *x, double *y) {
+  double a = M[0] * x[0] + M[1] * x[1] + M[2] * x[2], b = M[3] * x[0] + M[4] * x[1] + M[5] * x[2],
+         c = M[6] * x[0] + M[7] * x[1] + M[8] * x[2];
+  y[0] = a, y[1] = b, y[2] = c;
+}
+void m3_mul(const double *A, const double *B, double *C);     /* C = A B (C may not alias) */
+void m3_mul_t(const double *A, const double *B, double *C);   /* C = A B^T */
+void ap_rot_axis_angle(const double *axis, double angle, double *R);
+void ap_quat_normalized_matrix(const double *q, double *R);  /* R of q / |q| */
+/* The 4 x 3 block of N for a quaternion q with angular velocity w in parent axes:
+ * q' = 1/2 [0; w] (x) q = Nq w, written into N (ld ldn) at (row, col). */
+void ap_quat_N(const double *q, double *N, int ldn, int row, int col);
+/* Symmetric 3 x 3 eigenvalues (Jacobi), ascending. */
+void ap_sym3_eig(const double *A, double *lam);
+
+/* ---- shapes (shape.c) ------------------------------------------------------------------- */
+
+/* Support function sigma(u) of the shape at u (body axes), its gradient c (the support point)
+ * and Hessian H (3 x 3). *flat = |u_perp| / |u| for disk and torus (1 otherwise). Returns 0,
+ * or 1 when the shape is singular there (disk or torus lying flat: *flat < flat_tol). */
+int ap_shape_support(const ap_shape *s, const double *u, double *sigma, double *c, double *H,
+                     double *flat);
+
+/* ---- joints (joint.c) ------------------------------------------------------------------- */
+
+/* Local counts of a kind: coordinates, speeds, drivable scalars, quaternion w index, first
+ * angular speed of the quaternion. */
+void ap_joint_counts(ap_joint_kind kind, int *nq, int *nv, int *ndrivable, int *quat,
+                     int *wofs);
+/* Motion columns of local speed i in parent joint frame axes: angular sw, linear sv. For the
+ * plane contact, rc is the contact vector (world = parent axes). */
+void ap_joint_column(const ap_mjoint *j, int i, const double *rc, double *sw, double *sv);
+/* Rotation and translation of the joint from its local coordinates (plane contact: tj[2] is
+ * filled by the kinematics from the shape). */
+void ap_joint_transform(const ap_mjoint *j, const double *qloc, double *Rj, double *tj);
+/* The joint's entries of N (n x k, ld n) at q. */
+void ap_joint_fill_N(const ap_mjoint *j, const double *q, double *N, int n);
+/* Coordinate and speed names (local i) for a kind, e.g. "x", "qw"; "wx". */
+const char *ap_joint_coord_name(ap_joint_kind kind, int i);
+const char *ap_joint_speed_name(ap_joint_kind kind, int i);
+const char *ap_joint_kind_name(ap_joint_kind kind);
+
+/* ---- kinematics (kinematics.c) ---------------------------------------------------------- */
+
+/* Position stage of the bodies at (t, q): drives, transforms, Jacobians, world inertias, plane
+ * contacts. Writes d->msg on failure (drive callback, disk lying flat). */
+int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, double *S);
+/* Velocity stage: full body velocities and bias accelerations for speeds v. */
+void ap_kin_velocity(const ap_bmodel *M, const double *v, double *S);
+/* g (k x k) += sum m Jc^T Jc + Jw^T Iw Jw. */
+void ap_kin_metric(const ap_bmodel *M, double *S, double *g);
+/* h (k) += sum Jc^T m ac + Jw^T (Iw al + w x Iw w). */
+void ap_kin_bias(const ap_bmodel *M, double *S, double *h);
+/* Point p (body axes) of a body or the ground: world position x, offset r = R p, Jacobian
+ * JP (3 x K1) = Jo - [r]x Jw (zero for the ground). */
+void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, double *x,
+                  double *r, double *JP);
+/* Velocity and bias acceleration of a body point with offset r (zero for the ground). */
+void ap_kin_point_motion(const ap_bmodel *M, double *S, int body, const double *r, double *vp,
+                         double *ap);
+/* Full velocity J [v; 1] of a 3 x K1 Jacobian. */
+void ap_kin_apply(int K1, const double *J, const double *v, double *out);
+/* Scratch size of the model's layout (sets the offsets in M). */
+void ap_kin_layout(ap_bmodel *M);
+
+/* ---- constraints (constraint.c) --------------------------------------------------------- */
+
+/* Time functions of the constraints at t (ground motion, prescribed speeds) into S. */
+int ap_con_time(const ap_model *m, ap_data *d, double t, double *S);
+/* Rows A (b x k, ld b) and a0 (b) after ap_kin_position. */
+int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double *S, double *A,
+                double *a0);
+/* gamma (b) after ap_kin_velocity. */
+int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
+                 double *S, double *gamma);
+/* Rolling gamma with or without the term of the contact point moving over the body surface
+ * (surface = 0 is the classic mistake; tests use it to show the finite-difference check
+ * catches it). Writes the constraint's rows of gamma. */
+void ap_con_rolling_gamma(const ap_bmodel *M, double *S, int con, int surface, double *gamma);
+/* Loop closures: residuals phi (nloop) and their Jacobian transposed, JlT (k x nloop, ld k):
+ * JlT[c + k s] = d phi_s / d v_c. */
+void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT);
+
+/* ---- effects (effect.c) ----------------------------------------------------------------- */
+
+/* Q (k) += every effect's generalized force, after ap_kin_velocity. */
+int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
+                  double *S, double *Q);
+/* Potential energy of the gravity and spring effects, after ap_kin_position. */
+double ap_eff_potential(const ap_bmodel *M, double *S);
+
+/* ---- evaluator (evaluate.c) ------------------------------------------------------------- */
+
+int ap_bm_position(const ap_model *m, ap_data *d, double *S);
+int ap_bm_velocity(const ap_model *m, ap_data *d, double *S);
+int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change);
+void ap_bm_destroy(void *impl);
+
+/* Message helper: printf into d->msg (core). */
+#define AP_BM_MSG(d, ...) ap_core_msg((d), __VA_ARGS__)
+
+#endif
