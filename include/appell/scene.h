@@ -1,0 +1,96 @@
+/* Appell: scene files.
+ *
+ * A scene is a YAML file that describes bodies, joints, constraints, effects, the initial state
+ * in the coordinates people use, simulation settings and the output channels (docs/scenes.md).
+ * ap_scene_load reads and validates it, builds the bodies with the builder (body.h) and
+ * compiles the model. Every message about bad input has the form
+ *
+ *     FILE:LINE:COLUMN: key.path: what is wrong (and, for unknown keys, "did you mean ...?")
+ *
+ * and loading stops at the first one. Overrides ("bodies.disk.mass=2") replace any scalar of
+ * the file by its dotted key path before it is read; sequence entries are addressed by index
+ * ("bodies.disk.com.2=0.1"). */
+#ifndef APPELL_SCENE_H
+#define APPELL_SCENE_H
+
+#include <stddef.h>
+
+#include "appell/export.h"
+#include "appell/sim.h"
+#include "appell/status.h"
+#include "appell/system.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct ap_scene ap_scene;
+
+/* Load a scene file, apply nsets overrides "path=value" (later ones win), validate, build and
+ * compile. On failure *out is NULL, the status is AP_ERR_ARG for bad input (AP_ERR_NOMEM, ...
+ * otherwise) and msg holds the one message. */
+AP_API int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
+                         char *msg, size_t msg_len);
+/* The same from text in memory (len bytes, need not be NUL-terminated); name stands for the
+ * file name in messages. */
+AP_API int ap_scene_load_string(const char *text, size_t len, const char *name,
+                                const char *const *sets, int nsets, ap_scene **out, char *msg,
+                                size_t msg_len);
+AP_API void ap_scene_free(ap_scene *s);
+
+/* The compiled model (owned by the scene). */
+AP_API const ap_model *ap_scene_model(const ap_scene *s);
+
+/* Simulation settings of the scene (simulation: and output: sections). */
+typedef struct ap_scene_run {
+  ap_sim_def sim;          /* mode, method (points into the scene), rtol, atol, h_fixed, ... */
+  double t0;               /* start time (s); default 0 */
+  double t_end;            /* end time (s); default 10 */
+  double interval;         /* output interval (s); default 0.01 */
+} ap_scene_run;
+
+AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
+
+/* The initial state (n coordinates, k speeds) made consistent with the constraints: unit
+ * quaternions, loop closures assembled, unspecified speeds completed and over-specified ones
+ * projected (nearest in the metric g). report (may be NULL) receives a description of every
+ * correction, empty when none was needed. An impossible state (no consistent speeds, a loop
+ * that cannot close, a shape singular there) gives AP_ERR_ARG or the core's status and msg. */
+AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *report,
+                                  size_t report_len, char *msg, size_t msg_len);
+
+/* Output channels: column names of a row (column 0 is "t") and their values at the
+ * simulation's current state. */
+AP_API int ap_scene_output_count(const ap_scene *s);
+AP_API const char *ap_scene_output_name(const ap_scene *s, int i);
+AP_API int ap_scene_output_row(ap_scene *s, ap_sim *sim, double *row);
+
+/* Total mechanical energy (kinetic + potential of gravity and springs) at (t, q, v), and the
+ * largest |A v + a0| there. */
+AP_API int ap_scene_energy(ap_scene *s, double t, const double *q, const double *v, double *E);
+AP_API int ap_scene_residual(ap_scene *s, double t, const double *q, const double *v,
+                             double *resid);
+
+/* 1 when nothing in the scene adds or removes energy: no drivers, damping, applied forces,
+ * prescribed non-zero speeds or moving ground; the energy drift then measures the error. */
+AP_API int ap_scene_conserves_energy(const ap_scene *s);
+
+/* The scene's elements, for listings (appell check). */
+typedef enum ap_scene_section {
+  AP_SCENE_BODIES = 0,
+  AP_SCENE_JOINTS = 1,
+  AP_SCENE_CONSTRAINTS = 2,
+  AP_SCENE_EFFECTS = 3,
+  AP_SCENE_CHANNELS = 4    /* the output channels asked for (coordinates, energy, ...) */
+} ap_scene_section;
+
+AP_API int ap_scene_count(const ap_scene *s, ap_scene_section sec);
+AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec, int i);
+AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
+/* The scene's name (name: key, default the file name without directory and extension). */
+AP_API const char *ap_scene_name(const ap_scene *s);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,71 @@
+/* Scene building: sc_scene -> ap_builder -> ap_model (include/appell/body.h).
+ *
+ * Elements are added in the order of the file, so builder ids equal scene indices (body i,
+ * joint j, constraint c, effect e). A builder failure carries the builder's message and is
+ * placed at the line of the element it names ("joint 'x'", "body 'x'", ...), or at the top of
+ * the scene when it names none. Invariant: the builder is freed before returning; the model
+ * does not refer to it. */
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/scene_int.h"
+
+/* The scene node of the element a builder message names, or the root. */
+static const sc_node *blame(const sc_scene *s, const char *msg) {
+  static const char *const words[] = {"constraint '", "effect '", "joint '", "body '"};
+  const char *best = NULL;
+  const sc_node *node = s->root;
+  for (int w = 0; w < 4; w++) {
+    const char *p = strstr(msg, words[w]);
+    if (!p || (best && p > best)) continue;
+    const char *name = p + strlen(words[w]), *end = strchr(name, '\'');
+    size_t len = end ? (size_t)(end - name) : 0;
+    for (int i = 0; i < (w == 0 ? s->nc : w == 1 ? s->ne : w == 2 ? s->nj : s->nb); i++) {
+      const char *nm = w == 0 ? s->cons[i].name : w == 1 ? s->effs[i].name
+                     : w == 2 ? s->joints[i].name : s->bodies[i].name;
+      const sc_node *nd = w == 0 ? s->cons[i].node : w == 1 ? s->effs[i].node
+                        : w == 2 ? s->joints[i].node : s->bodies[i].node;
+      if (strlen(nm) == len && strncmp(nm, name, len) == 0) best = p, node = nd;
+    }
+  }
+  return node;
+}
+
+static int add_bodies(sc_ctx *c, sc_scene *s, ap_builder *b) {
+  for (int i = 0; i < s->nb; i++) {
+    ap_body_def def = s->bodies[i].def;
+    if (s->bodies[i].uniform && ap_body_def_uniform(&def, def.mass) != AP_OK)
+      return sc_err(c, s->bodies[i].node, "cannot compute a uniform inertia for this shape");
+    int rc = ap_builder_add_body(b, &def, NULL);
+    if (rc != AP_OK) return sc_err(c, s->bodies[i].node, "%s", ap_builder_message(b));
+  }
+  return AP_OK;
+}
+
+static int add_rest(sc_ctx *c, sc_scene *s, ap_builder *b) {
+  for (int i = 0; i < s->nj; i++)
+    if (ap_builder_add_joint(b, &s->joints[i].def, NULL) != AP_OK)
+      return sc_err(c, s->joints[i].node, "%s", ap_builder_message(b));
+  for (int i = 0; i < s->nc; i++)
+    if (ap_builder_add_constraint(b, &s->cons[i].def, NULL) != AP_OK)
+      return sc_err(c, s->cons[i].node, "%s", ap_builder_message(b));
+  for (int i = 0; i < s->ne; i++)
+    if (ap_builder_add_effect(b, &s->effs[i].def, NULL) != AP_OK)
+      return sc_err(c, s->effs[i].node, "%s", ap_builder_message(b));
+  return AP_OK;
+}
+
+int sc_build(sc_ctx *c, sc_scene *s, ap_model **out) {
+  ap_builder *b = NULL;
+  *out = NULL;
+  if (ap_builder_create(s->name, &b) != AP_OK) return sc_err(c, s->root, "out of memory");
+  int rc = add_bodies(c, s, b);
+  if (rc == AP_OK) rc = add_rest(c, s, b);
+  if (rc == AP_OK && ap_builder_compile(b, out) != AP_OK) {
+    const char *msg = ap_builder_message(b);
+    rc = sc_err(c, blame(s, msg ? msg : ""), "%s", msg && msg[0] ? msg : "the model does not "
+                "compile");
+  }
+  ap_builder_free(b);
+  return rc;
+}

@@ -1,0 +1,110 @@
+/* Scene expressions: constants and functions of time, with their first and second time
+ * derivatives, on libmatheval (Debian libmatheval-dev; docs/scenes.md "Expressions").
+ *
+ * An sc_expr holds either a constant `value` or three evaluators f, f', f'' built once by
+ * symbolic differentiation, so drivers, Omega(t) and applied forces get exact derivatives.
+ * Names allowed: t (time, where a function of time is allowed) and deg = pi/180; libmatheval
+ * adds pi, e and the usual functions. Invariant: an sc_expr that compiled evaluates without
+ * further checks; non-finite values are reported by sc_expr_eval's return code. libmatheval
+ * stores variable values inside its trees, so one scene must not be evaluated from two
+ * threads at once. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <matheval.h>
+
+#include "scene/scene_int.h"
+
+#define SC_EXPR_MAX 1000
+#define SC_DEG (3.14159265358979323846 / 180.0)
+
+static double eval_at(void *f, double t) {
+  char *names[] = {"t", "deg"};
+  double vals[] = {t, SC_DEG};
+  return evaluator_evaluate(f, 2, names, vals);
+}
+
+void sc_expr_free(sc_expr *e) {
+  for (int i = 0; i < 3; i++)
+    if (e->f[i]) evaluator_destroy(e->f[i]);
+  free(e->text);
+  memset(e, 0, sizeof *e);
+}
+
+/* Every variable of f must be t (when allowed) or deg. */
+static int check_names(sc_ctx *c, const sc_node *at, void *f, int allow_t, int *uses_t) {
+  char **names = NULL;
+  int count = 0;
+  evaluator_get_variables(f, &names, &count);
+  *uses_t = 0;
+  for (int i = 0; i < count; i++) {
+    if (strcmp(names[i], "t") == 0 && allow_t) *uses_t = 1;
+    else if (strcmp(names[i], "deg") != 0)
+      return sc_err(c, at, "unknown name '%s' in expression '%s' (allowed: %snumbers, pi, e, "
+                    "deg, and functions such as sin, cos, exp, sqrt)", names[i], at->text,
+                    allow_t ? "t, " : "");
+  }
+  return AP_OK;
+}
+
+int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
+  memset(e, 0, sizeof *e);
+  size_t len = strlen(text);
+  if (len == 0 || len > SC_EXPR_MAX)
+    return sc_err(c, at, "expected a number%s, got %s", allow_t ? " or an expression of t" : "",
+                  len ? "an expression longer than 1000 characters" : "an empty value");
+  e->text = malloc(len + 1);
+  if (!e->text) return sc_err(c, at, "out of memory");
+  memcpy(e->text, text, len + 1);
+  char *copy = malloc(len + 1);
+  if (copy) memcpy(copy, text, len + 1);
+  e->f[0] = copy ? evaluator_create(copy) : NULL;
+  free(copy);
+  if (!e->f[0]) {
+    sc_expr_free(e);
+    return sc_err(c, at, "cannot parse '%s' as a number or an expression%s", text,
+                  allow_t ? " of t" : "");
+  }
+  int uses_t = 0;
+  if (check_names(c, at, e->f[0], allow_t, &uses_t) != AP_OK) return sc_expr_free(e), AP_ERR_ARG;
+  if (!uses_t) {
+    e->value = eval_at(e->f[0], 0.0);
+    if (!isfinite(e->value)) {
+      sc_expr_free(e);
+      return sc_err(c, at, "'%s' is not a finite number", text);
+    }
+    return AP_OK;
+  }
+  e->timed = 1;
+  e->f[1] = evaluator_derivative(e->f[0], "t");
+  e->f[2] = e->f[1] ? evaluator_derivative(e->f[1], "t") : NULL;
+  if (!e->f[2]) return sc_expr_free(e), sc_err(c, at, "cannot differentiate '%s'", text);
+  return AP_OK;
+}
+
+int sc_expr_read(sc_ctx *c, const sc_node *n, sc_expr *e) {
+  memset(e, 0, sizeof *e);
+  if (sc_expect(c, n, SC_SCALAR) != AP_OK) return AP_ERR_ARG;
+  char *end = NULL;
+  double x = strtod(n->text, &end);
+  if (!n->quoted && end != n->text && *end == '\0' && isfinite(x)) {
+    e->value = x;
+    return AP_OK;
+  }
+  return sc_expr_compile(c, n, n->text, 1, e);
+}
+
+int sc_expr_eval(const sc_expr *e, double t, double f[3]) {
+  if (!e->timed) {
+    f[0] = e->value, f[1] = 0.0, f[2] = 0.0;
+    return 0;
+  }
+  for (int i = 0; i < 3; i++) f[i] = eval_at(e->f[i], t);
+  return isfinite(f[0]) && isfinite(f[1]) && isfinite(f[2]) ? 0 : -1;
+}
+
+int sc_expr_time_fn(double t, double f[3], void *user) {
+  return sc_expr_eval((const sc_expr *)user, t, f);
+}

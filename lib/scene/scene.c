@@ -1,0 +1,264 @@
+/* Scene API (include/appell/scene.h): load = read the file, build the tree, apply the --set
+ * overrides, parse, build and compile; then the initial state, the output rows and listings.
+ *
+ * An ap_scene owns its tree (element names point into it), the parsed scene (expressions the
+ * model's callbacks use), the model, one data struct for output evaluation and the output
+ * columns. Invariant: the model is freed before the expressions it calls, and a failed load
+ * frees everything and leaves exactly one message. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/scene_int.h"
+
+#define SC_MAX_FILE (16L << 20)
+
+struct ap_scene {
+  sc_scene s;
+  ap_model *m;
+  ap_data *d;              /* scratch for outputs, energy and residuals */
+  sc_out out;
+  char name[64];
+};
+
+void sc_scene_clear(sc_scene *s) {
+  for (int j = 0; j < s->nj; j++)
+    for (int i = 0; i < 3; i++) sc_expr_free(&s->joints[j].drive[i]);
+  for (int c = 0; c < s->nc; c++) {
+    sc_expr_free(&s->cons[c].value);
+    sc_expr_free(&s->cons[c].ground.omega);
+    for (int i = 0; i < 2; i++) sc_expr_free(&s->cons[c].ground.vel[i]);
+  }
+  for (int e = 0; e < s->ne; e++)
+    for (int i = 0; i < 3; i++) {
+      sc_expr_free(&s->effs[e].force[i]);
+      sc_expr_free(&s->effs[e].torque[i]);
+    }
+  sc_expr_free(&s->ground.omega);
+  for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
+  free(s->bodies);
+  free(s->joints);
+  free(s->cons);
+  free(s->effs);
+  sc_tree_free(s->root);
+  free(s->file);
+  memset(s, 0, sizeof *s);
+}
+
+void ap_scene_free(ap_scene *sc) {
+  if (!sc) return;
+  ap_data_free(sc->d);
+  ap_model_free(sc->m);
+  sc_out_free(&sc->out);
+  sc_scene_clear(&sc->s);
+  free(sc);
+}
+
+/* The file name without directory and extension. */
+static void stem(const char *file, char *out, size_t len) {
+  const char *base = strrchr(file, '/');
+  base = base ? base + 1 : file;
+  size_t n = strcspn(base, ".");
+  if (n >= len) n = len - 1;
+  memcpy(out, base, n);
+  out[n] = '\0';
+  if (!out[0]) snprintf(out, len, "scene");
+}
+
+static int load_parsed(sc_ctx *c, ap_scene *sc) {
+  if (sc_parse_scene(c, &sc->s) != AP_OK) return c->status;
+  if (!sc->s.name) sc->s.name = sc->name;
+  if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
+  if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
+    return sc_err(c, sc->s.root, "out of memory");
+  return AP_OK;
+}
+
+int ap_scene_load_string(const char *text, size_t len, const char *name,
+                         const char *const *sets, int nsets, ap_scene **out, char *msg,
+                         size_t msg_len) {
+  if (!out) return AP_ERR_ARG;
+  *out = NULL;
+  ap_scene *sc = calloc(1, sizeof *sc);
+  sc_ctx c = {name ? name : "scene", "", AP_OK};
+  if (!sc || !text) {
+    free(sc);
+    if (msg && msg_len) snprintf(msg, msg_len, "%s", sc ? "NULL scene text" : "out of memory");
+    return sc ? AP_ERR_ARG : AP_ERR_NOMEM;
+  }
+  sc->s.file = strdup(c.file);
+  c.file = sc->s.file ? sc->s.file : "scene";
+  stem(c.file, sc->name, sizeof sc->name);
+  sc->s.root = sc_tree_load(&c, text, len);
+  if (sc->s.root && sc->s.root->kind != SC_MAP)
+    sc_err(&c, sc->s.root, "a scene is a mapping of sections (bodies:, joints:, ...)");
+  for (int i = 0; c.status == AP_OK && i < nsets; i++) sc_tree_set(&c, sc->s.root, sets[i]);
+  if (c.status == AP_OK) load_parsed(&c, sc);
+  if (c.status != AP_OK) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
+    int rc = c.status;
+    ap_scene_free(sc);
+    return rc;
+  }
+  *out = sc;
+  return AP_OK;
+}
+
+int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
+                  char *msg, size_t msg_len) {
+  if (out) *out = NULL;
+  FILE *f = path ? fopen(path, "rb") : NULL;
+  if (!f) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s: cannot open: %s", path ? path : "(null)",
+                                 strerror(errno));
+    return AP_ERR_ARG;
+  }
+  char *buf = malloc((size_t)SC_MAX_FILE + 1);
+  size_t len = buf ? fread(buf, 1, (size_t)SC_MAX_FILE + 1, f) : 0;
+  int bad = !buf || ferror(f) || len > (size_t)SC_MAX_FILE;
+  fclose(f);
+  if (bad) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s: %s", path, !buf ? "out of memory" :
+                                 len > (size_t)SC_MAX_FILE ? "larger than 16 MiB" : "read error");
+    free(buf);
+    return buf ? AP_ERR_ARG : AP_ERR_NOMEM;
+  }
+  int rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
+  free(buf);
+  return rc;
+}
+
+const ap_model *ap_scene_model(const ap_scene *sc) { return sc ? sc->m : NULL; }
+const char *ap_scene_name(const ap_scene *sc) { return sc ? sc->s.name : NULL; }
+
+void ap_scene_get_run(const ap_scene *sc, ap_scene_run *run) {
+  if (sc && run) *run = sc->s.run;
+}
+
+int ap_scene_initial_state(ap_scene *sc, double *q0, double *v0, char *report,
+                           size_t report_len, char *msg, size_t msg_len) {
+  if (!sc || !q0 || !v0) return AP_ERR_ARG;
+  sc_ctx c = {sc->s.file, "", AP_OK};
+  int rc = sc_initial_state(&c, &sc->s, sc->m, q0, v0, report, report_len);
+  if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
+  return rc;
+}
+
+int ap_scene_output_count(const ap_scene *sc) { return sc ? sc->out.ncols : 0; }
+
+const char *ap_scene_output_name(const ap_scene *sc, int i) {
+  return sc && i >= 0 && i < sc->out.ncols ? sc->out.cols[i] : NULL;
+}
+
+int ap_scene_output_row(ap_scene *sc, ap_sim *sim, double *row) {
+  if (!sc || !sim || !row) return AP_ERR_ARG;
+  return sc_out_row(&sc->out, &sc->s, sc->m, sc->d, sim, row);
+}
+
+static void load_state(ap_scene *sc, double t, const double *q, const double *v) {
+  sc->d->t = t;
+  memcpy(sc->d->q, q, sizeof(double) * (size_t)ap_model_n(sc->m));
+  memcpy(sc->d->v, v, sizeof(double) * (size_t)ap_model_k(sc->m));
+}
+
+int ap_scene_energy(ap_scene *sc, double t, const double *q, const double *v, double *E) {
+  if (!sc || !q || !v || !E) return AP_ERR_ARG;
+  double T = 0.0, V = 0.0;
+  load_state(sc, t, q, v);
+  int rc = sc_out_energy(sc->m, sc->d, &T, &V);
+  *E = T + V;
+  return rc;
+}
+
+int ap_scene_residual(ap_scene *sc, double t, const double *q, const double *v, double *resid) {
+  if (!sc || !q || !v || !resid) return AP_ERR_ARG;
+  load_state(sc, t, q, v);
+  sc->d->basis = AP_BASIS_NONE;
+  int rc = ap_fwd_position(sc->m, sc->d);
+  *resid = rc == AP_OK ? ap_constraint_residual(sc->d, v) : 0.0;
+  return rc;
+}
+
+static int ground_moves(const ap_ground_motion *g, const sc_ground *sg) {
+  if (g->kind == AP_GROUND_TURNTABLE) return sg->omega.timed || g->omega != 0.0;
+  if (g->kind == AP_GROUND_TRANSLATING)
+    return sg->vel[0].timed || sg->vel[1].timed || g->velocity[0] != 0.0 || g->velocity[1] != 0.0;
+  return 0;
+}
+
+int ap_scene_conserves_energy(const ap_scene *sc) {
+  if (!sc) return 0;
+  const sc_scene *s = &sc->s;
+  for (int j = 0; j < s->nj; j++)
+    for (int i = 0; i < 3; i++)
+      if (s->joints[j].def.drive[i]) return 0;
+  for (int c = 0; c < s->nc; c++) {
+    const ap_constraint_def *d = &s->cons[c].def;
+    if (d->kind == AP_CON_PRESCRIBED_SPEED && (s->cons[c].value.timed || d->speed_value != 0.0))
+      return 0;
+    if ((d->kind == AP_CON_ROLLING || d->kind == AP_CON_KNIFE_EDGE) &&
+        ground_moves(&d->ground, &s->cons[c].ground))
+      return 0;
+  }
+  for (int e = 0; e < s->ne; e++) {
+    const ap_effect_def *d = &s->effs[e].def;
+    if (d->kind == AP_EFFECT_JOINT_DAMPING && d->damping != 0.0) return 0;
+    if (d->kind == AP_EFFECT_SPRING && d->damping != 0.0) return 0;
+    if (d->kind == AP_EFFECT_APPLIED) return 0;
+  }
+  return 1;
+}
+
+/* ---- listings --------------------------------------------------------------------------- */
+
+int ap_scene_count(const ap_scene *sc, ap_scene_section sec) {
+  if (!sc) return 0;
+  static const char *const names[] = SC_OUT_NAMES;
+  int n = 0;
+  switch (sec) {
+    case AP_SCENE_BODIES: return sc->s.nb;
+    case AP_SCENE_JOINTS: return sc->s.nj;
+    case AP_SCENE_CONSTRAINTS: return sc->s.nc;
+    case AP_SCENE_EFFECTS: return sc->s.ne;
+    case AP_SCENE_CHANNELS:
+      for (int i = 0; names[i]; i++) n += (sc->s.channels >> i) & 1u;
+      return n;
+  }
+  return 0;
+}
+
+static const char *channel(const ap_scene *sc, int i) {
+  static const char *const names[] = SC_OUT_NAMES;
+  for (int j = 0; names[j]; j++)
+    if (((sc->s.channels >> j) & 1u) && i-- == 0) return names[j];
+  return NULL;
+}
+
+const char *ap_scene_element_name(const ap_scene *sc, ap_scene_section sec, int i) {
+  if (!sc || i < 0 || i >= ap_scene_count(sc, sec)) return NULL;
+  switch (sec) {
+    case AP_SCENE_BODIES: return sc->s.bodies[i].name;
+    case AP_SCENE_JOINTS: return sc->s.joints[i].name;
+    case AP_SCENE_CONSTRAINTS: return sc->s.cons[i].name;
+    case AP_SCENE_EFFECTS: return sc->s.effs[i].name;
+    case AP_SCENE_CHANNELS: return channel(sc, i);
+  }
+  return NULL;
+}
+
+const char *ap_scene_element_kind(const ap_scene *sc, ap_scene_section sec, int i) {
+  static const char *const shapes[] = {"none", "point", "sphere", "ellipsoid", "disk", "torus"};
+  static const char *const cons[] = {"rolling", "knife_edge", "prescribed_speed", "user",
+                                     "coincident", "point_on_line", "point_on_plane"};
+  static const char *const effs[] = {"gravity", "spring", "joint_damping", "applied", "user"};
+  if (!sc || i < 0 || i >= ap_scene_count(sc, sec)) return NULL;
+  switch (sec) {
+    case AP_SCENE_BODIES: return shapes[sc->s.bodies[i].def.shape.kind];
+    case AP_SCENE_JOINTS: return sc_joint_kind_name(sc->s.joints[i].def.kind);
+    case AP_SCENE_CONSTRAINTS: return cons[sc->s.cons[i].def.kind];
+    case AP_SCENE_EFFECTS: return effs[sc->s.effs[i].def.kind];
+    case AP_SCENE_CHANNELS: return "channel";
+  }
+  return NULL;
+}

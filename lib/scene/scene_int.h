@@ -1,0 +1,243 @@
+/* Appell scene layer (internal): the YAML tree, the reader context, expressions, and the
+ * parsed scene.
+ *
+ * Layout of the layer (docs/scenes.md is the user's reference):
+ *   tree.c    libyaml document -> sc_node tree with line:column of every node; --set overrides
+ *   read.c    typed getters on the tree, unknown-key checks ("did you mean"), messages
+ *   expr.c    expressions of t (libmatheval) with first and second derivatives
+ *   parse.c   tree -> sc_scene (bodies, joints, constraints, effects, ground)
+ *   parse_run.c  tree -> initial state, simulation settings, outputs
+ *   build.c   sc_scene -> ap_builder -> ap_model
+ *   init.c    initial state in people's coordinates -> consistent (q0, v0)
+ *   output.c  output channels: names and values of a CSV row
+ *   scene.c   the public entry points (include/appell/scene.h)
+ *
+ * Invariant: every message the layer produces for bad input names the file, line and column
+ * of the offending node and its key path, and at most one message is produced per load. */
+#ifndef AP_SCENE_INT_H
+#define AP_SCENE_INT_H
+
+#include <stddef.h>
+
+#include "appell/body.h"
+#include "appell/scene.h"
+#include "appell/sim.h"
+
+/* ---- the tree (tree.c) ---------------------------------------------------------------- */
+
+typedef enum sc_kind { SC_SCALAR = 0, SC_SEQ = 1, SC_MAP = 2 } sc_kind;
+
+typedef struct sc_node {
+  sc_kind kind;
+  char *text;              /* scalar value (NUL-terminated; may hold NULs from the file) */
+  int quoted;              /* scalar written in quotes: a string, never a number */
+  int line, col;           /* 1-based position in the file; line 0 = from the command line */
+  const char *origin;      /* the --set argument that created or changed the node, or NULL */
+  char *path;              /* key path from the root, e.g. bodies.disk.com[1] */
+  int n, cap;              /* children */
+  struct sc_node **keys;   /* map: the key scalars (n) */
+  struct sc_node **kids;   /* map values or sequence items (n) */
+} sc_node;
+
+/* Limits that keep hostile input (alias bombs, deep nesting) cheap. */
+#define SC_MAX_DEPTH 64
+#define SC_MAX_NODES 200000
+
+/* The reader context: the file name and the first error. */
+typedef struct sc_ctx {
+  const char *file;
+  char msg[1024];
+  int status;              /* AP_OK or the first error's status */
+} sc_ctx;
+
+/* Parse YAML text into a tree. Returns NULL with ctx->msg set on failure. */
+sc_node *sc_tree_load(sc_ctx *c, const char *text, size_t len);
+void sc_tree_free(sc_node *root);
+/* Apply "dotted.path=value" to the tree (creates missing map keys). */
+int sc_tree_set(sc_ctx *c, sc_node *root, const char *assignment);
+/* Child of a map by key, or NULL. */
+sc_node *sc_map_get(const sc_node *map, const char *key);
+
+/* ---- reading (read.c) ----------------------------------------------------------------- */
+
+/* Record an error at a node: "file:line:col: path: message". Returns AP_ERR_ARG. */
+int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/* Every key of map must be in keys (NULL-terminated); otherwise an error naming the closest
+ * allowed key. A non-map node is an error too ("expected a mapping"). */
+int sc_check_keys(sc_ctx *c, const sc_node *map, const char *const *keys);
+int sc_expect(sc_ctx *c, const sc_node *n, sc_kind kind);
+/* The closest of keys to word by edit distance, or NULL when none is close. */
+const char *sc_suggest(const char *word, const char *const *keys);
+/* Scalars. Each leaves *out untouched when the key is absent (optional) and returns AP_OK. */
+int sc_number(sc_ctx *c, const sc_node *n, double *out);   /* number or constant expression */
+int sc_get_number(sc_ctx *c, const sc_node *map, const char *key, double *out);
+int sc_get_vec(sc_ctx *c, const sc_node *map, const char *key, int len, double *out);
+int sc_get_bool(sc_ctx *c, const sc_node *map, const char *key, int *out);
+int sc_get_int(sc_ctx *c, const sc_node *map, const char *key, long *out);
+/* A plain name (string scalar); *out points into the tree. */
+int sc_get_name(sc_ctx *c, const sc_node *map, const char *key, const char **out);
+/* One of words (NULL-terminated); *out = index. */
+int sc_get_enum(sc_ctx *c, const sc_node *map, const char *key, const char *const *words,
+                int *out);
+/* Range checks with messages at the key's node. */
+int sc_check_positive(sc_ctx *c, const sc_node *map, const char *key, double x);
+int sc_check_nonneg(sc_ctx *c, const sc_node *map, const char *key, double x);
+
+/* ---- expressions (expr.c) -------------------------------------------------------------- */
+
+/* A scalar that is a constant or an expression of t. */
+typedef struct sc_expr {
+  int timed;               /* 0: constant `value`; 1: f(t) with derivatives */
+  double value;
+  void *f[3];              /* libmatheval evaluators: f, f', f'' */
+  char *text;
+} sc_expr;
+
+/* Compile text as an expression; variables allowed: t (when allow_t) and deg = pi/180. */
+int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e);
+/* Read a number or expression of t from a node. */
+int sc_expr_read(sc_ctx *c, const sc_node *n, sc_expr *e);
+void sc_expr_free(sc_expr *e);
+/* f[0..2] at t: value and the two time derivatives (constants: value, 0, 0). */
+int sc_expr_eval(const sc_expr *e, double t, double f[3]);
+/* An ap_time_fn with user = sc_expr *. */
+int sc_expr_time_fn(double t, double f[3], void *user);
+
+/* ---- the parsed scene (parse.c, parse_run.c) ------------------------------------------- */
+
+typedef struct sc_body {
+  const char *name;
+  const sc_node *node;
+  ap_body_def def;
+  int uniform;             /* inertia from the shape */
+} sc_body;
+
+/* Initial state of one joint in people's coordinates (init.c converts). */
+typedef struct sc_init {
+  const sc_node *node;     /* the joint's entry under initial:, or NULL */
+  double pos[3];           /* x y z, or angle / position in pos[0] */
+  int pos_given[3];
+  double vel[3];           /* vx vy vz, or rate in vel[0] */
+  int vel_given[3];
+  int orient;              /* 0 none, 1 quat, 2 zxz (heading tilt spin), 3 zyx (yaw pitch roll) */
+  double quat[4];
+  double euler[3];
+  int ang;                 /* 0 none, 1 omega (parent axes), 2 omega_body, 3 Euler rates */
+  double omega[3];
+  double rates[3];
+} sc_init;
+
+typedef struct sc_joint {
+  const char *name;
+  const sc_node *node;
+  ap_joint_def def;
+  sc_expr drive[3];
+  sc_init init;
+} sc_joint;
+
+typedef struct sc_ground {
+  ap_ground_motion def;
+  sc_expr omega, vel[2];
+} sc_ground;
+
+typedef struct sc_con {
+  const char *name;
+  const sc_node *node;
+  ap_constraint_def def;
+  sc_ground ground;
+  sc_expr value;           /* prescribed speed */
+} sc_con;
+
+typedef struct sc_eff {
+  const char *name;
+  const sc_node *node;
+  ap_effect_def def;
+  sc_expr force[3], torque[3];
+  int timed;               /* some component depends on t: use the wrench callback */
+} sc_eff;
+
+/* Output channels (bit mask). */
+enum {
+  SC_OUT_COORDS = 1 << 0,
+  SC_OUT_SPEEDS = 1 << 1,
+  SC_OUT_ANGLES = 1 << 2,
+  SC_OUT_COM = 1 << 3,
+  SC_OUT_CONTACTS = 1 << 4,
+  SC_OUT_ENERGY = 1 << 5,
+  SC_OUT_RESIDUAL = 1 << 6,
+  SC_OUT_REACTIONS = 1 << 7
+};
+#define SC_OUT_NAMES                                                                     \
+  { "coordinates", "speeds", "angles", "com", "contacts", "energy", "residual", "reactions", \
+    NULL }
+
+typedef struct sc_scene {
+  char *file;
+  sc_node *root;
+  const char *name;
+  int nb, nj, nc, ne;
+  sc_body *bodies;
+  sc_joint *joints;
+  sc_con *cons;
+  sc_eff *effs;
+  sc_ground ground;        /* default ground motion (top-level ground:) */
+  const sc_node *ground_node;
+  ap_scene_run run;
+  char method[32];
+  unsigned channels;
+  double init_tol;         /* relative speed correction above which the state is refused */
+} sc_scene;
+
+int sc_parse_scene(sc_ctx *c, sc_scene *s);
+int sc_parse_con_eff(sc_ctx *c, sc_scene *s);
+int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
+void sc_ground_bind(sc_ground *g);
+int sc_parse_run(sc_ctx *c, sc_scene *s);
+void sc_scene_clear(sc_scene *s);
+int sc_find_body(const sc_scene *s, const char *name);   /* -1 if none */
+int sc_find_joint(const sc_scene *s, const char *name);  /* -1 if none */
+/* Read a body reference ("ground" allowed when ground_ok): *id = index or AP_GROUND. */
+int sc_get_body_ref(sc_ctx *c, const sc_scene *s, const sc_node *map, const char *key,
+                    int ground_ok, int *id);
+
+/* Coordinate, speed and drivable names of a joint kind in scenes (docs/scenes.md). */
+const char *sc_joint_kind_name(ap_joint_kind kind);
+int sc_joint_drivable(ap_joint_kind kind, const char *coord);   /* index or -1 */
+int sc_joint_speed(ap_joint_kind kind, const char *speed);      /* index or -1 */
+
+/* ---- outputs (output.c) --------------------------------------------------------------- */
+
+typedef struct sc_out {
+  int ncols;
+  char **cols;             /* column names; cols[0] = "t" */
+  double *angles;          /* (3 nj) last Euler angles, for unwrapping */
+  double E0;               /* energy at the first row */
+  long rows;               /* rows evaluated */
+} sc_out;
+
+int sc_out_names(sc_out *o, const sc_scene *s, const ap_model *m);
+void sc_out_free(sc_out *o);
+/* Fill row (o->ncols values) at the simulation's state, using d as scratch. */
+int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_sim *sim,
+               double *row);
+int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
+
+/* ---- building and initial state (build.c, init.c) ------------------------------------- */
+
+int sc_build(sc_ctx *c, sc_scene *s, ap_model **out);
+int sc_initial_state(sc_ctx *c, const sc_scene *s, const ap_model *m, double *q0, double *v0,
+                     char *report, size_t report_len);
+
+/* Euler angles (rad) to a quaternion [w x y z]: zxz = Rz(a) Rx(b) Rz(c), zyx = Rz(a) Ry(b)
+ * Rx(c). */
+void sc_euler_to_quat(int zyx, const double e[3], double q[4]);
+/* Angular velocity (parent axes) from Euler angles and their rates. */
+void sc_euler_rates_to_omega(int zyx, const double e[3], const double rates[3], double w[3]);
+/* Z-X-Z angles (heading, tilt, spin) of a rotation. */
+void sc_quat_to_zxz(const double q[4], double e[3]);
+
+#endif

@@ -1,0 +1,133 @@
+/* appell: the command-line tool. `appell run`, `appell check` and `appell plot` (docs/cli.md).
+ *
+ * This file dispatches to the subcommands and holds their shared helpers: option matching
+ * ("--opt VALUE" and "--opt=VALUE"), numbers, "did you mean" for unknown options, and the map
+ * from library status codes to exit codes. Public API only (<appell/appell.h>). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <appell/appell.h>
+
+#include "cli.h"
+
+static const char usage[] =
+    "usage: appell COMMAND [OPTIONS]\n"
+    "\n"
+    "Simulate mechanical systems with nonholonomic constraints described in scene files.\n"
+    "\n"
+    "commands:\n"
+    "  run SCENE     simulate a scene and write its outputs as CSV\n"
+    "  check SCENE   validate a scene and print its structure (n, k, b, rank, l, ...)\n"
+    "  plot CSV      draw columns of a CSV file with gnuplot into a PNG or SVG file\n"
+    "\n"
+    "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
+    "3 numerical failure, 1 internal error. Scenes: docs/scenes.md; the tool: docs/cli.md.\n";
+
+int cli_exit_code(int status) {
+  switch (status) {
+    case AP_OK: return EXIT_OK;
+    case AP_ERR_ARG:
+    case AP_ERR_INCONSISTENT:
+    case AP_ERR_RANK:
+    case AP_ERR_UNSUPPORTED: return EXIT_INPUT;
+    case AP_ERR_CALLBACK:
+    case AP_ERR_NAN:
+    case AP_ERR_SINGULAR:
+    case AP_ERR_SOLVER:
+    case AP_RECOVERABLE: return EXIT_NUMERIC;
+    default: return EXIT_INTERNAL;
+  }
+}
+
+int cli_opt(int argc, char **argv, int *i, const char *name, const char **value) {
+  size_t len = strlen(name);
+  const char *a = argv[*i];
+  if (strncmp(a, name, len) != 0) return 0;
+  if (a[len] == '=') {
+    *value = a + len + 1;
+    return 1;
+  }
+  if (a[len] != '\0') return 0;
+  if (*i + 1 >= argc) return -1;
+  *value = argv[++*i];
+  return 1;
+}
+
+int cli_number(const char *cmd, const char *opt, const char *text, double *out) {
+  char *end = NULL;
+  double x = strtod(text, &end);
+  if (end == text || *end != '\0' || !isfinite(x)) {
+    fprintf(stderr, "appell %s: %s: expected a number, got '%s'\n", cmd, opt, text);
+    return -1;
+  }
+  *out = x;
+  return 0;
+}
+
+static int distance(const char *a, const char *b) {
+  size_t la = strlen(a), lb = strlen(b);
+  if (la > 63 || lb > 63) return 99;
+  int row[64];
+  for (size_t j = 0; j <= lb; j++) row[j] = (int)j;
+  for (size_t i = 1; i <= la; i++) {
+    int diag = row[0];
+    row[0] = (int)i;
+    for (size_t j = 1; j <= lb; j++) {
+      int up = row[j], best = diag + (a[i - 1] != b[j - 1]);
+      if (up + 1 < best) best = up + 1;
+      if (row[j - 1] + 1 < best) best = row[j - 1] + 1;
+      row[j] = best, diag = up;
+    }
+  }
+  return row[lb];
+}
+
+const char *cli_suggest(const char *word, const char *const *words, int count) {
+  const char *best = NULL;
+  int bd = 99;
+  for (int i = 0; i < count && words[i]; i++) {
+    int d = distance(word, words[i]);
+    if (d < bd) bd = d, best = words[i];
+  }
+  int allow = strlen(word) <= 4 ? 1 : strlen(word) <= 8 ? 2 : 3;
+  return bd <= allow ? best : NULL;
+}
+
+int cli_unknown(const char *cmd, const char *arg, const char *const *known) {
+  char opt[64];
+  snprintf(opt, sizeof opt, "%.*s", (int)strcspn(arg, "="), arg);
+  int count = 0;
+  while (known[count]) count++;
+  const char *s = cli_suggest(opt, known, count);
+  if (s)
+    fprintf(stderr, "appell %s: unknown option '%s' (did you mean '%s'?)\n", cmd, opt, s);
+  else
+    fprintf(stderr, "appell %s: unknown option '%s' (see appell %s --help)\n", cmd, opt, cmd);
+  return EXIT_INPUT;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fputs(usage, stderr);
+    return EXIT_INPUT;
+  }
+  const char *cmd = argv[1];
+  if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+    fputs(usage, stdout);
+    return EXIT_OK;
+  }
+  if (strcmp(cmd, "--version") == 0) {
+    printf("appell %s\n", AP_VERSION_STRING);
+    return EXIT_OK;
+  }
+  if (strcmp(cmd, "run") == 0) return cmd_run(argc - 1, argv + 1);
+  if (strcmp(cmd, "check") == 0) return cmd_check(argc - 1, argv + 1);
+  if (strcmp(cmd, "plot") == 0) return cmd_plot(argc - 1, argv + 1);
+  static const char *const cmds[] = {"run", "check", "plot"};
+  const char *s = cli_suggest(cmd, cmds, 3);
+  fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,
+          s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
+  return EXIT_INPUT;
+}

@@ -1,0 +1,170 @@
+/* appell plot: draw columns of an appell CSV file with gnuplot (docs/cli.md).
+ *
+ * Reads the header row, checks every requested column (with "did you mean"), writes a gnuplot
+ * script to gnuplot's standard input (pngcairo or svg terminal, chosen by the extension of
+ * -o) and waits for it. Columns are addressed by number in the script, so names need no
+ * quoting; file names are refused if they contain a quote or a newline. Exit 2 for bad input,
+ * 1 when gnuplot is missing or fails. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+#define MAX_COLS 4096
+#define MAX_Y 16
+
+static const char help[] =
+    "usage: appell plot FILE.csv [--x COL] --y COL [--y COL]... -o FIG.png|FIG.svg\n"
+    "\n"
+    "Draw columns of a CSV file written by appell run with gnuplot (package gnuplot-nox).\n"
+    "\n"
+    "options:\n"
+    "  --x COL         the column on the horizontal axis (default t)\n"
+    "  --y COL         a column to draw against it (repeatable, at most 16)\n"
+    "  -o, --output F  the figure: F.png (pngcairo) or F.svg\n"
+    "  --title TEXT    a title above the plot\n"
+    "  --equal         the same scale on both axes (for paths in the plane)\n"
+    "  --logy          logarithmic vertical axis (absolute values are not taken)\n"
+    "  -h, --help      this help\n"
+    "\n"
+    "Exit codes: 0 success, 2 bad input (file, columns, options), 1 gnuplot missing or failed.\n";
+
+typedef struct plot_opts {
+  const char *csv, *x, *y[MAX_Y], *out, *title;
+  int ny, equal, logy;
+} plot_opts;
+
+static int parse(int argc, char **argv, plot_opts *o) {
+  static const char *const known[] = {"--x", "--y", "--output", "--title", "--equal", "--logy",
+                                      "--help", NULL};
+  for (int i = 1; i < argc; i++) {
+    const char *v = NULL;
+    int r = 0;
+    if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) return 1;
+    if (strcmp(argv[i], "--equal") == 0) o->equal = 1;
+    else if (strcmp(argv[i], "--logy") == 0) o->logy = 1;
+    else if ((r = cli_opt(argc, argv, &i, "--x", &v)) != 0) o->x = v;
+    else if ((r = cli_opt(argc, argv, &i, "--y", &v)) != 0) {
+      if (r > 0 && o->ny >= MAX_Y) return fprintf(stderr, "appell plot: at most %d --y\n", MAX_Y), -1;
+      if (r > 0) o->y[o->ny++] = v;
+    } else if ((r = cli_opt(argc, argv, &i, "-o", &v)) != 0 ||
+               (r = cli_opt(argc, argv, &i, "--output", &v)) != 0) o->out = v;
+    else if ((r = cli_opt(argc, argv, &i, "--title", &v)) != 0) o->title = v;
+    else if (argv[i][0] == '-' && argv[i][1]) return cli_unknown("plot", argv[i], known), -1;
+    else if (!o->csv) o->csv = argv[i];
+    else return fprintf(stderr, "appell plot: one CSV file at a time\n"), -1;
+    if (r < 0) return fprintf(stderr, "appell plot: %s needs a value\n", argv[i]), -1;
+  }
+  if (!o->csv || !o->ny || !o->out)
+    return fprintf(stderr, "appell plot: need FILE.csv, at least one --y and -o FIG.png|svg "
+                   "(see --help)\n"), -1;
+  return 0;
+}
+
+typedef struct header {
+  char *line;
+  const char *cols[MAX_COLS];
+  int n;
+} header;
+
+static int read_header(const char *csv, header *h) {
+  FILE *f = fopen(csv, "r");
+  if (!f) return fprintf(stderr, "appell plot: cannot open %s: %s\n", csv, strerror(errno)), -1;
+  size_t cap = 0;
+  ssize_t len = getline(&h->line, &cap, f);
+  fclose(f);
+  if (len <= 0) return fprintf(stderr, "appell plot: %s is empty\n", csv), -1;
+  h->line[strcspn(h->line, "\r\n")] = '\0';
+  for (char *p = strtok(h->line, ","); p && h->n < MAX_COLS; p = strtok(NULL, ","))
+    h->cols[h->n++] = p;
+  return 0;
+}
+
+/* 1-based column number of name, or 0 with a message. */
+static int column(const header *h, const char *csv, const char *name) {
+  for (int i = 0; i < h->n; i++)
+    if (strcmp(h->cols[i], name) == 0) return i + 1;
+  const char *s = cli_suggest(name, h->cols, h->n);
+  fprintf(stderr, "appell plot: %s has no column '%s'%s%s%s\n", csv, name,
+          s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
+  return 0;
+}
+
+static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
+
+static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
+  const char *ext = strrchr(o->out, '.');
+  int svg = ext && strcmp(ext, ".svg") == 0;
+  fprintf(g, "set terminal %s size 900,600 noenhanced\n", svg ? "svg" : "pngcairo");
+  fprintf(g, "set output '%s'\nset datafile separator ','\nset grid\nset key outside bottom "
+          "center horizontal\n", o->out);
+  fprintf(g, "set xlabel '%s'\n", o->x);
+  if (o->ny == 1) fprintf(g, "set ylabel '%s'\n", o->y[0]);
+  if (o->title) fprintf(g, "set title '%s'\n", o->title);
+  if (o->equal) fprintf(g, "set size ratio -1\n");
+  if (o->logy) fprintf(g, "set logscale y\nset format y '%%.0e'\n");
+  fprintf(g, "plot ");
+  for (int i = 0; i < o->ny; i++)
+    fprintf(g, "%s'%s' skip 1 using %d:%d with lines lw 2 title '%s'", i ? ", " : "", o->csv, xc,
+            yc[i], o->y[i]);
+  fprintf(g, "\n");
+}
+
+/* Run gnuplot with the script on its standard input. */
+static int gnuplot(const plot_opts *o, int xc, const int *yc) {
+  int fd[2];
+  if (pipe(fd) != 0) return fprintf(stderr, "appell plot: pipe: %s\n", strerror(errno)), 1;
+  pid_t pid = fork();
+  if (pid < 0) return fprintf(stderr, "appell plot: fork: %s\n", strerror(errno)), 1;
+  if (pid == 0) {
+    dup2(fd[0], STDIN_FILENO);
+    close(fd[0]), close(fd[1]);
+    execlp("gnuplot", "gnuplot", (char *)NULL);
+    fprintf(stderr, "appell plot: cannot run gnuplot (%s); install the Debian package "
+            "gnuplot-nox\n", strerror(errno));
+    _exit(127);
+  }
+  close(fd[0]);
+  FILE *g = fdopen(fd[1], "w");
+  if (g) {
+    script(g, o, xc, yc);
+    fclose(g);
+  } else {
+    close(fd[1]);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 127)
+      fprintf(stderr, "appell plot: gnuplot failed (status %d)\n", WEXITSTATUS(status));
+    return EXIT_INTERNAL;
+  }
+  return EXIT_OK;
+}
+
+int cmd_plot(int argc, char **argv) {
+  plot_opts o = {.x = "t"};
+  int rc = parse(argc, argv, &o);
+  if (rc != 0) return rc > 0 ? (fputs(help, stdout), EXIT_OK) : EXIT_INPUT;
+  const char *ext = strrchr(o.out, '.');
+  if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
+    return fprintf(stderr, "appell plot: -o %s: the figure must end in .png or .svg\n", o.out),
+           EXIT_INPUT;
+  if (!safe_name(o.csv) || !safe_name(o.out) || (o.title && !safe_name(o.title)))
+    return fprintf(stderr, "appell plot: file names and titles must not contain quotes, "
+                   "backslashes or newlines\n"), EXIT_INPUT;
+  header h = {0};
+  int code = read_header(o.csv, &h) == 0 ? EXIT_OK : EXIT_INPUT;
+  int xc = code == EXIT_OK ? column(&h, o.csv, o.x) : 0, yc[MAX_Y];
+  if (code == EXIT_OK && !xc) code = EXIT_INPUT;
+  for (int i = 0; code == EXIT_OK && i < o.ny; i++)
+    if (!(yc[i] = column(&h, o.csv, o.y[i]))) code = EXIT_INPUT;
+  if (code == EXIT_OK) code = gnuplot(&o, xc, yc);
+  if (code == EXIT_OK) printf("%s\n", o.out);
+  free(h.line);
+  return code;
+}

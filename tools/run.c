@@ -1,0 +1,309 @@
+/* appell run: simulate a scene and write its output channels as CSV (docs/cli.md).
+ *
+ * Flow: options -> overrides (--set first, then --mode/--method/--rtol/--atol/--t-end, so the
+ * command line wins over the file) -> ap_scene_load -> initial state (corrections reported)
+ * -> ap_sim_create -> rows at t0 + i * interval up to t_end -> summary on stderr.
+ * Invariant: with --out, rows go to a temporary file beside the target, renamed over it only
+ * after the last row; any failure or interruption removes the temporary file, so a file at
+ * the target path is always complete. */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <appell/appell.h>
+
+#include "cli.h"
+
+#define MAX_SETS 256
+
+static const char help[] =
+    "usage: appell run SCENE [options]\n"
+    "\n"
+    "Simulate SCENE (a YAML scene file, docs/scenes.md) and write one CSV row per output\n"
+    "interval: a header, then t and the channels the scene asks for (docs/cli.md).\n"
+    "\n"
+    "options:\n"
+    "  --out FILE.csv     write the CSV to FILE.csv (default: standard output); the file\n"
+    "                     appears only when the run succeeds\n"
+    "  --set PATH=VALUE   override a scalar of the scene by its dotted key path, e.g.\n"
+    "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
+    "  --mode M           minimal, projected or dae (simulation.mode)\n"
+    "  --method NAME      stepper (simulation.method); see the list below\n"
+    "  --rtol X           relative tolerance (simulation.rtol)\n"
+    "  --atol X           absolute tolerance (simulation.atol)\n"
+    "  --t-end T          end time in seconds (simulation.t_end)\n"
+    "  --interval DT      output interval in seconds (output.interval)\n"
+    "  --quiet            no summary and no progress bar\n"
+    "  -h, --help         this help\n"
+    "\n"
+    "Command-line values win over the file. A summary (steps, evaluations, wall time, largest\n"
+    "constraint residual, energy drift) goes to standard error, with a progress bar when\n"
+    "standard error is a terminal. Exit codes: 0 success, 2 bad input, 3 numerical failure,\n"
+    "1 internal error, 130 interrupted.\n";
+
+static volatile sig_atomic_t interrupted = 0;
+static void on_signal(int sig) { interrupted = sig; }
+
+typedef struct run_opts {
+  const char *scene, *out;
+  const char *sets[MAX_SETS + 8];
+  int nsets, quiet;
+  char extra[6][96];      /* overrides built from --mode, --method, ... */
+} run_opts;
+
+static void print_methods(void) {
+  ap_method_info info;
+  printf("\nmethods:\n");
+  for (int i = 0; i < ap_method_count(); i++)
+    if (ap_method_get(i, &info) == AP_OK)
+      printf("  %-12s order %d, %s  %s\n", info.name, info.order,
+             info.adaptive ? "adaptive" : "fixed step", info.summary);
+}
+
+/* Options that become overrides: option name and the scene path. */
+static const char *const mapped[][2] = {{"--mode", "simulation.mode"},
+                                        {"--method", "simulation.method"},
+                                        {"--rtol", "simulation.rtol"},
+                                        {"--atol", "simulation.atol"},
+                                        {"--t-end", "simulation.t_end"},
+                                        {"--interval", "output.interval"}};
+
+static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
+  for (int m = 0; m < 6; m++) {
+    const char *v = NULL;
+    int r = cli_opt(argc, argv, i, mapped[m][0], &v);
+    if (r == 0) continue;
+    if (r < 0) return fprintf(stderr, "appell run: %s needs a value\n", mapped[m][0]), -1;
+    double x;
+    if (m >= 2 && cli_number("run", mapped[m][0], v, &x) != 0) return -1;
+    snprintf(o->extra[*extra], sizeof o->extra[0], "%s=%s", mapped[m][1], v);
+    ++*extra;
+    return 1;
+  }
+  return 0;
+}
+
+static int parse_args(int argc, char **argv, run_opts *o) {
+  static const char *const known[] = {"--out", "--set", "--mode", "--method", "--rtol", "--atol",
+                                      "--t-end", "--interval", "--quiet", "--help", NULL};
+  int extra = 0;
+  for (int i = 1; i < argc; i++) {
+    const char *v = NULL;
+    int r;
+    if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) return 1;
+    if (strcmp(argv[i], "--quiet") == 0) {
+      o->quiet = 1;
+    } else if ((r = cli_opt(argc, argv, &i, "--out", &v)) != 0 ||
+               (r = cli_opt(argc, argv, &i, "-o", &v)) != 0) {
+      if (r < 0) return fprintf(stderr, "appell run: --out needs a file name\n"), -1;
+      o->out = v;
+    } else if ((r = cli_opt(argc, argv, &i, "--set", &v)) != 0) {
+      if (r < 0 || o->nsets >= MAX_SETS)
+        return fprintf(stderr, "appell run: --set needs PATH=VALUE (at most %d)\n", MAX_SETS), -1;
+      o->sets[o->nsets++] = v;
+    } else if ((r = mapped_opt(argc, argv, &i, o, &extra)) != 0) {
+      if (r < 0) return -1;
+    } else if (argv[i][0] == '-' && argv[i][1]) {
+      cli_unknown("run", argv[i], known);
+      return -1;
+    } else if (!o->scene) {
+      o->scene = argv[i];
+    } else {
+      return fprintf(stderr, "appell run: one scene at a time (got '%s' and '%s')\n", o->scene,
+                     argv[i]), -1;
+    }
+  }
+  for (int e = 0; e < extra; e++) o->sets[o->nsets++] = o->extra[e];
+  if (!o->scene) return fprintf(stderr, "appell run: no scene file (see appell run --help)\n"), -1;
+  return 0;
+}
+
+/* ---- output file ------------------------------------------------------------------------ */
+
+typedef struct out_file {
+  FILE *f;
+  char tmp[4096];
+  const char *target;
+} out_file;
+
+static int open_out(out_file *of, const char *target) {
+  of->target = target;
+  if (!target || strcmp(target, "-") == 0) {
+    of->f = stdout, of->target = NULL;
+    return EXIT_OK;
+  }
+  if (snprintf(of->tmp, sizeof of->tmp, "%s.tmp.XXXXXX", target) >= (int)sizeof of->tmp)
+    return fprintf(stderr, "appell run: --out: path too long\n"), EXIT_INPUT;
+  int fd = mkstemp(of->tmp);
+  of->f = fd >= 0 ? fdopen(fd, "w") : NULL;
+  if (!of->f) {
+    fprintf(stderr, "appell run: cannot create %s: %s\n", of->tmp, strerror(errno));
+    if (fd >= 0) close(fd), unlink(of->tmp);
+    of->tmp[0] = '\0';
+    return EXIT_INPUT;
+  }
+  return EXIT_OK;
+}
+
+/* Finish: rename on success, remove otherwise. Returns the exit code. */
+static int close_out(out_file *of, int code) {
+  if (!of->f) return code;
+  if (!of->target) return fflush(stdout) != 0 && code == EXIT_OK ? EXIT_INTERNAL : code;
+  int bad = ferror(of->f) | (fclose(of->f) != 0);
+  of->f = NULL;
+  if (code == EXIT_OK && bad) {
+    fprintf(stderr, "appell run: writing %s failed\n", of->tmp);
+    code = EXIT_INTERNAL;
+  }
+  if (code == EXIT_OK && rename(of->tmp, of->target) != 0) {
+    fprintf(stderr, "appell run: cannot rename %s to %s: %s\n", of->tmp, of->target,
+            strerror(errno));
+    code = EXIT_INTERNAL;
+  }
+  if (code != EXIT_OK) unlink(of->tmp);
+  return code;
+}
+
+/* ---- the run ---------------------------------------------------------------------------- */
+
+typedef struct run_state {
+  ap_scene *sc;
+  ap_sim *sim;
+  ap_scene_run run;
+  double *buf, *row, E0, drift, wall;   /* buf: q0, v0, row */
+  long rows;
+  int progress;
+} run_state;
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void progress(const run_state *rs, double t, int done) {
+  double frac = (t - rs->run.t0) / (rs->run.t_end - rs->run.t0);
+  int w = 30, fill = (int)(frac * w + 0.5);
+  fprintf(stderr, "\r[%.*s%*s] %3d%%  t = %-10.4g", fill, "##############################",
+          w - fill, "", (int)(100 * frac + 0.5), t);
+  if (done) fputs("\r\033[K", stderr);
+}
+
+static int write_row(run_state *rs, FILE *f) {
+  int rc = ap_scene_output_row(rs->sc, rs->sim, rs->row), nc = ap_scene_output_count(rs->sc);
+  if (rc != AP_OK) return rc;
+  for (int i = 0; i < nc; i++) fprintf(f, i ? ",%.15g" : "%.15g", rs->row[i]);
+  fputc('\n', f);
+  double E = 0.0;
+  rc = ap_scene_energy(rs->sc, ap_sim_time(rs->sim), ap_sim_q(rs->sim), ap_sim_v(rs->sim), &E);
+  if (rc != AP_OK) return rc;
+  if (rs->rows++ == 0) rs->E0 = E;
+  rs->drift = fmax(rs->drift, fabs(E - rs->E0));
+  return AP_OK;
+}
+
+static int loop(run_state *rs, FILE *f) {
+  long nrows = (long)ceil((rs->run.t_end - rs->run.t0) / rs->run.interval - 1e-9);
+  double last_draw = 0.0;
+  int rc = write_row(rs, f);
+  for (long i = 1; rc == AP_OK && i <= nrows && !interrupted; i++) {
+    double t = i == nrows ? rs->run.t_end : rs->run.t0 + (double)i * rs->run.interval;
+    rc = ap_sim_advance(rs->sim, t);
+    if (rc != AP_OK) {
+      fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
+              ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
+      return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
+    }
+    rc = write_row(rs, f);
+    if (rs->progress && (now() - last_draw > 0.1 || i == nrows)) {
+      progress(rs, t, 0);
+      last_draw = now();
+    }
+  }
+  if (rs->progress) progress(rs, rs->run.t_end, 1);
+  if (interrupted) return fprintf(stderr, "appell run: interrupted\n"), EXIT_INTERRUPT;
+  if (rc != AP_OK)
+    return fprintf(stderr, "appell run: output at t = %.10g failed: %s\n", ap_sim_time(rs->sim),
+                   ap_strerror(rc)), cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC
+                                                                     : cli_exit_code(rc);
+  return EXIT_OK;
+}
+
+static void summary(const run_state *rs, const run_opts *o) {
+  ap_sim_stats st;
+  ap_sim_get_stats(rs->sim, &st);
+  const ap_sim_def *d = &rs->run.sim;
+  static const char *const modes[] = {"minimal", "projected", "dae"};
+  fprintf(stderr, "appell: %s: t = %g .. %g, %ld rows%s%s\n", ap_scene_name(rs->sc), rs->run.t0,
+          rs->run.t_end, rs->rows, o->out ? " -> " : "", o->out ? o->out : "");
+  fprintf(stderr, "  mode %s, method %s, rtol %.3g, atol %.3g\n", modes[d->mode % 3],
+          d->mode == AP_MODE_DAE ? "ida" : d->method, d->rtol, d->atol);
+  fprintf(stderr, "  steps %ld (rejected %ld), evaluations %ld, partition switches %ld, "
+          "projections %ld, wall time %.3f s\n", st.steps, st.err_fails, st.rhs_evals,
+          st.partition_switches, st.projections, rs->wall);
+  fprintf(stderr, "  max constraint residual %.3g, energy drift %.3g (relative %.3g; %s)\n",
+          st.max_residual, rs->drift, rs->drift / fmax(fabs(rs->E0), 1e-300),
+          ap_scene_conserves_energy(rs->sc) ? "energy is conserved in this scene"
+                                            : "energy is not conserved in this scene");
+}
+
+static int start(run_state *rs, const run_opts *o) {
+  char msg[1024], report[2048];
+  const ap_model *m = ap_scene_model(rs->sc);
+  int n = ap_model_n(m), k = ap_model_k(m), nc = ap_scene_output_count(rs->sc);
+  double *q0 = calloc((size_t)(n + k + nc) + 1, sizeof *q0), *v0 = q0 ? q0 + n : NULL;
+  if (!q0) return fprintf(stderr, "appell run: out of memory\n"), EXIT_INTERNAL;
+  rs->buf = q0, rs->row = v0 + k;
+  int rc = ap_scene_initial_state(rs->sc, q0, v0, report, sizeof report, msg, sizeof msg);
+  if (rc != AP_OK) {
+    fprintf(stderr, "%s\n", msg);
+    return cli_exit_code(rc);
+  }
+  if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
+  ap_scene_get_run(rs->sc, &rs->run);
+  rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
+  if (rc != AP_OK) {
+    fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc), msg);
+    return cli_exit_code(rc);
+  }
+  return EXIT_OK;
+}
+
+static void write_header(const ap_scene *sc, FILE *f) {
+  for (int i = 0; i < ap_scene_output_count(sc); i++)
+    fprintf(f, i ? ",%s" : "%s", ap_scene_output_name(sc, i));
+  fputc('\n', f);
+}
+
+int cmd_run(int argc, char **argv) {
+  run_opts o = {0};
+  int rc = parse_args(argc, argv, &o);
+  if (rc != 0) return rc > 0 ? (fputs(help, stdout), print_methods(), EXIT_OK) : EXIT_INPUT;
+  char msg[1024];
+  run_state rs = {0};
+  int st = ap_scene_load(o.scene, o.sets, o.nsets, &rs.sc, msg, sizeof msg);
+  if (st != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(st);
+  out_file of = {0};
+  int code = start(&rs, &o);
+  if (code == EXIT_OK) code = open_out(&of, o.out);
+  if (code == EXIT_OK) {
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    rs.progress = !o.quiet && isatty(STDERR_FILENO);
+    double t_start = now();
+    write_header(rs.sc, of.f);
+    code = loop(&rs, of.f);
+    rs.wall = now() - t_start;
+    code = close_out(&of, code);
+    if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
+  }
+  free(rs.buf);
+  ap_sim_free(rs.sim);
+  ap_scene_free(rs.sc);
+  return code;
+}
