@@ -68,7 +68,10 @@ static void settings(const ap_scene *sc, const ap_scene_run *r) {
   static const char *const modes[] = {"minimal", "projected", "dae"};
   printf("simulation   mode %s, method %s, rtol %g, atol %g, t0 %g, t_end %g\n",
          modes[r->sim.mode % 3], r->sim.method, r->sim.rtol, r->sim.atol, r->t0, r->t_end);
-  list_section(sc, AP_SCENE_CHANNELS, "outputs");
+  printf("outputs      every %g s:", r->interval);
+  for (int i = 0; i < ap_scene_count(sc, AP_SCENE_CHANNELS); i++)
+    printf(" %s", ap_scene_element_name(sc, AP_SCENE_CHANNELS, i));
+  printf("\n");
   printf("columns      %d:", ap_scene_output_count(sc));
   for (int i = 0; i < ap_scene_output_count(sc); i++) printf(" %s", ap_scene_output_name(sc, i));
   printf("\n");

@@ -8,6 +8,7 @@
  * further checks; non-finite values are reported by sc_expr_eval's return code. libmatheval
  * stores variable values inside its trees, so one scene must not be evaluated from two
  * threads at once. */
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -49,12 +50,44 @@ static int check_names(sc_ctx *c, const sc_node *at, void *f, int allow_t, int *
   return AP_OK;
 }
 
+/* Position of a '.' that starts no number (libmatheval would echo it), or -1. */
+static long stray_dot(const char *s) {
+  size_t i = 0;
+  while (s[i]) {
+    if (isalpha((unsigned char)s[i]) || s[i] == '_') {
+      while (isalnum((unsigned char)s[i]) || s[i] == '_') i++;
+    } else if (isdigit((unsigned char)s[i]) || (s[i] == '.' && isdigit((unsigned char)s[i + 1]))) {
+      while (isdigit((unsigned char)s[i])) i++;
+      if (s[i] == '.') i++;
+      while (isdigit((unsigned char)s[i])) i++;
+    } else if (s[i] == '.') {
+      return (long)i;
+    } else {
+      i++;
+    }
+  }
+  return -1;
+}
+
 int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
   memset(e, 0, sizeof *e);
   size_t len = strlen(text);
   if (len == 0 || len > SC_EXPR_MAX)
     return sc_err(c, at, "expected a number%s, got %s", allow_t ? " or an expression of t" : "",
                   len ? "an expression longer than 1000 characters" : "an empty value");
+  /* libmatheval's scanner skips unknown characters and echoes them to stdout: refuse them. */
+  size_t bad = strspn(text, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_"
+                            ".+-*/^() \t");
+  if (bad < len) {
+    unsigned char ch = (unsigned char)text[bad];
+    if (ch >= 0x20 && ch < 0x7f)
+      return sc_err(c, at, "unexpected character '%c' in expression '%s'", ch, text);
+    return sc_err(c, at, "unexpected byte 0x%02x in expression (column %zu of the value)", ch,
+                  bad + 1);
+  }
+  if (stray_dot(text) >= 0)
+    return sc_err(c, at, "unexpected '.' in expression '%s' (column %ld of the value)", text,
+                  stray_dot(text) + 1);
   e->text = malloc(len + 1);
   if (!e->text) return sc_err(c, at, "out of memory");
   memcpy(e->text, text, len + 1);

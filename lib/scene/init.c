@@ -139,9 +139,32 @@ static void append(char *buf, size_t len, const char *fmt, const char *a, double
   if (used + 1 < len) snprintf(buf + used, len - used, fmt, a, x, y);
 }
 
+/* Is word in text as a whole name (row names add ".x" and the like)? */
+static int names(const char *text, const char *word) {
+  size_t len = strlen(word);
+  for (const char *p = strstr(text, word); p; p = strstr(p + 1, word)) {
+    char before = p == text ? ' ' : p[-1], after = p[len];
+    int inner = (before == '_' || before == '-' || (before >= '0' && before <= '9') ||
+                 (before >= 'A' && before <= 'Z') || (before >= 'a' && before <= 'z'));
+    if (!inner && (after == '\0' || after == '.' || after == ' ' || after == ',' || after == ';' ||
+                   after == ')' || after == ':' || after == '\''))
+      return 1;
+  }
+  return 0;
+}
+
+/* The node to blame: a constraint the core names, else the constraints (when they are the
+ * problem) or the initial state, else the top. */
+static const sc_node *culprit(const sc_scene *s, const ap_data *d, int constraints) {
+  for (int i = 0; d && i < s->nc; i++)
+    if (names(d->msg, s->cons[i].name)) return s->cons[i].node;
+  const sc_node *at = sc_map_get(s->root, constraints ? "constraints" : "initial");
+  return at ? at : s->root;
+}
+
 static int refuse(sc_ctx *c, const sc_scene *s, ap_data *d, const char *what) {
-  const sc_node *at = sc_map_get(s->root, "initial");
-  return sc_err(c, at ? at : s->root, "impossible initial state: %s%s%s", what,
+  const sc_node *at = culprit(s, d, strstr(what, "constraints") != NULL);
+  return sc_err(c, at, "impossible initial state: %s%s%s", what,
                 d && d->msg[0] ? ": " : "", d ? d->msg : "");
 }
 
@@ -170,7 +193,8 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
   }
   free(v_in);
   if (rc != AP_OK) return refuse(c, s, d, "no speeds satisfy the constraints");
-  if ((rc = ap_fwd_position(m, d)) != AP_OK) return refuse(c, s, d, "the constraints");
+  if ((rc = ap_fwd_position(m, d)) != AP_OK)
+    return refuse(c, s, d, "the model cannot be evaluated there");
   double resid = ap_constraint_residual(d, v), vmax = 1.0;
   for (int i = 0; i < k; i++) vmax = fmax(vmax, fabs(v[i]));
   if (resid > 1e-8 * vmax) {
@@ -196,7 +220,8 @@ static int consistent_state(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_
   d->basis = AP_BASIS_ORTHONORMAL;
   if ((rc = ap_partition(m, d)) == AP_ERR_INCONSISTENT)
     return refuse(c, s, d, "the constraints contradict each other");
-  if (rc != AP_OK) return refuse(c, s, d, "the constraints");
+  if (rc == AP_ERR_RANK) return refuse(c, s, d, "the constraints leave no free speed");
+  if (rc != AP_OK) return refuse(c, s, d, "the model cannot be evaluated there");
   if (ap_model_b(m) == 0) return AP_OK;
   return consistent_speeds(c, s, m, d, v, given, rep, rlen);
 }

@@ -1,5 +1,5 @@
 /* Scene reading: typed getters on the tree, unknown keys with a "did you mean" suggestion
- * (Levenshtein distance), and the one message per load.
+ * (edit distance with swaps of neighbours), and the one message per load.
  *
  * Every getter takes the map and the key, leaves its output untouched when the key is absent
  * (so callers pre-fill defaults), and on a wrong type or value records
@@ -26,7 +26,9 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   va_start(ap, fmt);
   vsnprintf(what, sizeof what, fmt, ap);
   va_end(ap);
-  const char *path = at && at->path && at->path[0] ? at->path : "(top level)";
+  char path[128];
+  const char *full = at && at->path && at->path[0] ? at->path : "(top level)";
+  snprintf(path, sizeof path, "%.100s%s", full, strlen(full) > 100 ? "..." : "");
   if (at && at->line == 0)
     snprintf(c->msg, sizeof c->msg, "%s: --set %s: %s: %s", c->file,
              at->origin ? at->origin : "?", path, what);
@@ -40,25 +42,24 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   return AP_ERR_ARG;
 }
 
-/* Levenshtein distance, capped for long words. */
+/* Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
+ * neighbouring letters each cost 1. */
 static int edit_distance(const char *a, const char *b) {
   size_t la = strlen(a), lb = strlen(b);
   if (la > 63 || lb > 63) return 99;
-  int row[64];
-  for (size_t j = 0; j <= lb; j++) row[j] = (int)j;
-  for (size_t i = 1; i <= la; i++) {
-    int diag = row[0];
-    row[0] = (int)i;
+  int d[64][64];
+  for (size_t i = 0; i <= la; i++) d[i][0] = (int)i;
+  for (size_t j = 0; j <= lb; j++) d[0][j] = (int)j;
+  for (size_t i = 1; i <= la; i++)
     for (size_t j = 1; j <= lb; j++) {
-      int up = row[j], cost = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
-      int best = diag + cost;
-      if (up + 1 < best) best = up + 1;
-      if (row[j - 1] + 1 < best) best = row[j - 1] + 1;
-      row[j] = best;
-      diag = up;
+      int cost = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]), best = d[i - 1][j - 1] + cost;
+      if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
+      if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && d[i - 2][j - 2] + 1 < best)
+        best = d[i - 2][j - 2] + 1;
+      d[i][j] = best;
     }
-  }
-  return row[lb];
+  return d[la][lb];
 }
 
 const char *sc_suggest(const char *word, const char *const *keys) {

@@ -254,7 +254,8 @@ const char *ap_scene_element_kind(const ap_scene *sc, ap_scene_section sec, int 
   static const char *const effs[] = {"gravity", "spring", "joint_damping", "applied", "user"};
   if (!sc || i < 0 || i >= ap_scene_count(sc, sec)) return NULL;
   switch (sec) {
-    case AP_SCENE_BODIES: return shapes[sc->s.bodies[i].def.shape.kind];
+    case AP_SCENE_BODIES:
+      return sc->s.bodies[i].def.shape.kind ? shapes[sc->s.bodies[i].def.shape.kind] : "no shape";
     case AP_SCENE_JOINTS: return sc_joint_kind_name(sc->s.joints[i].def.kind);
     case AP_SCENE_CONSTRAINTS: return cons[sc->s.cons[i].def.kind];
     case AP_SCENE_EFFECTS: return effs[sc->s.effs[i].def.kind];

@@ -138,6 +138,9 @@ static int copy_map(tree_build *tb, yaml_node_t *y, sc_node *n, int depth) {
     sc_node *key = yk ? copy_node(tb, yk, kp, depth + 1) : NULL;
     if (!yk) free(kp);
     if (!key) return yk ? tb->c->status : sc_err(tb->c, n, "a mapping key is missing");
+    free(key->path);
+    key->path = key->kind == SC_SCALAR ? child_path(n->path, key->text, 0) : dup_str("", 0);
+    if (!key->path) return sc_tree_free(key), nomem(tb->c);
     if (key->kind != SC_SCALAR) {
       sc_err(tb->c, key, "a mapping key must be a plain name, not a %s",
              key->kind == SC_MAP ? "mapping" : "sequence");
@@ -148,8 +151,6 @@ static int copy_map(tree_build *tb, yaml_node_t *y, sc_node *n, int depth) {
       return sc_tree_free(key), AP_ERR_ARG;
     }
     char *p = child_path(n->path, key->text, 0);
-    free(key->path);
-    key->path = p ? dup_str(p, strlen(p)) : NULL;
     sc_node *val = p ? copy_node(tb, yaml_document_get_node(tb->doc, pr->value), p, depth + 1)
                      : NULL;
     if (!val) return sc_tree_free(key), p ? tb->c->status : nomem(tb->c);
