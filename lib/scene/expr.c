@@ -69,6 +69,102 @@ static long stray_dot(const char *s) {
   return -1;
 }
 
+/* ---- a grammar check before libmatheval sees the text ----------------------------------
+ * libmatheval 1.1.11 leaks its partial tree on a syntax error and echoes stray characters,
+ * so the text is checked first with the same grammar:
+ *   sum := product {(+|-) product};  product := unary {(*|/) unary};
+ *   unary := - unary | primary [^ unary];  primary := number | name | function ( sum ) | ( sum )
+ */
+typedef struct sc_lex {
+  const char *s;
+  size_t i;
+  int depth;
+  const char *err;        /* what was expected, or NULL */
+  size_t at;
+} sc_lex;
+
+static const char *const functions[] = {
+    "exp", "log", "sqrt", "sin", "cos", "tan", "cot", "sec", "csc", "asin", "acos", "atan",
+    "acot", "asec", "acsc", "sinh", "cosh", "tanh", "coth", "sech", "csch", "asinh", "acosh",
+    "atanh", "acoth", "asech", "acsch", "abs", "step", "delta", "nandelta", "erf", NULL};
+
+static void skip_space(sc_lex *x) {
+  while (x->s[x->i] == ' ' || x->s[x->i] == '\t') x->i++;
+}
+
+static int fail(sc_lex *x, const char *what) {
+  if (!x->err) x->err = what, x->at = x->i;
+  return -1;
+}
+
+static int accept(sc_lex *x, char ch) {
+  skip_space(x);
+  if (x->s[x->i] != ch) return 0;
+  x->i++;
+  return 1;
+}
+
+static int sum(sc_lex *x);
+
+static int name_or_call(sc_lex *x) {
+  size_t start = x->i;
+  while (isalnum((unsigned char)x->s[x->i]) || x->s[x->i] == '_') x->i++;
+  int fn = 0;
+  for (int k = 0; functions[k] && !fn; k++)
+    fn = strlen(functions[k]) == x->i - start && !strncmp(functions[k], x->s + start, x->i - start);
+  if (!accept(x, '(')) return fn ? fail(x, "'(' after the function name") : 0;
+  if (!fn) return x->i--, fail(x, "an operator (only functions take arguments)");
+  if (sum(x) != 0) return -1;
+  return accept(x, ')') ? 0 : fail(x, "')'");
+}
+
+static int primary(sc_lex *x) {
+  skip_space(x);
+  char ch = x->s[x->i];
+  if (isdigit((unsigned char)ch) || ch == '.') {
+    while (isdigit((unsigned char)x->s[x->i])) x->i++;
+    if (x->s[x->i] == '.') x->i++;
+    while (isdigit((unsigned char)x->s[x->i])) x->i++;
+    if ((x->s[x->i] == 'e' || x->s[x->i] == 'E') &&
+        (isdigit((unsigned char)x->s[x->i + 1]) ||
+         ((x->s[x->i + 1] == '+' || x->s[x->i + 1] == '-') && isdigit((unsigned char)x->s[x->i + 2]))))
+      for (x->i += 2; isdigit((unsigned char)x->s[x->i]);) x->i++;
+    return 0;
+  }
+  if (isalpha((unsigned char)ch) || ch == '_') return name_or_call(x);
+  if (!accept(x, '(')) return fail(x, "a number, a name or '('");
+  if (sum(x) != 0) return -1;
+  return accept(x, ')') ? 0 : fail(x, "')'");
+}
+
+static int unary(sc_lex *x) {
+  if (++x->depth > 100) return fail(x, "less nesting");
+  int rc = accept(x, '-') ? unary(x) : primary(x);
+  if (rc == 0 && accept(x, '^')) rc = unary(x);
+  x->depth--;
+  return rc;
+}
+
+static int sum(sc_lex *x) {
+  for (int terms = 0;; terms++) {
+    if (terms && !accept(x, '+') && !accept(x, '-')) return 0;
+    for (int factors = 0;; factors++) {
+      if (factors && !accept(x, '*') && !accept(x, '/')) break;
+      if (unary(x) != 0) return -1;
+    }
+  }
+}
+
+/* 0 when text has the grammar above; else -1 with *what and the column in *col. */
+static int check_grammar(const char *text, const char **what, size_t *col) {
+  sc_lex x = {text, 0, 0, NULL, 0};
+  int rc = sum(&x);
+  skip_space(&x);
+  if (rc == 0 && text[x.i]) rc = fail(&x, "an operator");
+  *what = x.err, *col = x.at + 1;
+  return rc;
+}
+
 int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
   memset(e, 0, sizeof *e);
   size_t len = strlen(text);
@@ -88,6 +184,11 @@ int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t,
   if (stray_dot(text) >= 0)
     return sc_err(c, at, "unexpected '.' in expression '%s' (column %ld of the value)", text,
                   stray_dot(text) + 1);
+  const char *what = NULL;
+  size_t col = 0;
+  if (check_grammar(text, &what, &col) != 0)
+    return sc_err(c, at, "cannot parse '%s' as a number or an expression%s: expected %s at "
+                  "column %zu", text, allow_t ? " of t" : "", what, col);
   e->text = malloc(len + 1);
   if (!e->text) return sc_err(c, at, "out of memory");
   memcpy(e->text, text, len + 1);
