@@ -103,7 +103,7 @@ static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   fprintf(g, "set output '%s'\nset datafile separator ','\nset grid\nset key outside bottom "
           "center horizontal\n", o->out);
   fprintf(g, "set xlabel '%s'\n", o->x);
-  if (o->ny == 1) fprintf(g, "set ylabel '%s'\n", o->y[0]);
+  if (o->ny == 1) fprintf(g, "set ylabel '%s'\nset key off\n", o->y[0]);
   if (o->title) fprintf(g, "set title '%s'\n", o->title);
   if (o->equal) fprintf(g, "set size ratio -1\n");
   if (o->logy) fprintf(g, "set logscale y\nset format y '%%.0e'\n");
