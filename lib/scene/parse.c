@@ -72,10 +72,21 @@ static const char *const *speed_names(ap_joint_kind kind) {
   }
 }
 
+/* The column names of the speeds are accepted too (angle_dot, x_dot, ...). */
+static const char *const *speed_aliases(ap_joint_kind kind) {
+  static const char *const rev[] = {"angle_dot", NULL}, *const pri[] = {"pos_dot", NULL},
+                           *const pla[] = {"x_dot", "y_dot", "heading_dot", NULL},
+                           *const none[] = {NULL};
+  return kind == AP_JOINT_REVOLUTE ? rev : kind == AP_JOINT_PRISMATIC ? pri
+       : kind == AP_JOINT_PLANAR ? pla : none;
+}
+
 int sc_joint_speed(ap_joint_kind kind, const char *speed) {
-  const char *const *names = speed_names(kind);
+  const char *const *names = speed_names(kind), *const *alias = speed_aliases(kind);
   for (int i = 0; names[i]; i++)
     if (strcmp(names[i], speed) == 0) return i;
+  for (int i = 0; alias[i]; i++)
+    if (strcmp(alias[i], speed) == 0) return i;
   return -1;
 }
 
