@@ -346,6 +346,72 @@ static void test_columns(void) {
   ap_scene_free(sc);
 }
 
+
+/* Springs, joint damping, drives and time-dependent applied forces: a pendulum hung from a cart
+ * on a rail. Undriven and damped, its energy can only decrease; driven, the cart's coordinate
+ * leaves q; a torque f(t) goes through the wrench callback. */
+static const char pendulum[] =
+    "bodies:\n"
+    "  cart: {mass: 1, inertia: [0.1, 0.1, 0.1]}\n"
+    "  bob: {mass: 0.5, com: [0, 0, -1], inertia: [0.01, 0.01, 0.01]}\n"
+    "joints:\n"
+    "  cart: {kind: prismatic, axis: y}\n"
+    "  bob: {kind: revolute, parent: cart, axis: x}\n"
+    "effects:\n"
+    "  gravity: {kind: gravity}\n"
+    "  spring: {kind: spring, body: bob, point: [0, 0, -1], point2: [0, 0.5, -1], stiffness: 3,"
+    " damping: 0.2, rest_length: 0.1}\n"
+    "  friction: {kind: joint_damping, joint: bob, damping: 0.05}\n"
+    "initial:\n  bob: {angle: 0.4, rate: 1}\n  cart: {rate: 0.3}\n"
+    "output:\n  interval: 0.05\n  channels: [coordinates, energy]\n";
+
+static void test_effects(void) {
+  char msg[1024];
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load_string(pendulum, sizeof pendulum - 1, "pendulum", NULL, 0, &sc, msg,
+                                sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  if (rc != AP_OK) return (void)fprintf(stderr, "  %s\n", msg);
+  AP_CHECK_EQ_INT(ap_scene_conserves_energy(sc), 0);
+  const ap_model *m = ap_scene_model(sc);
+  AP_CHECK_EQ_INT(ap_model_n(m), 2);
+  double x[4], E, Eprev = INFINITY;
+  ap_scene_run run;
+  ap_scene_get_run(sc, &run);
+  ap_sim *sim = NULL;
+  AP_CHECK_EQ_INT(ap_scene_initial_state(sc, x, x + 2, NULL, 0, msg, sizeof msg), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_create(m, &run.sim, 0.0, x, x + 2, &sim, msg, sizeof msg), AP_OK);
+  for (int i = 0; sim && i <= 40; i++) {
+    if (i) AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.05 * i), AP_OK);
+    ap_scene_energy(sc, ap_sim_time(sim), ap_sim_q(sim), ap_sim_v(sim), &E);
+    AP_CHECK_LE(E, Eprev + 1e-9);   /* dampers only take energy out */
+    Eprev = E;
+  }
+  ap_sim_free(sim);
+  ap_scene_free(sc);
+  /* Drive the cart and push the bob with a torque f(t): the cart leaves q. */
+  static const char driven[] =
+      "bodies:\n"
+      "  cart: {mass: 1, inertia: [0.1, 0.1, 0.1]}\n"
+      "  bob: {mass: 0.5, com: [0, 0, -1], inertia: [0.01, 0.01, 0.01]}\n"
+      "joints:\n"
+      "  cart: {kind: prismatic, axis: y, drive: {position: \"0.2*sin(2*t)\"}}\n"
+      "  bob: {kind: revolute, parent: cart, axis: x}\n"
+      "effects:\n"
+      "  gravity: {kind: gravity}\n"
+      "  push: {kind: applied, body: bob, point: [0, 0, -1], torque: [\"0.1*cos(t)\", 0, 0]}\n"
+      "initial:\n  bob: {angle: 0.4}\n";
+  rc = ap_scene_load_string(driven, sizeof driven - 1, "driven", NULL, 0, &sc, msg, sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  if (rc != AP_OK) return (void)fprintf(stderr, "  %s\n", msg);
+  AP_CHECK_EQ_INT(ap_model_n(ap_scene_model(sc)), 1);
+  AP_CHECK_EQ_INT(strcmp(ap_model_coord_name(ap_scene_model(sc), 0), "bob.angle"), 0);
+  int rows = 0;
+  AP_CHECK(short_run(sc, 1.0, &rows) >= 0.0);
+  AP_CHECK_EQ_INT(rows, 11);
+  ap_scene_free(sc);
+}
+
 int main(void) {
   find_srcdir();
   test_bad_scenes();
@@ -356,5 +422,6 @@ int main(void) {
   test_turntable_expression();
   test_initial_projection();
   test_columns();
+  test_effects();
   return ap_check_finish("test_scene");
 }
