@@ -412,6 +412,38 @@ static void test_effects(void) {
   ap_scene_free(sc);
 }
 
+/* A ball on a plane translating with V(t) = 0.5 sin t: its centre accelerates at 2/7 of the
+ * plane's acceleration, so vx(t) = sin(t) / 7 exactly (from rest). */
+static void test_moving_plane(void) {
+  static const char text[] =
+      "ground: {kind: translating, velocity: [\"0.5*sin(t)\", 0]}\n"
+      "bodies:\n  ball: {mass: 1, shape: {kind: sphere, radius: 0.1}}\n"
+      "joints:\n  ball: {kind: plane_contact}\n"
+      "constraints:\n  roll: {kind: rolling, body: ball}\n"
+      "effects:\n  gravity: {kind: gravity}\n"
+      "simulation: {rtol: 1e-11, atol: 1e-13}\n";
+  char msg[1024];
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load_string(text, sizeof text - 1, "plane", NULL, 0, &sc, msg, sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  if (rc != AP_OK) return (void)fprintf(stderr, "  %s\n", msg);
+  const ap_model *m = ap_scene_model(sc);
+  double x[11];
+  ap_scene_run run;
+  ap_scene_get_run(sc, &run);
+  ap_sim *sim = NULL;
+  AP_CHECK_EQ_INT(ap_scene_initial_state(sc, x, x + 6, NULL, 0, msg, sizeof msg), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_create(m, &run.sim, 0.0, x, x + 6, &sim, msg, sizeof msg), AP_OK);
+  int vx = ap_model_find_speed(m, "ball.vx");
+  for (int i = 1; sim && vx >= 0 && i <= 6; i++) {
+    AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.5 * i), AP_OK);
+    AP_CHECK_NEAR(ap_sim_v(sim)[vx], sin(0.5 * i) / 7.0, 1e-9);
+  }
+  AP_CHECK(vx >= 0);
+  ap_sim_free(sim);
+  ap_scene_free(sc);
+}
+
 int main(void) {
   find_srcdir();
   test_bad_scenes();
@@ -423,5 +455,6 @@ int main(void) {
   test_initial_projection();
   test_columns();
   test_effects();
+  test_moving_plane();
   return ap_check_finish("test_scene");
 }
