@@ -165,8 +165,8 @@ static int check_grammar(const char *text, const char **what, size_t *col) {
   return rc;
 }
 
-int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
-  memset(e, 0, sizeof *e);
+/* Text that libmatheval may safely see: known characters, no stray '.', the grammar. */
+static int check_text(sc_ctx *c, const sc_node *at, const char *text, int allow_t) {
   size_t len = strlen(text);
   if (len == 0 || len > SC_EXPR_MAX)
     return sc_err(c, at, "expected a number%s, got %s", allow_t ? " or an expression of t" : "",
@@ -189,12 +189,18 @@ int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t,
   if (check_grammar(text, &what, &col) != 0)
     return sc_err(c, at, "cannot parse '%s' as a number or an expression%s: expected %s at "
                   "column %zu", text, allow_t ? " of t" : "", what, col);
+  return AP_OK;
+}
+
+int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
+  memset(e, 0, sizeof *e);
+  if (check_text(c, at, text, allow_t) != AP_OK) return AP_ERR_ARG;
+  size_t len = strlen(text);
   e->text = malloc(len + 1);
-  if (!e->text) return sc_err(c, at, "out of memory");
-  memcpy(e->text, text, len + 1);
-  char *copy = malloc(len + 1);
+  char *copy = malloc(len + 1);   /* evaluator_create takes a non-const string */
+  if (e->text) memcpy(e->text, text, len + 1);
   if (copy) memcpy(copy, text, len + 1);
-  e->f[0] = copy ? evaluator_create(copy) : NULL;
+  e->f[0] = copy && e->text ? evaluator_create(copy) : NULL;
   free(copy);
   if (!e->f[0]) {
     sc_expr_free(e);
@@ -205,11 +211,9 @@ int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t,
   if (check_names(c, at, e->f[0], allow_t, &uses_t) != AP_OK) return sc_expr_free(e), AP_ERR_ARG;
   if (!uses_t) {
     e->value = eval_at(e->f[0], 0.0);
-    if (!isfinite(e->value)) {
-      sc_expr_free(e);
-      return sc_err(c, at, "'%s' is not a finite number", text);
-    }
-    return AP_OK;
+    if (isfinite(e->value)) return AP_OK;
+    sc_expr_free(e);
+    return sc_err(c, at, "'%s' is not a finite number", text);
   }
   e->timed = 1;
   e->f[1] = evaluator_derivative(e->f[0], "t");

@@ -87,6 +87,9 @@ static void list_keys(const char *const *keys, char *buf, size_t len) {
 
 int sc_check_keys(sc_ctx *c, const sc_node *map, const char *const *keys) {
   int rc = sc_expect(c, map, SC_MAP);
+  if (rc == AP_OK && !keys[0] && map->n > 0)
+    return sc_err(c, map->keys[0], "unknown key '%s' (nothing can be set here)",
+                  map->keys[0]->text);
   for (int i = 0; rc == AP_OK && i < map->n; i++) {
     const char *k = map->keys[i]->text;
     int ok = 0;
