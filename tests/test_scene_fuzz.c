@@ -97,7 +97,8 @@ static void fuzz_scene(const char *dir, const char *file) {
   }
   AP_CHECK_EQ_INT(try_variant(orig, len, file), 1);
   int loaded = 0;
-  for (int i = 1; i <= TRUNCATIONS; i++) loaded += try_variant(orig, len * i / (TRUNCATIONS + 1), file);
+  for (int i = 1; i <= TRUNCATIONS; i++)
+    loaded += try_variant(orig, len * i / (TRUNCATIONS + 1), file);
   for (int i = 0; i < MUTATIONS; i++) {
     memcpy(buf, orig, len);
     size_t l = len;

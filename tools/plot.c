@@ -49,7 +49,8 @@ static int parse(int argc, char **argv, plot_opts *o) {
     else if (strcmp(argv[i], "--logy") == 0) o->logy = 1;
     else if ((r = cli_opt(argc, argv, &i, "--x", &v)) != 0) o->x = v;
     else if ((r = cli_opt(argc, argv, &i, "--y", &v)) != 0) {
-      if (r > 0 && o->ny >= MAX_Y) return fprintf(stderr, "appell plot: at most %d --y\n", MAX_Y), -1;
+      if (r > 0 && o->ny >= MAX_Y)
+        return fprintf(stderr, "appell plot: at most %d --y\n", MAX_Y), -1;
       if (r > 0) o->y[o->ny++] = v;
     } else if ((r = cli_opt(argc, argv, &i, "-o", &v)) != 0 ||
                (r = cli_opt(argc, argv, &i, "--output", &v)) != 0) o->out = v;

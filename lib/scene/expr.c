@@ -125,9 +125,9 @@ static int primary(sc_lex *x) {
     while (isdigit((unsigned char)x->s[x->i])) x->i++;
     if (x->s[x->i] == '.') x->i++;
     while (isdigit((unsigned char)x->s[x->i])) x->i++;
-    if ((x->s[x->i] == 'e' || x->s[x->i] == 'E') &&
-        (isdigit((unsigned char)x->s[x->i + 1]) ||
-         ((x->s[x->i + 1] == '+' || x->s[x->i + 1] == '-') && isdigit((unsigned char)x->s[x->i + 2]))))
+    const char *p = x->s + x->i;
+    int sign = p[1] == '+' || p[1] == '-';
+    if ((p[0] == 'e' || p[0] == 'E') && isdigit((unsigned char)p[1 + sign]))
       for (x->i += 2; isdigit((unsigned char)x->s[x->i]);) x->i++;
     return 0;
   }

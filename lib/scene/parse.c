@@ -56,7 +56,8 @@ int sc_joint_drivable(ap_joint_kind kind, const char *coord) {
 }
 
 static const char *const *speed_names(ap_joint_kind kind) {
-  static const char *const rev[] = {"rate", NULL}, *const pla[] = {"vx", "vy", "heading_rate", NULL},
+  static const char *const rev[] = {"rate", NULL},
+                           *const pla[] = {"vx", "vy", "heading_rate", NULL},
                            *const bal[] = {"wx", "wy", "wz", NULL},
                            *const fre[] = {"vx", "vy", "vz", "wx", "wy", "wz", NULL},
                            *const con[] = {"vx", "vy", "wx", "wy", "wz", NULL},
@@ -249,7 +250,8 @@ static int parse_frame(sc_ctx *c, const sc_node *n, ap_frame *f) {
   if (sc_check_keys(c, n, frame_keys) || sc_get_vec(c, n, "pos", 3, f->pos) ||
       sc_get_vec(c, n, "quat", 4, f->quat))
     return AP_ERR_ARG;
-  const sc_node *q = sc_map_get(n, "quat"), *ax = sc_map_get(n, "axis"), *an = sc_map_get(n, "angle");
+  const sc_node *q = sc_map_get(n, "quat"), *ax = sc_map_get(n, "axis"),
+                *an = sc_map_get(n, "angle");
   if (q && (ax || an)) return sc_err(c, q, "give either quat or axis and angle, not both");
   if (q && !(sqrt(f->quat[0] * f->quat[0] + f->quat[1] * f->quat[1] + f->quat[2] * f->quat[2] +
                   f->quat[3] * f->quat[3]) > 1e-12))

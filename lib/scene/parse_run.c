@@ -187,13 +187,15 @@ static int parse_sim(sc_ctx *c, sc_scene *s) {
       parse_method(c, s, n) || sc_get_number(c, n, "rtol", &r->sim.rtol) ||
       sc_get_number(c, n, "atol", &r->sim.atol) || sc_get_number(c, n, "t0", &r->t0) ||
       sc_get_number(c, n, "t_end", &r->t_end) || sc_get_number(c, n, "h_fixed", &r->sim.h_fixed) ||
-      sc_get_number(c, n, "h_init", &r->sim.h_init) || sc_get_number(c, n, "h_max", &r->sim.h_max) ||
+      sc_get_number(c, n, "h_init", &r->sim.h_init) ||
+      sc_get_number(c, n, "h_max", &r->sim.h_max) ||
       sc_get_int(c, n, "max_steps", &r->sim.max_steps) ||
       sc_get_number(c, n, "rank_rtol", &r->sim.rank_rtol) ||
       sc_get_number(c, n, "switch_growth", &r->sim.switch_growth))
     return AP_ERR_ARG;
   r->sim.mode = (ap_mode)mode;
-  if (sc_check_positive(c, n, "rtol", r->sim.rtol) || sc_check_positive(c, n, "atol", r->sim.atol) ||
+  if (sc_check_positive(c, n, "rtol", r->sim.rtol) ||
+      sc_check_positive(c, n, "atol", r->sim.atol) ||
       sc_check_positive(c, n, "h_fixed", r->sim.h_fixed) ||
       sc_check_nonneg(c, n, "h_init", r->sim.h_init) ||
       sc_check_nonneg(c, n, "h_max", r->sim.h_max) ||

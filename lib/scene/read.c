@@ -52,11 +52,12 @@ static int edit_distance(const char *a, const char *b) {
   for (size_t j = 0; j <= lb; j++) d[0][j] = (int)j;
   for (size_t i = 1; i <= la; i++)
     for (size_t j = 1; j <= lb; j++) {
-      int cost = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]), best = d[i - 1][j - 1] + cost;
+      int cost = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
+      int best = d[i - 1][j - 1] + cost;
       if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
       if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
-      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] && d[i - 2][j - 2] + 1 < best)
-        best = d[i - 2][j - 2] + 1;
+      int swap = i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1];
+      if (swap && d[i - 2][j - 2] + 1 < best) best = d[i - 2][j - 2] + 1;
       d[i][j] = best;
     }
   return d[la][lb];
@@ -160,7 +161,8 @@ int sc_get_int(sc_ctx *c, const sc_node *map, const char *key, long *out) {
   if (!n) return AP_OK;
   double x = 0;
   if (sc_number(c, n, &x) != AP_OK) return AP_ERR_ARG;
-  if (x != floor(x) || fabs(x) > 1e15) return sc_err(c, n, "expected an integer, got '%s'", n->text);
+  if (x != floor(x) || fabs(x) > 1e15)
+    return sc_err(c, n, "expected an integer, got '%s'", n->text);
   *out = (long)x;
   return AP_OK;
 }
