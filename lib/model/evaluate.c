@@ -119,12 +119,66 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
   return AP_ERR_INCONSISTENT;
 }
 
-int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
+/* A disk or torus cannot go through lying flat. Trial stages inside the singular band
+ * (|u_p| < flat_tol) are refused by the position stage as recoverable, so the stepper creeps
+ * towards the band with ever smaller steps; an accepted state within 2 flat_tol therefore
+ * means the motion itself reached lying flat, and it stops here with a clear error. A step
+ * could also jump over the band: the contact point would then jump to the far side of the rim
+ * (the support function has a kink there). Between accepted steps the in-plane direction of
+ * u = -R^T e_z turns continuously (an accurate step resolves the contact point's run round the
+ * rim, a few degrees at most), so a turn beyond 90 degrees means the step crossed the kink. */
+static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n, double turn,
+                      double t_prev) {
+  const char *what = B->shape.kind == AP_SHAPE_DISK ? "disk" : "torus";
+  if (turn > 0)
+    AP_BM_MSG(d, "model '%s': body '%s': the %s passed through lying flat between t = %.17g "
+              "and t = %.17g (its contact point jumped %.0f degrees round the rim): a falling "
+              "%s hits the ground with its face, which the plane-contact joint does not "
+              "describe", m->name, B->name, what, t_prev, d->t, turn, what);
+  else
+    AP_BM_MSG(d, "model '%s': body '%s': the %s reached lying flat at t = %.17g (its axis is "
+              "%.3g degrees from the vertical, within 2 flat_tol = %.3g): the contact point is "
+              "undefined and a falling %s hits the ground with its face, which the "
+              "plane-contact joint does not describe", m->name, B->name, what, d->t,
+              asin(fmin(n, 1.0)) * 57.29577951308232, 2 * B->shape.flat_tol, what);
+  return AP_ERR_SINGULAR;
+}
+
+static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S, int track) {
+  const ap_bmodel *M = ap_bm(m);
+  for (int j = 0; j < M->nj; j++) {
+    const ap_mjoint *J = &M->joints[j];
+    const ap_mbody *B = &M->bodies[J->child];
+    if (J->kind != AP_JOINT_PLANE_CONTACT ||
+        (B->shape.kind != AP_SHAPE_DISK && B->shape.kind != AP_SHAPE_TORUS))
+      continue;
+    kjoint K = ap_kin_joint(M, S, j);
+    double R[9], ux, uy, n;
+    ap_quat_normalized_matrix(q + J->qidx[J->quat], R);
+    ux = -R[2], uy = -R[5], n = hypot(ux, uy);
+    if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
+    if (!(n > 0)) continue;   /* exactly flat while assembling: the position stage reports it */
+    ux /= n, uy /= n;
+    double c = ux * K.track[0] + uy * K.track[1];
+    if (track && K.track[2] != 0.0 && c < 0.0)
+      return flat_error(m, d, B, n, acos(fmax(-1.0, c)) * 57.29577951308232, K.track[3]);
+    K.track[0] = ux, K.track[1] = uy, K.track[2] = track ? 1.0 : 0.0, K.track[3] = d->t;
+  }
+  return AP_OK;
+}
+
+int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *change,
+                  int track) {
   const ap_bmodel *M = ap_bm(m);
   *change = 0.0;
   int rc = M->nquat ? normalize_quats(m, d, q, change) : AP_OK;
   if (rc == AP_OK && M->nloop) rc = close_loops(m, d, q, S, change);
+  if (rc == AP_OK && M->nquat) rc = track_flat(m, d, q, S, track);
   return rc;
+}
+
+int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
+  return ap_bm_project(m, d, q, S, change, 1);
 }
 
 /* ---- public queries ------------------------------------------------------------------------ */
@@ -262,7 +316,7 @@ long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect) {
 int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) {
   if (!ap_model_is_body_model(m) || !d || !q) return AP_ERR_ARG;
   double ch = 0.0;
-  int rc = ap_bm_project_q(m, d, q, ap_bm_scratch(d), &ch);
+  int rc = ap_bm_project(m, d, q, ap_bm_scratch(d), &ch, 0);
   if (change) *change = ch;
   return rc;
 }

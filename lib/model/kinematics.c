@@ -57,7 +57,7 @@ kbody ap_kin_body(const ap_bmodel *M, double *S, int b) {
 kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j) {
   double *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
   kjoint J = {p, p + 7, p + 13, p + 22, p + 25, p + 28, p + 31, p + 34, p + 37,
-              p + 46, p + 49, p + 58, p + 61};
+              p + 46, p + 49, p + 58, p + 61, p + 64};
   return J;
 }
 

@@ -92,7 +92,7 @@ typedef struct ap_bmodel {
   size_t body_stride, proj_work, proj_iwork;
 } ap_bmodel;
 
-#define JOINT_STRIDE 64
+#define JOINT_STRIDE 72
 #define CON_STRIDE 8
 
 /* ---- views into the scratch ------------------------------------------------------------- */
@@ -112,6 +112,8 @@ typedef struct kjoint {
   double *RFP;                /* parent joint frame rotation (world) */
   double *rc, *H, *u, *cb;    /* plane contact: contact vector (world), Hessian of sigma
                                  (body), u = -R^T e_z, contact point (body) */
+  double *track;              /* disk, torus: in-plane direction of u at the last accepted
+                                 step (2), whether it is set (1), its time (1) (project_q) */
 } kjoint;
 
 static inline const ap_bmodel *ap_bm(const ap_model *m) { return (const ap_bmodel *)m->ev.impl; }
@@ -247,6 +249,10 @@ double ap_eff_potential(const ap_bmodel *M, double *S);
 int ap_bm_position(const ap_model *m, ap_data *d, double *S);
 int ap_bm_velocity(const ap_model *m, ap_data *d, double *S);
 int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change);
+/* The same with track = 0: no check of the contact direction between accepted steps, and the
+ * tracking is reset (for assembling states by hand). */
+int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *change,
+                  int track);
 void ap_bm_destroy(void *impl);
 
 /* Message helper: printf into d->msg (core). */
