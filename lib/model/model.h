@@ -27,7 +27,9 @@
 #include "core/core.h"
 
 /* ---- tolerances (docs/bodies.md) -------------------------------------------------------- */
-#define AP_QUAT_TOL 1e-12      /* re-normalize a quaternion when ||q| - 1| exceeds this */
+#define AP_QUAT_TOL 1e-9       /* re-normalize a quaternion when ||q| - 1| exceeds this: R is
+                                  computed from q / |q|, so a smaller drift is harmless, and
+                                  re-normalizing it would only restart the stepper */
 #define AP_LOOP_TOL 1e-12      /* loop closure residual, relative to the model's length scale */
 #define AP_LOOP_ITER 25        /* Gauss-Newton steps allowed in the loop projection */
 
