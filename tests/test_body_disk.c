@@ -104,7 +104,8 @@ static void disk_read(const double *q, const double *v, double *th, double *thd,
 static double ref_energy(const disk *p, double th, double thd, double wa, double wn) {
   double mr2 = p->m * p->r * p->r;
   return 0.5 * mr2 * (wn * wn + thd * thd) +
-         0.5 * (p->A * thd * thd + p->A * wa * wa + p->C * wn * wn) + p->m * p->grav * p->r * cos(th);
+         0.5 * (p->A * thd * thd + p->A * wa * wa + p->C * wn * wn) +
+         p->m * p->grav * p->r * cos(th);
 }
 
 /* ---- REFERENCES §4's equations as a math-level system ---------------------------------------
@@ -231,7 +232,7 @@ static void test_energy_and_equations(void) {
   ap_model_free(m);
 }
 
-/* ---- steady circular rolling -------------------------------------------------------------------- */
+/* ---- steady circular rolling ----------------------------------------------------------------- */
 
 static void test_steady(void) {
   disk p = D0;
@@ -261,7 +262,7 @@ static void test_steady(void) {
   ap_model_free(m);
 }
 
-/* ---- the critical speed of upright rolling ------------------------------------------------------ */
+/* ---- the critical speed of upright rolling --------------------------------------------------- */
 
 static double max_tilt(const ap_model *m, ap_data *d, double speed) {
   const disk p = D0;
@@ -283,7 +284,8 @@ static void test_critical(void) {
   ap_model *m = disk_model(&p, 0);
   ap_data *d = NULL;
   ap_data_create(m, &d);
-  double vc = sqrt(p.grav * p.r / 3), hi = max_tilt(m, d, 1.05 * vc), lo = max_tilt(m, d, 0.95 * vc);
+  double vc = sqrt(p.grav * p.r / 3);
+  double hi = max_tilt(m, d, 1.05 * vc), lo = max_tilt(m, d, 0.95 * vc);
   printf("critical speed %.4f m/s: max tilt over 5 s at 1.05 vc %.2e rad, at 0.95 vc %.2e rad\n",
          vc, hi, lo);
   AP_CHECK_LE(hi, 3e-3);
@@ -292,7 +294,7 @@ static void test_critical(void) {
   ap_model_free(m);
 }
 
-/* ---- near lying flat ---------------------------------------------------------------------------- */
+/* ---- near lying flat ------------------------------------------------------------------------- */
 
 /* The Euler-disk steady motion 0.1 degree from flat: w_n = 0, Omega^2 A cos(theta) = m g r, the
  * centre at rest and the contact point running round the rim at Omega. flip turns the body

@@ -120,7 +120,7 @@ static double compare(const ap_model *mb, ap_data *db, const ap_model *mr, ap_da
   return e;
 }
 
-/* ---- simulations ------------------------------------------------------------------------------ */
+/* ---- simulations ----------------------------------------------------------------------------- */
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const double *q0,
                      const double *v0) {
@@ -144,7 +144,7 @@ static int advance(ap_sim *s, double t) {
 static const ap_mode modes[2] = {AP_MODE_MINIMAL, AP_MODE_PROJECTED};
 static const char *const mode_names[2] = {"minimal", "projected"};
 
-/* ---- 1. skate on an inclined plane ------------------------------------------------------------ */
+/* ---- 1. skate on an inclined plane ----------------------------------------------------------- */
 
 static ap_model *skate_model(const rs_knife *p) {
   ap_builder *b = NULL;
@@ -198,7 +198,7 @@ static void test_skate(void) {
   ap_model_free(mb), ap_model_free(mr);
 }
 
-/* ---- 2. Chaplygin sleigh ---------------------------------------------------------------------- */
+/* ---- 2. Chaplygin sleigh --------------------------------------------------------------------- */
 
 static ap_model *sleigh_model(const rs_sleigh *p) {
   ap_builder *b = NULL;
@@ -249,7 +249,7 @@ static void test_sleigh(void) {
   ap_model_free(mb), ap_model_free(mr);
 }
 
-/* ---- 3. ball on a turntable ------------------------------------------------------------------- */
+/* ---- 3. ball on a turntable ------------------------------------------------------------------ */
 
 static int table_rate(double t, double f[3], void *user) {
   const rs_turntable *p = user;

@@ -49,7 +49,7 @@ static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const 
   return start_tol(m, mode, method, q0, v0, RTOL);
 }
 
-/* ---- heavy symmetric top ---------------------------------------------------------------------- */
+/* ---- heavy symmetric top --------------------------------------------------------------------- */
 
 typedef struct top { double m, l, A0, C, grav; } top;
 
@@ -126,7 +126,7 @@ static void test_top(void) {
   ap_model_free(m);
 }
 
-/* ---- rattleback -------------------------------------------------------------------------------- */
+/* ---- rattleback ------------------------------------------------------------------------------ */
 
 static ap_model *rattleback_model(void) {
   ap_builder *b = NULL;
