@@ -55,6 +55,8 @@ typedef struct ap_sim_stats {
   double max_residual;     /* largest |A v + a0| seen at step ends */
   double max_projection;   /* projected mode: largest projection correction (g-norm) */
   double init_correction;  /* g-norm of the correction applied to the initial speeds */
+  double min_rcond;        /* smallest reciprocal condition of G = B^T g B (and of R11 in
+                              minimal mode) seen at output times */
 } ap_sim_stats;
 
 typedef struct ap_sim ap_sim;
@@ -78,6 +80,11 @@ AP_API const ap_data *ap_sim_data(const ap_sim *s);
 AP_API int ap_sim_reactions(ap_sim *s, const double **lambda);
 AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
 AP_API const char *ap_sim_message(const ap_sim *s);
+/* The first warning of the run, or "" when there is none. A warning is issued when the
+ * condition number of G (or R11) times the machine epsilon exceeds rtol: the linear solves
+ * then cannot deliver the requested accuracy. It names the matrix, the condition number and
+ * the time. */
+AP_API const char *ap_sim_warning(const ap_sim *s);
 AP_API void ap_sim_free(ap_sim *s);
 
 /* The cross-check (DESIGN.md §1): the same model run in minimal, projected and DAE modes with

@@ -117,6 +117,8 @@ typedef struct ap_data {
   ap_basis basis;      /* which null-space basis the position stage builds */
   int speeds_from_e;   /* partitioned basis: v = B e + b0 (1) or v given (0) */
   int want_reactions;  /* compute lambda in ap_forward */
+  int estimate_cond;   /* estimate rcond_R and rcond_G (LAPACK condition estimators); the
+                          drivers turn it on at output times only, not in the hot path */
   double rank_rtol;    /* relative tolerance on |R_ii| for the numerical rank; default 1e-10 */
 
   /* partition (partitioned basis): set by ap_partition, frozen between calls */
@@ -132,7 +134,7 @@ typedef struct ap_data {
   double *B;           /* (k x l) null-space basis: A B = 0 */
   double *b0;          /* (k) particular speed: A b0 = -a0 */
   double growth;       /* partitioned: max |R11^-1 R12|; large means re-partition */
-  double rcond_R;      /* reciprocal condition of R11 (1-norm) */
+  double rcond_R;      /* reciprocal condition of R11 (1-norm); 1 unless estimate_cond */
   double resid_a0;     /* consistency residual of a0 on dropped (redundant) rows */
 
   /* velocity stage: ap_fwd_velocity */
@@ -145,7 +147,7 @@ typedef struct ap_data {
   /* acceleration stage: ap_fwd_acceleration */
   double *G;           /* (l x l) B^T g B, overwritten by its Cholesky factor */
   double *Phi;         /* (l) B^T (Q - h - g w): the right-hand side of Appell's equations */
-  double rcond_G;      /* reciprocal condition estimate of G (1-norm) */
+  double rcond_G;      /* reciprocal condition estimate of G (1-norm); 1 unless estimate_cond */
   double *edd;         /* (l) e'' */
   double *vdot;        /* (k) v' = B e'' + w */
   double *qdot;        /* (n) q' = N v */
@@ -154,8 +156,7 @@ typedef struct ap_data {
   double *lambda;      /* (b) multipliers: A^T lambda = g v' + h - Q */
 
   ap_counters cnt;
-  int warned_cond;     /* a condition warning was issued */
-  char msg[512];       /* last detailed message (error or warning) */
+  char msg[512];       /* last detailed message (error, or a note on dropped rows) */
   void *internal;      /* scratch arena and factorizations, owned by the data */
 } ap_data;
 

@@ -20,8 +20,6 @@
 
 /* Relative size beyond which a redundant constraint row is called inconsistent. */
 static const double consistency_rtol = 1e-8;
-/* Reciprocal condition of G below which a warning is stored (once per data). */
-static const double warn_rcond = 1e-12;
 
 /* ---- messages and checks ---------------------------------------------------------------- */
 
@@ -135,14 +133,15 @@ int ap_partition(const ap_model *m, ap_data *d) {
 static int basis_partitioned(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
   double resid = 0.0;
+  double scratch_rcond, *rcond = d->estimate_cond ? &d->rcond_R : &scratch_rcond;
+  if (!d->estimate_cond) d->rcond_R = 1.0;
   int rc = ap_la_partition_basis(m->b, m->k, d->rank, d->perm, d->A, d->a0, s->F, s->tau,
-                                 d->B, d->b0, &d->growth, &d->rcond_R, &resid, s->work,
-                                 s->iwork);
+                                 d->B, d->b0, &d->growth, rcond, &resid, s->work, s->iwork);
   d->cnt.qr++;
   d->resid_a0 = resid;
   if (rc != AP_OK || d->rcond_R < 1e-14) {
     ap_core_msg(d, "system '%s': the dependent-speed block R11 of the partition is singular "
-                "(rcond %.3g) at t = %.17g: re-partition needed", m->name, d->rcond_R, d->t);
+                "to working precision at t = %.17g: re-partition needed", m->name, d->t);
     return AP_RECOVERABLE;
   }
   return AP_OK;
@@ -301,17 +300,14 @@ int ap_fwd_acceleration(const ap_model *m, ap_data *d) {
     ap_la_gemv_t(k, l, d->B, d->Q, d->Phi);
     ap_la_gemv_t(k, l, d->B, s->tk2, d->edd);
   }
-  int rc = ap_la_chol(l, d->G, &d->rcond_G, s->work, s->iwork);
+  double scratch_rcond, *rcond = d->estimate_cond ? &d->rcond_G : &scratch_rcond;
+  if (!d->estimate_cond) d->rcond_G = 1.0;
+  int rc = ap_la_chol(l, d->G, rcond, s->work, s->iwork);
   if (rc != AP_OK) {
     ap_core_msg(d, "system '%s': G = B^T g B (%d x %d) is not positive definite at "
                 "t = %.17g: the metric g is not positive definite on the free speeds",
                 m->name, l, l, d->t);
     return AP_ERR_SINGULAR;
-  }
-  if (d->rcond_G < warn_rcond && !d->warned_cond) {
-    d->warned_cond = 1;
-    ap_core_msg(d, "warning: system '%s': G = B^T g B is ill-conditioned at t = %.17g "
-                "(condition estimate %.3g)", m->name, d->t, 1.0 / d->rcond_G);
   }
   ap_la_chol_solve(l, d->G, d->edd);
   rc = ap_core_check_finite(m, d, "Appell solve (e'')", d->edd, l, 1);
@@ -368,7 +364,8 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
   ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g (v - b0) */
   ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g (v - b0) */
   ap_la_congruence(k, l, d->g, d->B, d->G, s->gB);
-  rc = ap_la_chol(l, d->G, &d->rcond_G, s->work, s->iwork);
+  double scratch_rcond;
+  rc = ap_la_chol(l, d->G, &scratch_rcond, s->work, s->iwork);
   if (rc != AP_OK) {
     ap_core_msg(d, "system '%s': G = B^T g B is not positive definite at t = %.17g (speed "
                 "projection)", m->name, d->t);

@@ -11,6 +11,7 @@
  *
  * The stepper (lib/integrate/stepper.h) stops exactly at each requested output time. A failed
  * ap_sim_advance leaves (t, q, v) at the last accepted step. */
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -37,6 +38,7 @@ struct ap_sim {
   char rhs_msg[512];
   ap_sim_stats stats;
   char msg[512];
+  char warning[512];        /* the first warning, "" when none */
 };
 
 static int sim_fail(ap_sim *s, int status, const char *fmt, ...)
@@ -217,11 +219,32 @@ static int after_step_dae(ap_sim *s, double t) {
   return AP_OK;
 }
 
+/* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the
+ * requested accuracy is then out of reach of the linear algebra itself. */
+static void check_condition(ap_sim *s) {
+  const ap_data *d = s->d;
+  int partitioned = s->def.mode == AP_MODE_MINIMAL && s->m->b > 0;
+  double rc = partitioned ? fmin(d->rcond_G, d->rcond_R) : d->rcond_G;
+  s->stats.min_rcond = fmin(s->stats.min_rcond, rc);
+  if (s->warning[0] || rc * s->def.rtol >= DBL_EPSILON) return;
+  const char *what = partitioned && d->rcond_R < d->rcond_G ? "the dependent-speed block R11"
+                                                              : "G = B^T g B";
+  snprintf(s->warning, sizeof s->warning, "system '%s': %s has condition number %.3g at "
+           "t = %.17g; with rtol = %.3g the linear solves lose about %.0f digits, so results "
+           "may miss the requested accuracy%s", s->m->name, what, 1.0 / rc, s->t,
+           s->def.rtol, log10(1.0 / rc),
+           s->def.mode == AP_MODE_PROJECTED ? " (the orthonormal basis inherits cond(g); "
+           "minimal mode's partitioned basis may be better conditioned)" : "");
+}
+
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 static int evaluate_current(ap_sim *s) {
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
+  s->d->estimate_cond = 1;
   int rc = rhs(s->t, s->y, s->ytry, s);
+  s->d->estimate_cond = 0;
   if (rc != 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
+  check_condition(s);
   memcpy(s->q, s->d->q, sizeof(double) * (size_t)s->n);
   memcpy(s->v, s->d->v, sizeof(double) * (size_t)s->k);
   return AP_OK;
@@ -363,6 +386,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
     return AP_ERR_NOMEM;
   }
   s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;
+  s->stats.min_rcond = 1.0;
   s->y = buf, s->ytry = buf + nk, s->q = buf + 2 * nk, s->v = s->q + m->n;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
@@ -433,6 +457,7 @@ const double *ap_sim_q(const ap_sim *s) { return s->q; }
 const double *ap_sim_v(const ap_sim *s) { return s->v; }
 const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
 const char *ap_sim_message(const ap_sim *s) { return s->msg; }
+const char *ap_sim_warning(const ap_sim *s) { return s->warning; }
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
   if (s->dae) {   /* IDA's own multipliers: the cross-check compares them with Appell's */
