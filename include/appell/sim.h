@@ -4,6 +4,8 @@
  *
  *   AP_MODE_MINIMAL    state (q, e'), partitioned basis frozen during a step, re-partitioned
  *                      between steps when R11 degrades; the constraints hold to round-off.
+ *   AP_MODE_PLAIN      as projected, without the projection (drifts; for comparison).
+ *   AP_MODE_DAE        IDA on (q, v, lambda), index 2 (see docs/architecture.md).
  *   AP_MODE_PROJECTED  state (q, v), orthonormal basis, v projected onto A v + a0 = 0 in the
  *                      metric g after every step.
  *
@@ -22,7 +24,9 @@ extern "C" {
 typedef enum ap_mode {
   AP_MODE_MINIMAL = 0,
   AP_MODE_PROJECTED = 1,
-  AP_MODE_DAE = 2          /* reserved for the IDA cross-check */
+  AP_MODE_DAE = 2,         /* SUNDIALS IDA on (q, v, lambda): the cross-check */
+  AP_MODE_PLAIN = 3        /* as projected but never projected: the velocity constraints drift
+                              with the integration error. For comparison only. */
 } ap_mode;
 
 typedef struct ap_sim_def {

@@ -182,6 +182,16 @@ static int sim_proj(double t, const double *y, double *corr, double *err, void *
   return 0;
 }
 
+/* Plain mode: nothing is projected; only the residual is recorded. */
+static int after_step_plain(ap_sim *s, double t) {
+  if (s->m->b == 0) return AP_OK;
+  load_state(s, t, s->y);
+  int rc = ap_fwd_position(s->m, s->d);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", s->d->msg);
+  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(s->d, s->d->v));
+  return AP_OK;
+}
+
 /* Projected mode: put v back on the constraint set, nearest in the metric g. One-step methods
  * project after every accepted step and restart (it costs them one evaluation); CVODE
  * projects inside its own step through sim_proj (a restart would drop it to order 1). */
@@ -254,7 +264,7 @@ static int evaluate_current(ap_sim *s) {
 
 static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED &&
-      def->mode != AP_MODE_DAE)
+      def->mode != AP_MODE_DAE && def->mode != AP_MODE_PLAIN)
     return sim_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);
   s->meth = ap_step_method_find(def->mode == AP_MODE_DAE ? "bdf" : def->method ? def->method : "");
   if (!s->meth)
@@ -444,7 +454,9 @@ int ap_sim_advance(ap_sim *s, double tout) {
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
     rc = project_coordinates(s, t);
     if (rc == AP_OK)
-      rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t) : after_step_projected(s, t);
+      rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t)
+           : s->def.mode == AP_MODE_PLAIN   ? after_step_plain(s, t)
+                                            : after_step_projected(s, t);
     if (rc != AP_OK) return rc;
   }
   return evaluate_current(s);
