@@ -91,6 +91,8 @@ def label(key):
         return f"limit (hand ODE) {meth}"
     if tool == "sympy_scipy":
         return f"SymPy+SciPy {meth}"
+    if tool == "simbody_disk_check":
+        return f"Simbody {meth} (NoSlip1D disk, energy not kept)"
     return f"Simbody {meth}"
 
 
