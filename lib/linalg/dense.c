@@ -1,9 +1,15 @@
 /* Appell linear algebra: the small dense kernels of the Appell solve.
  *
  * DESIGN.md §1: G e'' = Phi - B^T (h + g w) with G = B^T g B (l x l, SPD). This file forms G
- * (ap_la_congruence: dsymm then dgemm, G made exactly symmetric), factors it G = L L^T with a
- * reciprocal condition estimate (ap_la_chol: dlansy for ||G||_1 before factoring, dpotrf,
- * dpocon), solves with the factor (dpotrs), and wraps dgemv.
+ * (ap_la_congruence, G made exactly symmetric), factors it G = L L^T (ap_la_chol, with a
+ * reciprocal condition estimate on request: dlansy for ||G||_1 before factoring, dpocon after),
+ * solves with the factor, and computes y = M x and y = M^T x.
+ * Two paths: up to ap_la_small_limit() (rows and columns) native loops, the textbook algorithms
+ * (Golub & Van Loan, Matrix Computations, 4th ed.: Cholesky-Banachiewicz, row by row, 4.2;
+ * forward and back substitution 3.1; congruence as g B then B^T (g B), lower triangle then
+ * mirrored); above it BLAS and LAPACK (dsymm and dgemm, dpotrf, dpotrs, dgemv), whose per-call
+ * overhead (argument checks, ilaenv, buffer locks) dwarfs the arithmetic on tiny matrices.
+ * Both paths read only the lower triangle of g and of G, and agree to round-off.
  * Layout: column-major, leading dimension = row count; only the lower triangle of the factor is
  * meaningful. Nothing allocates: scratch comes from the caller (ap_la_work_size covers 4 l). */
 #include "linalg/linalg.h"
@@ -14,27 +20,171 @@
 
 #include "appell/status.h"
 
+/* The size limit of the native kernels; tests and benchmarks move it (ap_la_set_small_limit). */
+static int small_limit = AP_LA_SMALL_LIMIT;
+
+int ap_la_small_limit(void) { return small_limit; }
+
+int ap_la_set_small_limit(int n) {
+  int old = small_limit;
+  small_limit = n < 0 ? 0 : n;
+  return old;
+}
+
+/* ---- native kernels ----------------------------------------------------------------------- */
+
+/* G = L L^T in place (lower triangle, ld l), row by row (Cholesky-Banachiewicz):
+ * L_ij = (G_ij - sum_{p<j} L_ip L_jp) / L_jj, L_ii = sqrt(G_ii - sum_{p<i} L_ip^2).
+ * Returns 0, or -1 at the first pivot that is <= 0 or not finite. */
+static int chol_native(int l, double *G) {
+  for (int i = 0; i < l; i++) {
+    for (int j = 0; j <= i; j++) {
+      double s = G[i + (size_t)j * l];
+      for (int p = 0; p < j; p++) s -= G[i + (size_t)p * l] * G[j + (size_t)p * l];
+      if (j < i) {
+        G[i + (size_t)j * l] = s / G[j + (size_t)j * l];
+      } else {
+        if (!(s > 0.0) || !isfinite(s)) return -1;
+        G[i + (size_t)i * l] = sqrt(s);
+      }
+    }
+  }
+  return 0;
+}
+
+/* x = (L L^T)^-1 x: L y = x forward by rows, then L^T x = y backward by L's columns. */
+static void chol_solve_native(int l, const double *L, double *x) {
+  for (int i = 0; i < l; i++) {
+    double s = x[i];
+    for (int p = 0; p < i; p++) s -= L[i + (size_t)p * l] * x[p];
+    x[i] = s / L[i + (size_t)i * l];
+  }
+  for (int i = l - 1; i >= 0; i--) {
+    const double *Li = L + (size_t)i * l;
+    double s = x[i];
+    for (int p = i + 1; p < l; p++) s -= Li[p] * x[p];
+    x[i] = s / Li[i];
+  }
+}
+
+/* y (m) = M x, M (m x n, n >= 1): y starts as M_0 x_0, then accumulates four columns at a time
+ * (one pass over y per four). */
+static void gemv_native(int m, int n, const double *restrict M, const double *restrict x,
+                        double *restrict y) {
+  int j = 1;
+  for (int i = 0; i < m; i++) y[i] = M[i] * x[0];
+  for (; j + 3 < n; j += 4) {
+    const double *M0 = M + (size_t)j * m, *M1 = M0 + m, *M2 = M1 + m, *M3 = M2 + m;
+    double x0 = x[j], x1 = x[j + 1], x2 = x[j + 2], x3 = x[j + 3];
+    for (int i = 0; i < m; i++) y[i] += (M0[i] * x0 + M1[i] * x1) + (M2[i] * x2 + M3[i] * x3);
+  }
+  for (; j < n; j++) {
+    const double *Mj = M + (size_t)j * m;
+    double xj = x[j];
+    for (int i = 0; i < m; i++) y[i] += Mj[i] * xj;
+  }
+}
+
+/* y (n) = M^T x, M (m x n): four dot products at a time (four independent sums). */
+static void gemv_t_native(int m, int n, const double *restrict M, const double *restrict x,
+                          double *restrict y) {
+  int j = 0;
+  for (; j + 3 < n; j += 4) {
+    const double *M0 = M + (size_t)j * m, *M1 = M0 + m, *M2 = M1 + m, *M3 = M2 + m;
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (int i = 0; i < m; i++) {
+      double xi = x[i];
+      s0 += M0[i] * xi, s1 += M1[i] * xi, s2 += M2[i] * xi, s3 += M3[i] * xi;
+    }
+    y[j] = s0, y[j + 1] = s1, y[j + 2] = s2, y[j + 3] = s3;
+  }
+  for (; j < n; j++) {
+    const double *Mj = M + (size_t)j * m;
+    double s = 0.0;
+    for (int i = 0; i < m; i++) s += Mj[i] * x[i];
+    y[j] = s;
+  }
+}
+
+/* gB (k x l) = g B with g's lower triangle: g_ip = g[i + p k] for p < i (row i), g[p + i k]
+ * for p >= i (column i). Dot products, four columns of B at a time (four independent sums). */
+static void symm_lower(int k, int l, const double *restrict g, const double *restrict B,
+                       double *restrict gB) {
+  int j = 0;
+  for (; j + 3 < l; j += 4) {
+    const double *B0 = B + (size_t)j * k, *B1 = B0 + k, *B2 = B1 + k, *B3 = B2 + k;
+    for (int i = 0; i < k; i++) {
+      const double *gi = g + (size_t)i * k;
+      double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, t;
+      for (int p = 0; p < i; p++)
+        t = g[i + (size_t)p * k], s0 += t * B0[p], s1 += t * B1[p], s2 += t * B2[p],
+        s3 += t * B3[p];
+      for (int p = i; p < k; p++)
+        t = gi[p], s0 += t * B0[p], s1 += t * B1[p], s2 += t * B2[p], s3 += t * B3[p];
+      double *y = gB + i + (size_t)j * k;
+      y[0] = s0, y[k] = s1, y[2 * (size_t)k] = s2, y[3 * (size_t)k] = s3;
+    }
+  }
+  for (; j < l; j++) {
+    const double *Bj = B + (size_t)j * k;
+    for (int i = 0; i < k; i++) {
+      const double *gi = g + (size_t)i * k;
+      double s = 0.0;
+      for (int p = 0; p < i; p++) s += g[i + (size_t)p * k] * Bj[p];
+      for (int p = i; p < k; p++) s += gi[p] * Bj[p];
+      gB[i + (size_t)j * k] = s;
+    }
+  }
+}
+
+/* gB = g B, then G_ij = B_i . gB_j for i >= j (M^T x on the columns j..l-1 of B), mirrored to
+ * the upper triangle. */
+static void congruence_native(int k, int l, const double *g, const double *B, double *G,
+                              double *gB) {
+  symm_lower(k, l, g, B, gB);
+  for (int j = 0; j < l; j++) {
+    gemv_t_native(k, l - j, B + (size_t)j * k, gB + (size_t)j * k, G + j + (size_t)j * l);
+    for (int i = j + 1; i < l; i++) G[j + (size_t)i * l] = G[i + (size_t)j * l];
+  }
+}
+
+/* ---- the routines ------------------------------------------------------------------------- */
+
 int ap_la_chol(int l, double *G, double *rcond, double *work, int *iwork) {
   if (l < 0) return AP_ERR_ARG;
-  *rcond = 1.0;
+  if (rcond) *rcond = 1.0;
   if (l == 0) return AP_OK;
-  double anorm = LAPACKE_dlansy_work(LAPACK_COL_MAJOR, '1', 'L', l, G, l, work);
-  if (!isfinite(anorm)) return AP_ERR_SINGULAR;
-  if (LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'L', l, G, l) != 0) return AP_ERR_SINGULAR;
-  if (LAPACKE_dpocon_work(LAPACK_COL_MAJOR, 'L', l, G, l, anorm, rcond, work, iwork) != 0)
+  double anorm = 0.0;
+  if (rcond) {
+    anorm = LAPACKE_dlansy_work(LAPACK_COL_MAJOR, '1', 'L', l, G, l, work);
+    if (!isfinite(anorm)) return AP_ERR_SINGULAR;
+  }
+  if (l <= small_limit) {
+    if (chol_native(l, G)) return AP_ERR_SINGULAR;
+  } else {
+    if (LAPACKE_dpotrf_work(LAPACK_COL_MAJOR, 'L', l, G, l) != 0) return AP_ERR_SINGULAR;
+    for (int i = 0; i < l; i++) /* dpotrf lets an infinite pivot pass */
+      if (!isfinite(G[i + (size_t)i * l])) return AP_ERR_SINGULAR;
+  }
+  if (rcond && LAPACKE_dpocon_work(LAPACK_COL_MAJOR, 'L', l, G, l, anorm, rcond, work, iwork))
     return AP_ERR_ARG;
   return AP_OK;
 }
 
 void ap_la_chol_solve(int l, const double *L, double *x) {
   if (l <= 0) return;
-  LAPACKE_dpotrs_work(LAPACK_COL_MAJOR, 'L', l, 1, L, l, x, l);
+  if (l <= small_limit) chol_solve_native(l, L, x);
+  else LAPACKE_dpotrs_work(LAPACK_COL_MAJOR, 'L', l, 1, L, l, x, l);
 }
 
 void ap_la_congruence(int k, int l, const double *g, const double *B, double *G, double *gB) {
   if (l <= 0) return;
   if (k <= 0) {
     for (int i = 0; i < l * l; i++) G[i] = 0.0;
+    return;
+  }
+  if (k <= small_limit) {
+    congruence_native(k, l, g, B, G, gB);
     return;
   }
   cblas_dsymm(CblasColMajor, CblasLeft, CblasLower, k, l, 1.0, g, k, B, k, 0.0, gB, k);
@@ -45,18 +195,17 @@ void ap_la_congruence(int k, int l, const double *g, const double *B, double *G,
 
 void ap_la_gemv(int m, int n, const double *M, const double *x, double *y) {
   if (m <= 0) return;
-  if (n <= 0) {
+  if (n <= 0) { /* empty product */
     for (int i = 0; i < m; i++) y[i] = 0.0;
-    return;
+  } else if (m <= small_limit && n <= small_limit) {
+    gemv_native(m, n, M, x, y);
+  } else {
+    cblas_dgemv(CblasColMajor, CblasNoTrans, m, n, 1.0, M, m, x, 1, 0.0, y, 1);
   }
-  cblas_dgemv(CblasColMajor, CblasNoTrans, m, n, 1.0, M, m, x, 1, 0.0, y, 1);
 }
 
 void ap_la_gemv_t(int m, int n, const double *M, const double *x, double *y) {
   if (n <= 0) return;
-  if (m <= 0) {
-    for (int j = 0; j < n; j++) y[j] = 0.0;
-    return;
-  }
-  cblas_dgemv(CblasColMajor, CblasTrans, m, n, 1.0, M, m, x, 1, 0.0, y, 1);
+  if (m <= 0 || (m <= small_limit && n <= small_limit)) gemv_t_native(m, n, M, x, y);
+  else cblas_dgemv(CblasColMajor, CblasTrans, m, n, 1.0, M, m, x, 1, 0.0, y, 1);
 }

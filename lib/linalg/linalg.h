@@ -1,13 +1,23 @@
-/* Appell linear algebra (internal): null-space bases of the constraint matrix, Cholesky with a
- * condition estimate, small dense kernels. Raw column-major arrays and sizes only: nothing here
- * knows about models or data. No routine allocates; every scratch array is passed in and its
- * size is given by ap_la_work_size / ap_la_iwork_size. LAPACKE _work routines, column-major.
+/* Appell linear algebra (internal): null-space bases of the constraint matrix, Cholesky with an
+ * optional condition estimate, small dense kernels. Raw column-major arrays and sizes only:
+ * nothing here knows about models or data. No routine allocates; every scratch array is passed
+ * in and its size is given by ap_la_work_size / ap_la_iwork_size.
+ *
+ * Two paths with one meaning. The routines called on every evaluation (partition_basis,
+ * partition_particular, orth_basis, orth_particular, chol, chol_solve, congruence, gemv,
+ * gemv_t) run native unblocked loops when every dimension involved (b and k; l; k; m and n) is
+ * <= ap_la_small_limit(), default AP_LA_SMALL_LIMIT, and LAPACKE _work / CBLAS above it. Same
+ * storage (F and tau in LAPACK's dgeqrf layout) and the same results up to round-off; LAPACK's
+ * per-call overhead costs microseconds on the tiny matrices of a mechanism. pivot_select and
+ * lstsq_At always use LAPACK. The condition estimates (dtrcon, dpocon) are LAPACK on both paths
+ * and are skipped when rcond is NULL.
  *
  * Notation (DESIGN.md §1): A is b x k (b constraint rows, k speeds), r = numerical rank of A,
  * l = k - r free speeds. Return values: AP_OK, or AP_ERR_SINGULAR / AP_ERR_ARG.
  * AP_ERR_ARG: bad sizes, rtol negative or not finite, or a non-finite entry of A in the routines
  * that decide the rank (pivot_select, orth_basis, lstsq_At). AP_ERR_SINGULAR: a triangular
- * pivot that is exactly 0 or not finite (never divided by), or G not positive definite. */
+ * pivot that is exactly 0 or not finite (never divided by), below the working-precision bound
+ * of ap_la_partition_basis when rcond is NULL, or G not positive definite. */
 #ifndef AP_LINALG_H
 #define AP_LINALG_H
 
@@ -35,11 +45,14 @@ int ap_la_pivot_select(int b, int k, const double *A, double rtol, int *perm, in
  *   b0 (k) if a0 and b0 are not NULL: b0[perm[i]] = -(R11^-1 Q1^T a0)_i, 0 elsewhere
  * where A_i = A[:, perm[r..k-1]] and Q1 = first r columns of Q.
  * growth = max |(R11^-1 Q1^T A_i)_ij| (0 when l == 0 or r == 0);
- * rcond  = reciprocal 1-norm condition estimate of R11 (dtrcon; 1 when r == 0);
+ * rcond  = reciprocal 1-norm condition estimate of R11 (dtrcon; 1 when r == 0), or NULL: no
+ *          estimate (the per-evaluation path; dtrcon costs more than the factorization here);
  * resid  = max |(Q^T [A_i a0])_{r..b-1, :}| : how far the dropped rows are from consistent
  *          (0 when b == r).
  * a0 may be NULL (resid then covers A_i only). B is not written when l == 0.
- * Returns AP_ERR_SINGULAR (outputs unspecified) when some R11_ii is exactly 0 or not finite. */
+ * Returns AP_ERR_SINGULAR (outputs unspecified) when some R11_ii is not finite, or is exactly 0
+ * (rcond given: the caller judges the estimate), or |R11_ii| <= 64 DBL_EPSILON max_j ||Ad_j||_2
+ * (rcond NULL: singular to working precision relative to the largest column of Ad). */
 int ap_la_partition_basis(int b, int k, int r, const int *perm, const double *A,
                           const double *a0, double *F, double *tau, double *B, double *b0,
                           double *growth, double *rcond, double *resid, double *work,
@@ -73,15 +86,18 @@ int ap_la_orth_particular(int b, int k, int rank, const double *F, const int *jp
 
 /* ---- Cholesky, congruence, least squares -------------------------------------------------- */
 
-/* Cholesky factor G = L L^T in place (lower triangle; dpotrf) with the reciprocal 1-norm
- * condition estimate (dpocon). AP_ERR_SINGULAR when G is not positive definite. l == 0 is ok
- * (rcond = 1). */
+/* Cholesky factor G = L L^T in place (lower triangle read and written; dpotrf or the native
+ * loop). rcond: the reciprocal 1-norm condition estimate (dlansy + dpocon), or NULL: no estimate.
+ * AP_ERR_SINGULAR when a pivot is <= 0 or not finite (G not positive definite, or NaN / Inf in
+ * its lower triangle), and, with rcond, when ||G||_1 is not finite. l == 0 is ok (rcond = 1). */
 int ap_la_chol(int l, double *G, double *rcond, double *work, int *iwork);
 
-/* Solve G x = rhs in place with the factor from ap_la_chol (dpotrs, one right-hand side). */
+/* Solve G x = rhs in place with the factor from ap_la_chol (dpotrs or forward and back
+ * substitution, one right-hand side). */
 void ap_la_chol_solve(int l, const double *L, double *x);
 
-/* G = B^T g B (l x l, ld l, full symmetric), with scratch gB (k x l). g is k x k symmetric. */
+/* G = B^T g B (l x l, ld l, full symmetric), with scratch gB (k x l). g is k x k symmetric; only
+ * its lower triangle is read. */
 void ap_la_congruence(int k, int l, const double *g, const double *B, double *G, double *gB);
 
 /* Minimum-norm least-squares solution of A^T lambda = rhs (A is b x k, rhs has k entries,
@@ -93,5 +109,22 @@ int ap_la_lstsq_At(int b, int k, const double *A, const double *rhs, double rtol
 /* y = M x  (M m x n, column-major, ld m) and y = M^T x. */
 void ap_la_gemv(int m, int n, const double *M, const double *x, double *y);
 void ap_la_gemv_t(int m, int n, const double *M, const double *x, double *y);
+
+/* ---- size limit of the native kernels ------------------------------------------------------ */
+
+/* Default limit: native when max(b, k) <= 16. Measured with bench/bench_linalg (OpenBLAS 0.3.21,
+ * one thread, Xeon 2.5 GHz): for k <= 6 every routine is 2-20x faster natively; the QR
+ * routines stay faster up to k ~ 24-40 (partition_basis 1.9x at (16, 32)), while congruence and
+ * gemv, which OpenBLAS vectorizes, fall behind from k ~ 10-12 (congruence 0.5x at k = 12-16).
+ * Summed over one evaluation's calls the native path is 2.4x faster at (6, 12), 1.5x at
+ * (8, 16) and (10, 20), and even around (16, 32): 16 keeps the margin and the mechanism sizes. */
+#define AP_LA_SMALL_LIMIT 16
+
+/* The current limit. */
+int ap_la_small_limit(void);
+/* For tests and benchmarks only: set the limit (0: LAPACK/BLAS everywhere; a large value: native
+ * everywhere) and return the previous one. A process-wide setting, not thread-safe: change it
+ * only while no other thread runs these routines. */
+int ap_la_set_small_limit(int n);
 
 #endif
