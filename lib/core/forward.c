@@ -133,8 +133,8 @@ int ap_partition(const ap_model *m, ap_data *d) {
 static int basis_partitioned(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
   double resid = 0.0;
-  double scratch_rcond, *rcond = d->estimate_cond ? &d->rcond_R : &scratch_rcond;
-  if (!d->estimate_cond) d->rcond_R = 1.0;
+  double *rcond = d->estimate_cond ? &d->rcond_R : NULL;   /* not in the hot path */
+  if (!rcond) d->rcond_R = 1.0;
   int rc = ap_la_partition_basis(m->b, m->k, d->rank, d->perm, d->A, d->a0, s->F, s->tau,
                                  d->B, d->b0, &d->growth, rcond, &resid, s->work, s->iwork);
   d->cnt.qr++;
@@ -300,8 +300,8 @@ int ap_fwd_acceleration(const ap_model *m, ap_data *d) {
     ap_la_gemv_t(k, l, d->B, d->Q, d->Phi);
     ap_la_gemv_t(k, l, d->B, s->tk2, d->edd);
   }
-  double scratch_rcond, *rcond = d->estimate_cond ? &d->rcond_G : &scratch_rcond;
-  if (!d->estimate_cond) d->rcond_G = 1.0;
+  double *rcond = d->estimate_cond ? &d->rcond_G : NULL;   /* not in the hot path */
+  if (!rcond) d->rcond_G = 1.0;
   int rc = ap_la_chol(l, d->G, rcond, s->work, s->iwork);
   if (rc != AP_OK) {
     ap_core_msg(d, "system '%s': G = B^T g B (%d x %d) is not positive definite at "
@@ -364,8 +364,7 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
   ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g (v - b0) */
   ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g (v - b0) */
   ap_la_congruence(k, l, d->g, d->B, d->G, s->gB);
-  double scratch_rcond;
-  rc = ap_la_chol(l, d->G, &scratch_rcond, s->work, s->iwork);
+  rc = ap_la_chol(l, d->G, NULL, s->work, s->iwork);
   if (rc != AP_OK) {
     ap_core_msg(d, "system '%s': G = B^T g B is not positive definite at t = %.17g (speed "
                 "projection)", m->name, d->t);
