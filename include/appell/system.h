@@ -102,7 +102,11 @@ typedef struct ap_counters {
   long reactions;      /* reaction solves */
   long qr;             /* QR factorizations of A (skipped when b == 0) */
   long partitions;     /* pivoted partition selections */
-  long metric, bias, force, constraint, gamma, kinematic; /* callback calls */
+  long metric, bias, force, constraint, gamma, kinematic; /* callback calls (body models:
+                          evaluations of the same objects by the body layer) */
+  long rheonomic;      /* body models: position stages that evaluated time-dependent terms
+                          (drives, moving ground, prescribed speeds); 0 when scleronomic */
+  long energy;         /* energy evaluations (ap_body_energy: scene energy outputs) */
 } ap_counters;
 
 typedef struct ap_data {

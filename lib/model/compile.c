@@ -226,6 +226,7 @@ static void layout_coords(ap_bmodel *M) {
     M->nquat += J->quat >= 0;
   }
   M->n = q, M->k = v, M->K1 = v + 1;
+  M->ncol = M->has_drive ? M->K1 : M->k;
 }
 
 static int cmp_int(const void *a, const void *b) { return *(const int *)a - *(const int *)b; }
@@ -506,7 +507,7 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->sys.constraint_names = (const char *const *)m->constraint_names;
   int timed = 0;
   for (int i = 0; i < M->nc; i++) timed |= M->cons[i].timed;
-  m->sys.rheonomic = M->has_drive || timed;
+  m->sys.rheonomic = M->rheonomic = M->has_drive || timed;
   m->ev.scratch = M->scratch;
   m->ev.position = ap_bm_position;
   m->ev.velocity = ap_bm_velocity;

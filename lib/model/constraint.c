@@ -91,19 +91,29 @@ int ap_con_time(const ap_model *m, ap_data *d, double t, double *S) {
   return AP_OK;
 }
 
+/* A fixed ground (c->timed == 0) has no surface velocity or acceleration: those rheonomic terms
+ * are skipped, not evaluated as zeros. */
 static void ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg) {
   const double *ctr = c->def.ground.center;
+  Vg[2] = 0.0;
+  if (!c->timed) {
+    Vg[0] = Vg[1] = 0.0;
+    return;
+  }
   Vg[0] = G[G_VX] - G[G_OM] * (x[1] - ctr[1]);
   Vg[1] = G[G_VY] + G[G_OM] * (x[0] - ctr[0]);
-  Vg[2] = 0.0;
 }
 
 static void ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
                          double *Ag) {
   const double *ctr = c->def.ground.center;
+  Ag[2] = 0.0;
+  if (!c->timed) {
+    Ag[0] = Ag[1] = 0.0;
+    return;
+  }
   Ag[0] = G[G_DVX] - G[G_DOM] * (x[1] - ctr[1]) - G[G_OM] * xd[1];
   Ag[1] = G[G_DVY] + G[G_DOM] * (x[0] - ctr[0]) + G[G_OM] * xd[0];
-  Ag[2] = 0.0;
 }
 
 /* ---- loop rows ---------------------------------------------------------------------------- */

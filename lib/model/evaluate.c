@@ -6,7 +6,11 @@
  * than AP_QUAT_TOL, then loop closures phi(q, t) = 0 by Gauss-Newton with minimum-norm steps
  * dv (lstsq on the loop Jacobian) mapped to q through N. Corrections below the tolerances are
  * not applied, so the stepper restarts only when something really moved.
- * Everything writes into the data's scratch; the model is never modified. */
+ * Everything writes into the data's scratch; the model is never modified.
+ * Counters (d->cnt, as the core counts a math-level system's callbacks): metric, kinematic
+ * (n != k), constraint (b > 0) and rheonomic (drives or timed constraints only) per position
+ * stage; bias, force (effects listed) and gamma (b > 0) per velocity stage; energy per
+ * ap_body_energy. A stage's piece that the model does not have is skipped and not counted. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,6 +21,10 @@
 
 int ap_bm_position(const ap_model *m, ap_data *d, double *S) {
   const ap_bmodel *M = ap_bm(m);
+  d->cnt.metric++;
+  d->cnt.kinematic += M->n != M->k;
+  d->cnt.constraint += M->b > 0;
+  d->cnt.rheonomic += M->rheonomic;
   int rc = ap_kin_position(m, d, d->t, d->q, S);
   if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
   if (rc != AP_OK) return rc;
@@ -28,9 +36,12 @@ int ap_bm_position(const ap_model *m, ap_data *d, double *S) {
 
 int ap_bm_velocity(const ap_model *m, ap_data *d, double *S) {
   const ap_bmodel *M = ap_bm(m);
+  d->cnt.bias++;
+  d->cnt.force += M->ne > 0;
+  d->cnt.gamma += M->b > 0;
   ap_kin_velocity(M, d->v, S);
   ap_kin_bias(M, S, d->h);
-  int rc = ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q);
+  int rc = M->ne ? ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q) : AP_OK;
   if (rc == AP_OK && M->b) rc = ap_con_gamma(m, d, d->t, d->q, d->v, S, d->gamma);
   return rc;
 }
@@ -291,6 +302,7 @@ int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body, const 
 }
 
 int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *potential) {
+  if (ap_model_is_body_model(m) && d) d->cnt.energy++;
   int rc = ap_body_eval(m, d);
   if (rc != AP_OK) return rc;
   const ap_bmodel *M = ap_bm(m);

@@ -61,9 +61,10 @@ kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j) {
   return J;
 }
 
-/* out[:, c] += J[:, c] x r for every column (the velocity of an offset point). */
-static void cols_cross_r(int K1, const double *J, const double *r, double *out) {
-  for (int c = 0; c < K1; c++) v3_cross_add(J + 3 * c, r, out + 3 * c);
+/* out[:, c] += J[:, c] x r for the first ncol columns (the velocity of an offset point). Without
+ * drives ncol = k: the rheonomic column k is zero everywhere and is not touched. */
+static void cols_cross_r(int ncol, const double *J, const double *r, double *out) {
+  for (int c = 0; c < ncol; c++) v3_cross_add(J + 3 * c, r, out + 3 * c);
 }
 
 void ap_kin_apply(int K1, const double *J, const double *v, double *out) {
@@ -170,13 +171,13 @@ static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, dou
   if (j->parent >= 0) {
     memcpy(C.Jw, P.Jw, K3 * sizeof(double));
     memcpy(C.Jo, P.Jo, K3 * sizeof(double));
-    cols_cross_r(M->K1, P.Jw, r12, C.Jo);
+    cols_cross_r(M->ncol, P.Jw, r12, C.Jo);
   } else {
     memset(C.Jw, 0, K3 * sizeof(double));
     memset(C.Jo, 0, K3 * sizeof(double));
   }
   joint_columns(M, j, &J, C.Jw, C.Jo);
-  for (int c = 0; c < M->K1; c++) v3_cross_add(J.r3, C.Jw + 3 * c, C.Jo + 3 * c);
+  for (int c = 0; c < M->ncol; c++) v3_cross_add(J.r3, C.Jw + 3 * c, C.Jo + 3 * c);
   return AP_OK;
 }
 
@@ -187,7 +188,7 @@ static void body_mass(const ap_bmodel *M, const ap_mbody *B, kbody *C) {
   m3_mul_t(T, C->R, C->Iw);
   m3_mul_v(C->R, B->com, C->rcom);
   memcpy(C->Jc, C->Jo, 3 * (size_t)M->K1 * sizeof(double));
-  cols_cross_r(M->K1, C->Jw, C->rcom, C->Jc);
+  cols_cross_r(M->ncol, C->Jw, C->rcom, C->Jc);
 }
 
 int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, double *S) {
@@ -321,7 +322,7 @@ void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, doub
   if (r) v3_copy(rr, r);
   if (JP) {
     memcpy(JP, C.Jo, K3 * sizeof *JP);
-    cols_cross_r(M->K1, C.Jw, rr, JP);
+    cols_cross_r(M->ncol, C.Jw, rr, JP);
   }
 }
 

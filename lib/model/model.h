@@ -88,6 +88,9 @@ typedef struct ap_bmodel {
   int nloop;                  /* loop-closure rows */
   int nquat;                  /* joints with a quaternion */
   int has_drive;
+  int ncol;                   /* Jacobian columns evaluated: K1 with drives; k without (the
+                                 rheonomic column k then stays zero and is skipped) */
+  int rheonomic;              /* drives or timed constraints: time-dependent terms exist */
   double lscale;              /* length scale for the loop tolerance (m) */
   int max_user_rows;
   size_t off_body, off_joint, off_con, off_cnt, off_tmp, off_proj, scratch;

@@ -225,6 +225,9 @@ void sc_out_free(sc_out *o);
 int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_sim *sim,
                double *row);
 int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
+/* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
+ * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
+const ap_data *sc_scene_output_data(const ap_scene *sc);
 
 /* ---- building and initial state (build.c, init.c) ------------------------------------- */
 
