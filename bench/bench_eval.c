@@ -5,7 +5,11 @@
  * Method: warm up, then time blocks of `reps` evaluations from a saved state with
  * CLOCK_MONOTONIC; report the median over `blocks` blocks and the spread (min, max) in
  * nanoseconds per evaluation, and the ratio of medians. Writes CSV to stdout-or-file.
- * Usage: bench_eval [--csv FILE] [--reps N] [--blocks N]
+ * Usage: bench_eval [--csv FILE] [--reps N] [--blocks N] [--only SYSTEM]
+ * For instruction counts per evaluation (stable on a loaded machine):
+ *   valgrind --tool=callgrind --toggle-collect=fwd_body bench_eval --only sleigh
+ *   valgrind --tool=callgrind --toggle-collect=hand_body bench_eval --only sleigh
+ * and divide the totals by 2 (bases) x reps x (blocks + 1).
  * Run with OPENBLAS_NUM_THREADS=1. */
 #include <math.h>
 #include <stdio.h>
@@ -139,13 +143,14 @@ static void hand_body(void *arg) {
 
 int main(int argc, char **argv) {
   int reps = 20000, blocks = 31;
-  const char *csv = NULL;
+  const char *csv = NULL, *only = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
     else if (!strcmp(argv[i], "--reps") && i + 1 < argc) reps = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--blocks") && i + 1 < argc) blocks = atoi(argv[++i]);
+    else if (!strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
     else {
-      fprintf(stderr, "usage: bench_eval [--csv FILE] [--reps N] [--blocks N]\n");
+      fprintf(stderr, "usage: bench_eval [--csv FILE] [--reps N] [--blocks N] [--only SYSTEM]\n");
       return 2;
     }
   }
@@ -190,6 +195,7 @@ int main(int argc, char **argv) {
   printf("%-20s %-12s %2s %2s %12s %20s %10s %20s %7s\n", "system", "basis", "k", "b",
          "appell ns", "(min..max)", "hand ns", "(min..max)", "ratio");
   for (int c = 0; c < 6; c++) {
+    if (only && strcmp(only, cases[c].name)) continue;
     for (int basis = 0; basis < 2; basis++) {
       ap_model *m = NULL;
       char msg[256];
