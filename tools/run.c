@@ -176,6 +176,8 @@ typedef struct run_state {
   ap_sim *sim;
   ap_scene_run run;
   double *buf, *row, E0, drift, wall;   /* buf: q0, v0, row */
+  char *lift;              /* per column: 1 = a contact normal force (.contact.Fz) not yet
+                              negative, 2 = warned about, 0 = another column */
   long rows;
   int progress;
 } run_state;
@@ -194,11 +196,25 @@ static void progress(const run_state *rs, double t, int done) {
   if (done) fputs("\r\033[K", stderr);
 }
 
+/* A negative contact normal force: the ground would have to pull, the body would lift off
+ * (the plane-contact joint keeps it on the plane regardless). Once per contact. */
+static void warn_lift_off(run_state *rs, int nc) {
+  for (int i = 0; rs->lift && i < nc; i++) {
+    if (rs->lift[i] != 1 || !(rs->row[i] < 0)) continue;
+    rs->lift[i] = 2;
+    fprintf(stderr, "%sappell run: warning: %s = %.6g N < 0 at t = %.10g: the ground would have "
+            "to pull; a real body would lift off here (the plane-contact joint keeps it on the "
+            "plane)\n", rs->progress ? "\r\033[K" : "", ap_scene_output_name(rs->sc, i),
+            rs->row[i], ap_sim_time(rs->sim));
+  }
+}
+
 static int write_row(run_state *rs, FILE *f) {
   int rc = ap_scene_output_row(rs->sc, rs->sim, rs->row), nc = ap_scene_output_count(rs->sc);
   if (rc != AP_OK) return rc;
   for (int i = 0; i < nc; i++) fprintf(f, i ? ",%.15g" : "%.15g", rs->row[i]);
   fputc('\n', f);
+  warn_lift_off(rs, nc);
   double E = 0.0;
   rc = ap_scene_energy(rs->sc, ap_sim_time(rs->sim), ap_sim_q(rs->sim), ap_sim_v(rs->sim), &E);
   if (rc != AP_OK) return rc;
@@ -259,6 +275,13 @@ static int start(run_state *rs, const run_opts *o) {
   double *q0 = calloc((size_t)(n + k + nc) + 1, sizeof *q0), *v0 = q0 ? q0 + n : NULL;
   if (!q0) return fprintf(stderr, "appell run: out of memory\n"), EXIT_INTERNAL;
   rs->buf = q0, rs->row = v0 + k;
+  rs->lift = calloc((size_t)nc + 1, 1);
+  if (!rs->lift) return fprintf(stderr, "appell run: out of memory\n"), EXIT_INTERNAL;
+  for (int i = 0; i < nc; i++) {
+    const char *name = ap_scene_output_name(rs->sc, i);
+    size_t len = strlen(name), sl = strlen(".contact.Fz");
+    rs->lift[i] = len > sl && strcmp(name + len - sl, ".contact.Fz") == 0;
+  }
   int rc = ap_scene_initial_state(rs->sc, q0, v0, report, sizeof report, msg, sizeof msg);
   if (rc != AP_OK) {
     fprintf(stderr, "%s\n", msg);
@@ -303,6 +326,7 @@ int cmd_run(int argc, char **argv) {
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
   }
   free(rs.buf);
+  free(rs.lift);
   ap_sim_free(rs.sim);
   ap_scene_free(rs.sc);
   return code;

@@ -304,6 +304,35 @@ AP_API int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *c
 AP_API int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q,
                                    const int *given, double *v);
 
+/* The contact force of a rolling constraint (AP_CON_ROLLING): the force of the ground on the
+ * body at the contact point, world axes. The tangential part is the friction the rolling rows
+ * need (their multipliers); the normal part is carried by the plane-contact joint, which has
+ * no multiplier for it, and comes from Newton's law for the vertical over the body and its
+ * descendants: F_n = sum m_b a_b,z minus the effects' and the other constraints' vertical
+ * forces on them. */
+typedef struct ap_contact_force {
+  double point[3];         /* contact point on z = 0 (m) */
+  double force[3];         /* ground on body (N): x, y tangential, z = normal */
+  double normal;           /* F_n = force[2] (N); negative: the ground would have to pull */
+  double tangential;       /* |F_t| (N) */
+  double friction_ratio;   /* |F_t| / F_n: the least friction coefficient a real surface needs
+                              for rolling without slip; HUGE_VAL when F_n <= 0 */
+  double spin_torque;      /* no-spin row: the ground's torque about the vertical (N m); 0
+                              without it */
+  int lift_off;            /* 1 when F_n < 0: the body would lift off (the model keeps it on
+                              the plane regardless) */
+} ap_contact_force;
+
+/* The contact force of rolling constraint `constraint` at the data's pipeline state: the
+ * kinematics and v' of the last ap_forward at (t, q, v) (ap_sim_data after ap_sim_create or
+ * ap_sim_advance has them), and the multipliers lambda (b entries; NULL means d->lambda, e.g.
+ * after ap_fwd_reactions). With a simulation pass ap_sim_reactions' lambda: in DAE mode those
+ * are IDA's own. AP_ERR_ARG for a math-level model, a bad id or another constraint kind;
+ * AP_ERR_UNSUPPORTED when the model has a user effect or a user constraint (their generalized
+ * forces cannot be attributed to bodies); AP_ERR_CALLBACK when a wrench callback fails. */
+AP_API int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
+                                 int constraint, ap_contact_force *out);
+
 /* Quaternion helpers ([w x y z]). */
 AP_API void ap_quat_from_axis_angle(const double axis[3], double angle, double q[4]);
 AP_API void ap_quat_mul(const double a[4], const double b[4], double out[4]);

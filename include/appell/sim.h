@@ -5,7 +5,8 @@
  *   AP_MODE_MINIMAL    state (q, e'), partitioned basis frozen during a step, re-partitioned
  *                      between steps when R11 degrades; the constraints hold to round-off.
  *   AP_MODE_PLAIN      as projected, without the projection (drifts; for comparison).
- *   AP_MODE_DAE        IDA on (q, v, lambda), index 2 (see docs/architecture.md).
+ *   AP_MODE_DAE        IDA on (q, v, lambda, mu), index 2; loop closures and unit quaternions
+ *                      of body models in stabilized (GGL) form (see docs/architecture.md).
  *   AP_MODE_PROJECTED  state (q, v), orthonormal basis, v projected onto A v + a0 = 0 in the
  *                      metric g after every step.
  *
@@ -61,6 +62,10 @@ typedef struct ap_sim_stats {
   double init_correction;  /* g-norm of the correction applied to the initial speeds */
   double min_rcond;        /* smallest reciprocal condition of G = B^T g B (and of R11 in
                               minimal mode) seen at output times */
+  double max_phi;          /* DAE mode: largest |phi(q, t)| of a body model's implicit
+                              holonomic rows (loop closures in m, |p|^2 - 1 of quaternions)
+                              at step ends; 0 in the other modes (project_q holds loops to
+                              1e-12 x the length scale there) */
 } ap_sim_stats;
 
 typedef struct ap_sim ap_sim;

@@ -25,6 +25,15 @@ typedef struct ap_evaluator {
   /* after an accepted step: put q back on its manifold (unit quaternions, loop closures);
    * *change = size of the correction. May be NULL. */
   int (*project_q)(const ap_model *m, ap_data *d, double *q, double *scratch, double *change);
+  /* Implicit holonomic constraints phi(q, t) = 0 (m->nphi rows: loop closures, unit-quaternion
+   * norms) for the DAE mode's stabilized index-2 (GGL) form: phi (nphi) and its Jacobian with
+   * respect to q, Phi_q (nphi x n, column-major, ld nphi; zeroed by the caller), at
+   * (d->t, d->q) after the position stage there (it reads that stage's kinematics); Phi_q
+   * may be NULL (phi only). The hook is NULL when nphi == 0. */
+  int (*phi)(const ap_model *m, ap_data *d, double *scratch, double *phi, double *Phi_q);
+  /* After an accepted step of a mode that must not move q (DAE): the checks of project_q
+   * without the corrections (a disk or torus reaching lying flat). May be NULL. */
+  int (*check_q)(const ap_model *m, ap_data *d, const double *q, double *scratch);
   void (*destroy)(void *impl);   /* frees impl with the model */
   void *impl;
 } ap_evaluator;
@@ -33,6 +42,7 @@ struct ap_model {
   ap_system_def sys;        /* callbacks and sizes; names point into the arrays below */
   ap_evaluator ev;          /* set by the body layer; all NULL for math-level systems */
   int n, k, b;
+  int nphi;                 /* rows of ev.phi; 0 for math-level systems */
   char name[64];
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */

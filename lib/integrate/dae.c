@@ -1,16 +1,29 @@
 /* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (DESIGN.md §1, "The DAE
  * cross-check").
  *
- * Variables y = (q, v, lambda), n + k + b of them, and the index-2 residual
+ * Variables y = (q, v, lambda, mu), n + k + b + nphi of them, and the residual
  *
- *     F_q = q' - N(q) v
- *     F_v = g v' + h - Q - A^T lambda
- *     F_c = A v + a0
+ *     F_q   = q' - N(q) v - Phi_q^T mu
+ *     F_v   = g v' + h - Q - A^T lambda
+ *     F_c   = A v + a0
+ *     F_phi = phi(q, t)
  *
- * lambda is algebraic (IDASetId 0) and left out of the error test (IDASetSuppressAlg), as an
- * index-2 multiplier must be. Consistent initial values come from the Appell solve (v' and
- * lambda are known exactly there), so IDACalcIC is never called. The residual runs the core's
- * position and velocity stages with AP_BASIS_NONE: no null-space basis is built. */
+ * The last rows are the implicit holonomic constraints (loop closures, unit-quaternion norms)
+ * of a body model in the stabilized index-2 form of Gear, Gupta and Leimkuhler (1985): their
+ * velocity form is already among the rows of A (loops) or holds identically (quaternions,
+ * Phi_q N = 0), and the extra multipliers mu move q along Phi_q^T, the gradient of phi in q,
+ * which Phi_q Phi_q^T (non-singular for independent rows) turns into a correction of phi. On
+ * the exact solution phi' = Phi_q N v + phi_t + Phi_q Phi_q^T mu = Phi_q Phi_q^T mu = 0, so
+ * mu = 0; numerically mu is what keeps phi = 0 at each step instead of letting it drift with
+ * the integrated velocity rows. Phi_q is the Jacobian in q (not in v): for N != I this is
+ * what makes Phi_q^T mu a vector of q-space, and it lets the quaternion rows |p|^2 - 1
+ * (whose gradient 2 p is normal to every N v) correct the norm.
+ *
+ * lambda and mu are algebraic (IDASetId 0) and left out of the error test
+ * (IDASetSuppressAlg), as index-2 multipliers must be. Consistent initial values come from the
+ * Appell solve (v' and lambda are known exactly there; mu = 0), so IDACalcIC is never called.
+ * The residual runs the core's position and velocity stages with AP_BASIS_NONE: no
+ * null-space basis is built. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -34,7 +47,8 @@ struct ap_dae {
   N_Vector yy, yp, id, atol;
   SUNMatrix J;
   SUNLinearSolver LS;
-  int ny;
+  int ny, nphi;
+  double *Phi_q, *dq;       /* (nphi x n) Jacobian of phi in q, (n) Phi_q^T mu */
   int res_status;           /* last failure of the residual */
   char res_msg[512];
   char msg[1024];
@@ -58,9 +72,21 @@ static int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
     memcpy(s->res_msg, d->msg, sizeof s->res_msg);
     return rc > 0 ? 1 : -1;
   }
-  const double *lambda = y + n + k;
-  ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v */
+  const double *lambda = y + n + k, *mu = lambda + b;
+  ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v - Phi_q^T mu */
   for (int i = 0; i < n; i++) r[i] = y1[i] - r[i];
+  if (s->nphi > 0) {
+    int np = s->nphi;
+    memset(s->Phi_q, 0, sizeof(double) * (size_t)np * (size_t)n);
+    rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, r + n + k + b, s->Phi_q);
+    if (rc != AP_OK) {
+      s->res_status = rc;
+      memcpy(s->res_msg, d->msg, sizeof s->res_msg);
+      return rc > 0 ? 1 : -1;
+    }
+    ap_la_gemv_t(np, n, s->Phi_q, mu, s->dq);
+    for (int i = 0; i < n; i++) r[i] -= s->dq[i];
+  }
   ap_la_gemv(k, k, d->g, y1 + n, r + n);                   /* F_v = g v' + h - Q - A^T l */
   if (b > 0) {
     ap_la_gemv_t(b, k, d->A, lambda, d->w);                /* w is free here: A^T lambda */
@@ -85,7 +111,16 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
   *out = NULL;
   ap_dae *s = calloc(1, sizeof *s);
   if (!s) return AP_ERR_NOMEM;
-  s->m = m, s->d = d, s->ny = m->n + m->k + m->b;
+  s->m = m, s->d = d, s->nphi = m->ev.phi ? m->nphi : 0;
+  s->ny = m->n + m->k + m->b + s->nphi;
+  if (s->nphi > 0) {
+    s->Phi_q = calloc((size_t)s->nphi * (size_t)m->n + (size_t)m->n, sizeof *s->Phi_q);
+    if (!s->Phi_q) {
+      free(s);
+      return AP_ERR_NOMEM;
+    }
+    s->dq = s->Phi_q + (size_t)s->nphi * (size_t)m->n;
+  }
   int ok = SUNContext_Create(NULL, &s->ctx) == 0;
   if (ok) {
     s->yy = N_VNew_Serial(s->ny, s->ctx), s->yp = N_VNew_Serial(s->ny, s->ctx);
@@ -106,7 +141,9 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     /* Index-2 multipliers are out of the error test (IDASetSuppressAlg) but still weigh in
      * IDA's Newton convergence test, where their updates scale like 1/h: with the user's
      * atol there, the first tiny steps fail to converge (measured: the knife edge at
-     * rtol 1e-9). They get 10 rtol (1 + |lambda0|). */
+     * rtol 1e-9). They get 10 rtol (1 + |lambda0|); so do the GGL multipliers mu (zero on
+     * the exact solution; tighter or looser values, 1e-12 to 1e-3, changed the cross-check
+     * differences only irregularly, measured on the body models of test_dae_bodies). */
     double lam0 = 0.0;
     for (int i = m->n + m->k; i < s->ny; i++) lam0 = fmax(lam0, fabs(y0[i]));
     for (int i = 0; i < s->ny; i++)
@@ -183,5 +220,6 @@ void ap_dae_free(ap_dae *s) {
   if (s->id) N_VDestroy(s->id);
   if (s->atol) N_VDestroy(s->atol);
   if (s->ctx) SUNContext_Free(&s->ctx);
+  free(s->Phi_q);
   free(s);
 }

@@ -1,4 +1,5 @@
-/* Simulation drivers: minimal mode and projected mode (DESIGN.md §1 "Choosing B", §2).
+/* Simulation drivers: minimal, projected, plain and DAE modes (DESIGN.md §1 "Choosing B",
+ * "The DAE cross-check", §2).
  *
  * Minimal mode integrates y = (q, e') with the partitioned basis frozen during a step. After
  * every accepted step the driver looks at the growth max|R11^-1 R12| of the basis at the new
@@ -8,6 +9,10 @@
  * Projected mode integrates y = (q, v) with the orthonormal basis and, after every accepted
  * step, replaces v by its nearest point on A v + a0 = 0 in the metric g, then restarts the
  * stepper from the projected state.
+ *
+ * DAE mode hands y = (q, v, lambda, mu) to IDA (dae.c) from consistent values of the Appell
+ * solve; after each IDA step it only checks (lying flat) and records residuals, never
+ * touching IDA's state.
  *
  * The stepper (lib/integrate/stepper.h) stops exactly at each requested output time. A failed
  * ap_sim_advance leaves (t, q, v) at the last accepted step. */
@@ -217,15 +222,28 @@ static int after_step_projected(ap_sim *s, double t) {
   return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
 }
 
-/* DAE mode: record the velocity-constraint residual at the accepted step. */
+/* DAE mode: IDA keeps q on phi = 0 itself (GGL rows), so nothing is corrected here and IDA's
+ * state is never touched. The body model's checks of project_q run on the accepted q (a disk
+ * or torus reaching lying flat stops the run); the velocity-constraint residual and |phi| are
+ * recorded. */
 static int after_step_dae(ap_sim *s, double t) {
   ap_data *d = s->d;
-  if (s->m->b == 0) return AP_OK;
+  const ap_model *m = s->m;
+  int nphi = m->ev.phi ? m->nphi : 0, rc = AP_OK;
   load_state(s, t, s->y);
+  if (m->ev.check_q) rc = m->ev.check_q(m, d, s->y, ((ap_scratch *)d->internal)->ev);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
+  if (m->b == 0 && nphi == 0) return AP_OK;
   d->basis = AP_BASIS_NONE;
-  int rc = ap_fwd_position(s->m, d);
+  rc = ap_fwd_position(m, d);
   if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
+  if (m->b > 0)
+    s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
+  if (nphi == 0) return AP_OK;
+  double *phi = s->ytry;                        /* free between steps */
+  rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+  for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
   return AP_OK;
 }
 
@@ -328,17 +346,20 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   return AP_OK;
 }
 
-/* DAE mode: y = (q, v, lambda), y' = (q', v', 0), all from the Appell solve at t0. */
+/* DAE mode: y = (q, v, lambda, mu), y' = (q', v', 0, 0), from the Appell solve at t0 (mu = 0:
+ * on the exact solution the GGL multipliers vanish). */
 static int setup_dae(ap_sim *s) {
   ap_data *d = s->d;
   int rc = ap_fwd_reactions(s->m, d);
   if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
-  s->ny = s->n + s->k + s->b;
+  int nalg = s->b + (s->m->ev.phi ? s->m->nphi : 0);
+  s->ny = s->n + s->k + nalg;
   double *yp = s->ytry;
+  memset(s->y + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
   memcpy(s->y + s->n + s->k, d->lambda, sizeof(double) * (size_t)s->b);
   memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
-  memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)s->b);
+  memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
   /* First step: IDA's own guess from |y'| is far too small at tight tolerances, and an index-2
    * Newton iteration fails there (its matrix conditions like 1/h^2). Use the BDF1 local error
    * h^2 |q''| / 2 = rtol |q| + atol with q'' ~ N v' from the Appell solve. */
@@ -389,7 +410,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
     return AP_ERR_ARG;
   }
   ap_sim *s = calloc(1, sizeof *s);
-  size_t nk = (size_t)(m->n + m->k + m->b);
+  size_t nk = (size_t)(m->n + m->k + m->b + (m->ev.phi ? m->nphi : 0));
   double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
   if (!buf) {
     free(s);

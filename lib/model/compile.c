@@ -512,6 +512,9 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->ev.position = ap_bm_position;
   m->ev.velocity = ap_bm_velocity;
   m->ev.project_q = ap_bm_project_q;
+  m->ev.check_q = ap_bm_check_q;
+  m->nphi = M->nloop + M->nquat;
+  if (m->nphi > 0) m->ev.phi = ap_bm_phi;
   *out = m;
   return AP_OK;
 }

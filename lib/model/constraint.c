@@ -359,3 +359,56 @@ int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const
   }
   return AP_OK;
 }
+
+/* ---- reaction forces on a subtree (contact forces, evaluate.c) ----------------------------- */
+
+/* Total force (world axes) that the constraint rows with multipliers lambda (g v' + h - Q =
+ * A^T lambda) exert on the bodies of the subtree rooted at `root`, except constraint `skip`,
+ * after the position stage. A row c . (JP v) is the force lambda c at that point: rolling
+ * (lambda_x, lambda_y, 0) at the contact point (no-spin: a torque), knife edge lambda n. A loop
+ * row n . (vA - vB) + (n x d) . wB is lambda n on body A and -lambda n on body B at the same
+ * world point. A prescribed speed acts inside the subtree (equal and opposite on a joint's two
+ * bodies) or on the root's plane-contact joint, where vx, vy are horizontal forces and the
+ * angular speeds torques. A user constraint cannot be attributed: AP_ERR_UNSUPPORTED. */
+int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
+                         int skip, double *F) {
+  F[0] = F[1] = F[2] = 0.0;
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    const double *lam = lambda + c->row;
+    if (ci == skip) continue;
+    switch (c->def.kind) {
+      case AP_CON_ROLLING:
+        if (ap_bm_in_subtree(M, c->def.body, root)) F[0] += lam[0], F[1] += lam[1];
+        break;
+      case AP_CON_KNIFE_EDGE:
+        if (ap_bm_in_subtree(M, c->def.body, root)) {
+          double n[3];
+          m3_mul_v(ap_kin_body(M, S, c->def.body).R, c->dir, n);
+          v3_axpy(lam[0], n, F);
+        }
+        break;
+      case AP_CON_PRESCRIBED_SPEED: {
+        const ap_mjoint *j = &M->joints[M->joint_topo[c->def.joint]];
+        if (j->child == root && j->kind == AP_JOINT_PLANE_CONTACT && c->def.speed < 2)
+          F[c->def.speed] += lam[0];
+        break;
+      }
+      case AP_CON_USER: return AP_ERR_UNSUPPORTED;
+      case AP_CON_COINCIDENT:
+      case AP_CON_POINT_ON_LINE:
+      case AP_CON_POINT_ON_PLANE: {
+        int ina = ap_bm_in_subtree(M, c->def.body, root);
+        int inb = c->def.body2 >= 0 && ap_bm_in_subtree(M, c->def.body2, root);
+        if (ina == inb) break;
+        for (int r = 0; r < c->nrows; r++) {
+          double n[3];
+          loop_normal(M, S, c, r, n);
+          v3_axpy(ina ? lam[r] : -lam[r], n, F);
+        }
+        break;
+      }
+    }
+  }
+  return AP_OK;
+}

@@ -165,3 +165,65 @@ double ap_eff_potential(const ap_bmodel *M, double *S) {
   }
   return V;
 }
+
+/* ---- forces on a subtree (contact forces, evaluate.c) -------------------------------------- */
+
+/* Total force (world axes) of the effects on the bodies of the subtree rooted at `root` (a
+ * plane-contact body), after ap_kin_velocity at the same state. Gravity and applied forces on
+ * its bodies count; a spring counts at the end in the subtree (nothing when both are); joint
+ * damping inside the subtree is internal, and on the root's plane-contact joint it is the
+ * horizontal force -c (vx, vy) plus torques. A user effect's generalized force cannot be
+ * attributed to bodies: AP_ERR_UNSUPPORTED. */
+int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *v, int root,
+                         double *F) {
+  F[0] = F[1] = F[2] = 0.0;
+  for (int i = 0; i < M->ne; i++) {
+    const ap_effect_def *e = &M->effs[i].def;
+    switch (e->kind) {
+      case AP_EFFECT_GRAVITY:
+        for (int b = 0; b < M->nb; b++)
+          if (ap_bm_in_subtree(M, b, root)) v3_axpy(M->bodies[b].mass, e->gravity, F);
+        break;
+      case AP_EFFECT_SPRING: {
+        int ina = e->body >= 0 && ap_bm_in_subtree(M, e->body, root);
+        int inb = e->body2 >= 0 && ap_bm_in_subtree(M, e->body2, root);
+        if (ina == inb) break;
+        double xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], dd[3], dv[3], f[3];
+        ap_kin_point(M, S, e->body, e->point, xA, rA, NULL);
+        ap_kin_point(M, S, e->body2, e->point2, xB, rB, NULL);
+        ap_kin_point_motion(M, S, e->body, rA, vA, NULL);
+        ap_kin_point_motion(M, S, e->body2, rB, vB, NULL);
+        for (int j = 0; j < 3; j++) dd[j] = xB[j] - xA[j], dv[j] = vB[j] - vA[j];
+        double L = v3_norm(dd);
+        if (e->rest_length == 0.0) {
+          for (int j = 0; j < 3; j++) f[j] = e->stiffness * dd[j] + e->damping * dv[j];
+        } else {
+          if (!(L > 0)) return AP_ERR_SINGULAR;
+          double s = e->stiffness * (L - e->rest_length) + e->damping * v3_dot(dd, dv) / L;
+          for (int j = 0; j < 3; j++) f[j] = s * dd[j] / L;
+        }
+        v3_axpy(ina ? 1.0 : -1.0, f, F);   /* f acts on A, -f on B */
+        break;
+      }
+      case AP_EFFECT_JOINT_DAMPING: {
+        const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
+        if (j->child != root || j->kind != AP_JOINT_PLANE_CONTACT) break;
+        for (int i2 = 0; i2 < 2; i2++)
+          if (j->vidx[i2] >= 0) F[i2] -= e->damping * v[j->vidx[i2]];
+        break;
+      }
+      case AP_EFFECT_APPLIED: {
+        if (!ap_bm_in_subtree(M, e->body, root)) break;
+        double f[3] = {e->force[0], e->force[1], e->force[2]}, T[3] = {0, 0, 0};
+        if (e->wrench) {
+          f[0] = f[1] = f[2] = 0.0;
+          if (e->wrench(t, f, T, e->user) != 0) return AP_ERR_CALLBACK;
+        }
+        v3_axpy(1.0, f, F);
+        break;
+      }
+      case AP_EFFECT_USER: return AP_ERR_UNSUPPORTED;
+    }
+  }
+  return AP_OK;
+}

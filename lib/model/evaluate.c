@@ -192,6 +192,58 @@ int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double 
   return ap_bm_project(m, d, q, S, change, 1);
 }
 
+int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
+  return ap_bm(m)->nquat ? track_flat(m, d, q, S, 1) : AP_OK;
+}
+
+/* ---- implicit holonomic constraints for the DAE mode (GGL) ----------------------------------
+ *
+ * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c). Their Jacobian with
+ * respect to the speeds, Jl = d phi' / d v = Phi_q N, comes from ap_con_loops; it is mapped to
+ * q joint by joint: a scalar coordinate has N = 1 against its speed, so its column of Phi_q is
+ * Jl's; a quaternion p enters phi only through R(p / |p|), so Phi_q p = 0, and
+ * Phi_q N_p = Jl_w with N_p = 1/2 [0; w] (x) p, whose columns are orthogonal with norm |p| / 2:
+ * the quaternion block of Phi_q is (4 / |p|^2) Jl_w N_p^T.
+ * Rows nloop..nloop+nquat-1: |p|^2 - 1 = 0 for each quaternion joint, Jacobian 2 p^T. */
+
+/* Row s of Phi_q (ld nphi) from the speed Jacobian row jl (k entries, stride 1). */
+static void phi_row_to_q(const ap_bmodel *M, const double *q, const double *jl, int s,
+                         int nphi, double *Phi_q) {
+  for (int j = 0; j < M->nj; j++) {
+    const ap_mjoint *J = &M->joints[j];
+    for (int i = 0; i < J->ndrivable; i++)
+      if (J->qidx[i] >= 0) Phi_q[s + (size_t)J->qidx[i] * nphi] = jl[J->vidx[i]];
+    if (J->quat < 0) continue;
+    const double *p = q + J->qidx[J->quat], *jw = jl + J->vidx[J->wofs];
+    double N[12], pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
+    ap_quat_N(p, N, 4, 0, 0);
+    for (int r = 0; r < 4; r++)
+      Phi_q[s + (size_t)(J->qidx[J->quat] + r) * nphi] =
+          4.0 / pp * (N[r] * jw[0] + N[r + 4] * jw[1] + N[r + 8] * jw[2]);
+  }
+}
+
+int ap_bm_phi(const ap_model *m, ap_data *d, double *S, double *phi, double *Phi_q) {
+  const ap_bmodel *M = ap_bm(m);
+  int nl = M->nloop, nphi = m->nphi, k = M->k;
+  if (nl > 0) {
+    double *JlT = S + M->off_proj;   /* row s of Jl is column s of JlT: contiguous */
+    ap_con_loops(M, S, phi, JlT);
+    for (int s = 0; s < nl && Phi_q; s++)
+      phi_row_to_q(M, d->q, JlT + (size_t)s * k, s, nphi, Phi_q);
+  }
+  for (int j = 0, s = nl; j < M->nj; j++) {
+    const ap_mjoint *J = &M->joints[j];
+    if (J->quat < 0) continue;
+    const double *p = d->q + J->qidx[J->quat];
+    phi[s] = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0;
+    for (int r = 0; r < 4 && Phi_q; r++)
+      Phi_q[s + (size_t)(J->qidx[J->quat] + r) * nphi] = 2.0 * p[r];
+    s++;
+  }
+  return AP_OK;
+}
+
 /* ---- public queries ------------------------------------------------------------------------ */
 
 int ap_model_is_body_model(const ap_model *m) {
@@ -373,5 +425,61 @@ int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, cons
               m->name, res);
     return AP_ERR_INCONSISTENT;
   }
+  return AP_OK;
+}
+
+/* ---- contact forces ------------------------------------------------------------------------ */
+
+int ap_bm_in_subtree(const ap_bmodel *M, int body, int root) {
+  while (body >= 0) {
+    if (body == root) return 1;
+    body = M->joints[M->bodies[body].joint].parent;
+  }
+  return 0;
+}
+
+/* The force of the ground on a rolling body (docs/bodies.md "Contact forces"). Tangential: the
+ * rolling rows are e_i . vP with vP the material contact point, so A^T lambda = JP^T
+ * (lambda_x, lambda_y, 0): the friction force itself. Normal: the plane-contact joint carries
+ * it without a multiplier (z is not a coordinate; the contact point's vertical velocity is
+ * identically zero, so the force does no virtual work), so it comes from Newton's law for the
+ * vertical over the body's subtree T:
+ *     F_n = e_z . (sum_T m_b a_b - F_effects(T) - F_other constraints(T)),
+ * a_b = Jc_b v' + ac_b the centre-of-mass accelerations at the data's v'. */
+int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
+                          int constraint, ap_contact_force *out) {
+  if (!ap_model_is_body_model(m) || !d || !out) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
+    return AP_ERR_ARG;
+  const ap_mcon *c = &M->cons[constraint];
+  const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
+  double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
+  int root = c->def.body, k = M->k;
+  for (int b = 0; b < M->nb; b++) {
+    if (!ap_bm_in_subtree(M, b, root)) continue;
+    kbody C = ap_kin_body(M, S, b);
+    double a[3], t[3];
+    v3_copy(C.ao, a);                     /* com bias: ao + al x rc + w x (w x rc) */
+    v3_cross_add(C.al, C.rcom, a);
+    v3_cross(C.w, C.rcom, t);
+    v3_cross_add(C.w, t, a);
+    for (int col = 0; col < k; col++) v3_axpy(vd[col], C.Jc + 3 * col, a);
+    v3_axpy(M->bodies[b].mass, a, ma);
+  }
+  int rc = ap_eff_subtree_force(M, S, d->t, d->v, root, Fe);
+  if (rc == AP_OK) rc = ap_con_subtree_force(M, S, lam, root, constraint, Fc);
+  if (rc != AP_OK) return rc;
+  kbody C = ap_kin_body(M, S, root);
+  kjoint J = ap_kin_joint(M, S, M->bodies[root].joint);
+  memset(out, 0, sizeof *out);
+  for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + J.rc[i];
+  out->point[2] = 0.0;
+  out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
+  out->force[2] = out->normal = ma[2] - Fe[2] - Fc[2];
+  out->tangential = hypot(out->force[0], out->force[1]);
+  out->friction_ratio = out->normal > 0 ? out->tangential / out->normal : HUGE_VAL;
+  out->spin_torque = c->def.no_spin ? lam[c->row + 2] : 0.0;
+  out->lift_off = out->normal < 0;
   return AP_OK;
 }

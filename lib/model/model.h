@@ -258,6 +258,21 @@ int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double 
  * tracking is reset (for assembling states by hand). */
 int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *change,
                   int track);
+/* track_flat only (no correction of q): the DAE mode's check after each step. */
+int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S);
+/* The DAE mode's implicit holonomic constraints (core.h ev.phi): loop closures, then one
+ * unit-norm row per quaternion joint; after ap_kin_position at (d->t, d->q). */
+int ap_bm_phi(const ap_model *m, ap_data *d, double *S, double *phi, double *Phi_q);
+/* 1 when body is root or one of its descendants. */
+int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
+/* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
+ * effects (effect.c), and of the constraint rows other than skip with multipliers lambda
+ * (constraint.c). AP_ERR_UNSUPPORTED when a user effect or user constraint is present (its
+ * generalized force cannot be attributed to bodies). */
+int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *v, int root,
+                         double *F);
+int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
+                         int skip, double *F);
 void ap_bm_destroy(void *impl);
 
 /* Message helper: printf into d->msg (core). */

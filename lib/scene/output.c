@@ -5,7 +5,9 @@
  * (disk.wx); angles (disk.heading, disk.tilt, disk.spin: Z-X-Z of each quaternion joint,
  * unwrapped from row to row so that a steady spin gives a straight line); com (disk.com.x);
  * contacts (disk.contact.x, .y); energy (kinetic, potential, energy, energy_error = E - E(t0));
- * residual (max |A v + a0|); reactions (lambda.<row>). Only the channels asked for are
+ * residual (max |A v + a0|); reactions (lambda.<row>); contact forces (per rolling constraint,
+ * named by its body: disk.contact.Fx, .Fy, .Fz, .friction_ratio, from ap_body_contact_force
+ * with the simulation's multipliers, IDA's own in DAE mode). Only the channels asked for are
  * evaluated. Invariant: sc_out_names and sc_out_row agree on the count and the order. */
 #include <math.h>
 #include <stdio.h>
@@ -74,6 +76,11 @@ int sc_out_names(sc_out *o, const sc_scene *s, const ap_model *m) {
   if (rc == AP_OK && (ch & SC_OUT_RESIDUAL)) rc = push(o, "residual", "");
   for (int i = 0; rc == AP_OK && (ch & SC_OUT_REACTIONS) && i < ap_model_b(m); i++)
     rc = push(o, "lambda.", ap_model_constraint_name(m, i));
+  static const char *const cf[] = {".contact.Fx", ".contact.Fy", ".contact.Fz",
+                                   ".contact.friction_ratio"};
+  for (int i = 0; rc == AP_OK && (ch & SC_OUT_CONTACT_FORCES) && i < s->nc; i++)
+    for (int j = 0; rc == AP_OK && j < 4 && s->cons[i].def.kind == AP_CON_ROLLING; j++)
+      rc = push(o, s->bodies[s->cons[i].def.body].name, cf[j]);
   if (rc == AP_OK) o->angles = calloc((size_t)3 * (size_t)s->nj + 1, sizeof *o->angles);
   return rc == AP_OK && o->angles ? AP_OK : AP_ERR_NOMEM;
 }
@@ -146,6 +153,17 @@ int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_s
     const double *lambda = NULL;
     if ((rc = ap_sim_reactions(sim, &lambda)) != AP_OK) return rc;
     for (int i = 0; i < b; i++) row[c++] = lambda[i];
+  }
+  if ((ch & SC_OUT_CONTACT_FORCES) && b > 0) {
+    const double *lambda = NULL;
+    if ((rc = ap_sim_reactions(sim, &lambda)) != AP_OK) return rc;
+    for (int i = 0; i < s->nc; i++) {
+      if (s->cons[i].def.kind != AP_CON_ROLLING) continue;
+      ap_contact_force f;
+      if ((rc = ap_body_contact_force(m, ap_sim_data(sim), lambda, i, &f)) != AP_OK) return rc;
+      row[c++] = f.force[0] + 0.0, row[c++] = f.force[1] + 0.0, row[c++] = f.force[2];
+      row[c++] = f.friction_ratio;
+    }
   }
   o->rows++;
   return c == o->ncols ? AP_OK : AP_ERR_INTERNAL;

@@ -169,11 +169,12 @@ enum {
   SC_OUT_CONTACTS = 1 << 4,
   SC_OUT_ENERGY = 1 << 5,
   SC_OUT_RESIDUAL = 1 << 6,
-  SC_OUT_REACTIONS = 1 << 7
+  SC_OUT_REACTIONS = 1 << 7,
+  SC_OUT_CONTACT_FORCES = 1 << 8
 };
 #define SC_OUT_NAMES                                                                     \
   { "coordinates", "speeds", "angles", "com", "contacts", "energy", "residual", "reactions", \
-    NULL }
+    "contact_forces", NULL }
 
 typedef struct sc_scene {
   char *file;
