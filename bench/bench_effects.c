@@ -8,7 +8,8 @@
  * Configurations (each a scene text; the trajectory is the same in all, since the extra
  * effects have zero strength):
  *   needs        gravity; channels [coordinates]
- *   outputs      + every channel: speeds, angles, com, contacts, energy, residual, reactions
+ *   outputs      + every channel: speeds, angles, com, contacts, energy, residual, reactions,
+ *                contact_forces
  *   effects      + a spring (stiffness and damping 0), joint damping 0, an applied force 0
  *   all          outputs and effects
  *   all_timed    all, the applied force given as an expression of t that is 0 ("0*sin(t)"):
@@ -57,7 +58,7 @@ static const char extra_effects[] =
 
 static const char lean_channels[] = "[coordinates]";
 static const char all_channels[] =
-    "[coordinates, speeds, angles, com, contacts, energy, residual, reactions]";
+    "[coordinates, speeds, angles, com, contacts, energy, residual, reactions, contact_forces]";
 
 typedef struct conf {
   const char *name;

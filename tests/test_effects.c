@@ -11,10 +11,11 @@
  *   time         a scleronomic body model evaluates no rheonomic terms (cnt.rheonomic == 0);
  *                the same model made formally rheonomic (turntable at Omega = 0, a joint driven
  *                at a constant angle) counts them and gives the same g, h, Q, A, a0, gamma
- *   outputs      a scene without energy, residual or reactions channels computes none of them
- *                (scene data: cnt.energy, cnt.position; sim data: cnt.reactions all 0); with
- *                them, one of each per output row; the pipeline stage counts and the
- *                trajectory are the same either way: the skipped stages cost nothing else. */
+ *   outputs      a scene without energy, residual, reactions or contact_forces channels
+ *                computes none of them (scene data: cnt.energy, cnt.position; sim data:
+ *                cnt.reactions all 0); with them, one of each per output row; the pipeline
+ *                stage counts and the trajectory are the same either way: the skipped stages
+ *                cost nothing else. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -470,6 +471,11 @@ static void test_outputs(void) {
   scene_run lean = run_scene("[coordinates]");
   scene_run all = run_scene("[coordinates, speeds, angles, com, contacts, energy, residual, "
                             "reactions]");
+  scene_run forces = run_scene("[coordinates, contact_forces]");   /* needs the multipliers */
+  AP_CHECK_EQ_INT(forces.reactions, forces.rows);
+  AP_CHECK_EQ_INT(forces.energy, 0);
+  AP_CHECK_EQ_INT(forces.resid_pos, 0);
+  AP_CHECK_EQ_INT(forces.position, lean.position);
   AP_CHECK(lean.rows > 10);
   AP_CHECK_EQ_INT(lean.energy, 0);
   AP_CHECK_EQ_INT(lean.resid_pos, 0);
