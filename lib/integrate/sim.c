@@ -115,12 +115,22 @@ static int rhs(double t, const double *y, double *ydot, void *user) {
  * stepper restarts only when something moved. */
 static int project_coordinates(ap_sim *s, double t) {
   if (!s->m->ev.project_q) return AP_OK;
-  double change = 0.0;
+  double change = 0.0, *q = s->ytry;   /* project a copy: it may not be applied */
   ap_data *d = s->d;
   load_state(s, t, s->y);
-  int rc = s->m->ev.project_q(s->m, d, s->y, ((ap_scratch *)d->internal)->ev, &change);
+  memcpy(q, s->y, sizeof(double) * (size_t)s->n);
+  int rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
   if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   if (change == 0.0) return AP_OK;
+  if (s->meth->backend == &ap_step_cvode) {
+    /* A restart drops CVODE to order 1 with a tiny step: apply the correction only once it
+     * exceeds a tenth of the tolerance (measured: the rolling disk took 1.48 million steps
+     * when its quaternion was re-normalized and CVODE restarted after every step). */
+    double qmax = 0.0;
+    for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(s->y[i]));
+    if (change <= 0.1 * (s->def.rtol * qmax + s->def.atol)) return AP_OK;
+  }
+  memcpy(s->y, q, sizeof(double) * (size_t)s->n);
   s->stats.restarts++;
   rc = ap_step_reset(s->st, t, s->y);
   return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
