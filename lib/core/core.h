@@ -78,6 +78,9 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
  * of G left by ap_core_project_here. */
 void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x);
 
+/* v = B e' + b0 from the data's position stage (partitioned basis). */
+void ap_core_speeds(const ap_model *m, ap_data *d);
+
 /* printf into d->msg. */
 void ap_core_msg(ap_data *d, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -246,14 +246,16 @@ static int particular(const ap_model *m, ap_data *d) {
   return AP_OK;
 }
 
+void ap_core_speeds(const ap_model *m, ap_data *d) {
+  ap_la_gemv(m->k, d->l, d->B, d->e, d->v);     /* v = B e' + b0 */
+  for (int i = 0; i < m->k; i++) d->v[i] += d->b0[i];
+}
+
 int ap_fwd_velocity(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
-  int k = m->k, l = d->l;
+  int k = m->k;
   d->cnt.velocity++;
-  if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) {
-    ap_la_gemv(k, l, d->B, d->e, d->v);           /* v = B e' + b0 */
-    for (int i = 0; i < k; i++) d->v[i] += d->b0[i];
-  }
+  if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) ap_core_speeds(m, d);
   if (m->ev.velocity) {
     memset(d->h, 0, sizeof(double) * (size_t)k);
     memset(d->Q, 0, sizeof(double) * (size_t)k);

@@ -146,8 +146,7 @@ static int after_step_minimal(ap_sim *s, double t) {
     return sim_fail(s, AP_ERR_SINGULAR, "%s (at an accepted step; lower switch_growth)",
                     d->msg);
   if (s->m->b == 0) return AP_OK;
-  rc = ap_fwd_velocity(s->m, d);                 /* v = B e' + b0 at the new state */
-  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
+  ap_core_speeds(s->m, d);                       /* v = B e' + b0 at the new state */
   s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
   if (d->growth <= s->def.switch_growth) return AP_OK;
 
