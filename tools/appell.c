@@ -1,4 +1,4 @@
-/* appell: the command-line tool. `appell run`, `appell check` and `appell plot` (docs/cli.md).
+/* appell: the command-line tool. `appell run`, `check`, `plot` and `bench` (docs/cli.md).
  *
  * This file dispatches to the subcommands and holds their shared helpers: option matching
  * ("--opt VALUE" and "--opt=VALUE"), numbers, "did you mean" for unknown options, and the map
@@ -12,6 +12,8 @@
 
 #include "cli.h"
 
+int cmd_bench(int argc, char **argv);   /* tools/bench.c */
+
 static const char usage[] =
     "usage: appell COMMAND [OPTIONS]\n"
     "\n"
@@ -21,6 +23,7 @@ static const char usage[] =
     "  run SCENE     simulate a scene and write its outputs as CSV\n"
     "  check SCENE   validate a scene and print its structure (n, k, b, rank, l, ...)\n"
     "  plot CSV      draw columns of a CSV file with gnuplot into a PNG or SVG file\n"
+    "  bench SCENE   work-precision sweep of a scene against its own tight reference\n"
     "\n"
     "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
     "3 numerical failure, 1 internal error. Scenes: docs/scenes.md; the tool: docs/cli.md.\n";
@@ -127,8 +130,9 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "run") == 0) return cmd_run(argc - 1, argv + 1);
   if (strcmp(cmd, "check") == 0) return cmd_check(argc - 1, argv + 1);
   if (strcmp(cmd, "plot") == 0) return cmd_plot(argc - 1, argv + 1);
-  static const char *const cmds[] = {"run", "check", "plot"};
-  const char *s = cli_suggest(cmd, cmds, 3);
+  if (strcmp(cmd, "bench") == 0) return cmd_bench(argc - 1, argv + 1);
+  static const char *const cmds[] = {"run", "check", "plot", "bench"};
+  const char *s = cli_suggest(cmd, cmds, 4);
   fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,
           s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
   return EXIT_INPUT;
