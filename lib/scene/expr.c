@@ -125,10 +125,12 @@ static int primary(sc_lex *x) {
     while (isdigit((unsigned char)x->s[x->i])) x->i++;
     if (x->s[x->i] == '.') x->i++;
     while (isdigit((unsigned char)x->s[x->i])) x->i++;
-    const char *p = x->s + x->i;
-    int sign = p[1] == '+' || p[1] == '-';
-    if ((p[0] == 'e' || p[0] == 'E') && isdigit((unsigned char)p[1 + sign]))
-      for (x->i += 2; isdigit((unsigned char)x->s[x->i]);) x->i++;
+    const char *p = x->s + x->i;   /* an exponent: p[1] exists only when p[0] is not NUL */
+    if (p[0] == 'e' || p[0] == 'E') {
+      int sign = p[1] == '+' || p[1] == '-';
+      if (isdigit((unsigned char)p[1 + sign]))
+        for (x->i += 1 + sign; isdigit((unsigned char)x->s[x->i]);) x->i++;
+    }
     return 0;
   }
   if (isalpha((unsigned char)ch) || ch == '_') return name_or_call(x);
