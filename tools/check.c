@@ -65,9 +65,9 @@ static int structure(const ap_model *m, const double *q0, const ap_scene_run *ru
 }
 
 static void settings(const ap_scene *sc, const ap_scene_run *r) {
-  static const char *const modes[] = {"minimal", "projected", "dae"};
+  static const char *const modes[] = {"minimal", "projected", "dae", "plain"};
   printf("simulation   mode %s, method %s, rtol %g, atol %g, t0 %g, t_end %g\n",
-         modes[r->sim.mode % 3], r->sim.method, r->sim.rtol, r->sim.atol, r->t0, r->t_end);
+         modes[r->sim.mode % 4], r->sim.method, r->sim.rtol, r->sim.atol, r->t0, r->t_end);
   printf("outputs      every %g s:", r->interval);
   for (int i = 0; i < ap_scene_count(sc, AP_SCENE_CHANNELS); i++)
     printf(" %s", ap_scene_element_name(sc, AP_SCENE_CHANNELS, i));

@@ -32,7 +32,7 @@ static const char help[] =
     "                     appears only when the run succeeds\n"
     "  --set PATH=VALUE   override a scalar of the scene by its dotted key path, e.g.\n"
     "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
-    "  --mode M           minimal, projected or dae (simulation.mode)\n"
+    "  --mode M           minimal, projected, dae or plain (simulation.mode)\n"
     "  --method NAME      stepper (simulation.method); see the list below\n"
     "  --rtol X           relative tolerance (simulation.rtol)\n"
     "  --atol X           absolute tolerance (simulation.atol)\n"
@@ -254,10 +254,10 @@ static void summary(const run_state *rs, const run_opts *o) {
   ap_sim_stats st;
   ap_sim_get_stats(rs->sim, &st);
   const ap_sim_def *d = &rs->run.sim;
-  static const char *const modes[] = {"minimal", "projected", "dae"};
+  static const char *const modes[] = {"minimal", "projected", "dae", "plain"};
   fprintf(stderr, "appell: %s: t = %g .. %g, %ld rows%s%s\n", ap_scene_name(rs->sc), rs->run.t0,
           rs->run.t_end, rs->rows, o->out ? " -> " : "", o->out ? o->out : "");
-  fprintf(stderr, "  mode %s, method %s, rtol %.3g, atol %.3g\n", modes[d->mode % 3],
+  fprintf(stderr, "  mode %s, method %s, rtol %.3g, atol %.3g\n", modes[d->mode % 4],
           d->mode == AP_MODE_DAE ? "ida" : d->method, d->rtol, d->atol);
   fprintf(stderr, "  steps %ld (rejected %ld), evaluations %ld, partition switches %ld, "
           "projections %ld, wall time %.3f s\n", st.steps, st.err_fails, st.rhs_evals,

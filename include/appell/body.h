@@ -299,6 +299,10 @@ AP_API long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect
  * steps) at time d->t. *change (may be NULL) receives the size of the correction. The
  * drivers call the same after each accepted step; call it to assemble an initial state. */
 AP_API int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change);
+/* Largest |phi(q, t)| of the loop-closure constraints (m) at the data's (t, q); 0 when the
+ * model has none. The minimal, projected and plain drivers keep it below 1e-12 x the model's
+ * length scale (ap_body_project_q after each step); the DAE mode does not project q. */
+AP_API int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max);
 /* Complete speeds: keep v[i] where given[i] != 0 and set the others (minimum norm) so that
  * A v + a0 = 0 at (d->t, q). AP_ERR_INCONSISTENT when that leaves a residual. */
 AP_API int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q,

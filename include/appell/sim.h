@@ -44,7 +44,10 @@ typedef struct ap_sim_def {
                               default 2 */
   double init_tol;         /* initial speeds violating A v + a0 = 0 by more than this (in the
                               metric g, relative to |v|) are refused; smaller violations are
-                              projected and reported. Default 1e-6 */
+                              projected and reported. Body models: initial coordinates whose
+                              loop closures are open by more than init_tol (m) are refused too
+                              (ap_body_project_q assembles them); smaller gaps are closed and
+                              quaternions normalized. Default 1e-6 */
 } ap_sim_def;
 
 AP_API ap_sim_def ap_sim_def_default(void);

@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "appell/body.h"
 #include "appell/sim.h"
 #include "core/core.h"
 #include "integrate/dae.h"
@@ -328,6 +329,27 @@ static int check_initial(ap_sim *s, const double *q0, const double *v0) {
   return AP_OK;
 }
 
+/* Body models: q0 onto its manifold before anything else. Loop closures open by more than
+ * init_tol (m) are refused: closing them would move the configuration that far without a word
+ * (assemble q0 with ap_body_project_q first). Otherwise project_q closes them and normalizes
+ * the quaternions (rotations use q / |q|: the configuration does not change) into q. */
+static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double *q) {
+  ap_data *d = s->d;
+  double phi = 0.0, change = 0.0;
+  memcpy(q, q0, sizeof(double) * (size_t)s->n);
+  if (!s->m->ev.project_q) return AP_OK;
+  d->t = t0;
+  memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
+  int rc = ap_body_loop_residual(s->m, d, &phi);
+  if (rc == AP_OK && phi > s->def.init_tol)
+    return sim_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
+                    "loop closures open by %.3g m, more than init_tol %.3g: close them first "
+                    "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
+  if (rc == AP_OK) rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
+  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", d->msg);
+  return AP_OK;
+}
+
 /* Put v on the constraint set; refuse speeds too far off it. */
 static int consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0) {
   ap_data *d = s->d;
@@ -388,8 +410,10 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc != AP_OK) return rc == AP_ERR_NOMEM ? sim_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
-  rc = consistent_speeds(s, t0, q0, v0);
+  rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
+  if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0);
   if (rc != AP_OK) return rc;
+  q0 = s->q;
   s->t = t0;
   memcpy(s->y, q0, sizeof(double) * (size_t)s->n);
   if (s->def.mode == AP_MODE_MINIMAL) {

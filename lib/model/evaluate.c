@@ -385,6 +385,19 @@ int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) 
   return rc;
 }
 
+int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
+  if (!ap_model_is_body_model(m) || !d || !phi_max) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  *phi_max = 0.0;
+  if (!M->nloop) return AP_OK;
+  double *S = ap_bm_scratch(d), *JlT = S + M->off_proj, *phi = JlT + (size_t)M->nloop * M->k;
+  int rc = ap_kin_position(m, d, d->t, d->q, S);
+  if (rc != AP_OK) return rc;
+  ap_con_loops(M, S, phi, JlT);
+  *phi_max = max_abs(phi, M->nloop);
+  return AP_OK;
+}
+
 /* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T. */
 int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
                             double *v) {

@@ -16,7 +16,7 @@
 static const char *const sim_keys[] = {"mode", "method", "rtol", "atol", "t0", "t_end",
                                        "h_fixed", "h_init", "h_max", "max_steps", "rank_rtol",
                                        "switch_growth", NULL};
-static const char *const modes[] = {"minimal", "projected", "dae", NULL};
+static const char *const modes[] = {"minimal", "projected", "dae", "plain", NULL};  /* ap_mode */
 static const char *const out_keys[] = {"interval", "channels", NULL};
 
 /* Keys of the initial state by joint kind. */
