@@ -15,8 +15,8 @@
  * touching IDA's state.
  *
  * The stepper (lib/integrate/stepper.h) stops exactly at each requested output time. A failed
- * ap_sim_advance leaves (t, q, v) at the last accepted step. */
-#include <float.h>
+ * ap_sim_advance leaves (t, q, v) at the last accepted step. The right-hand side and the work
+ * after each accepted step, per mode, are in sim_step.c. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -24,37 +24,10 @@
 #include <string.h>
 
 #include "appell/body.h"
-#include "appell/sim.h"
-#include "core/core.h"
-#include "integrate/dae.h"
-#include "integrate/stepper.h"
+#include "integrate/sim_int.h"
 
-struct ap_sim {
-  const ap_model *m;
-  ap_data *d;
-  ap_sim_def def;
-  const ap_step_method *meth;
-  ap_stepper *st;           /* minimal and projected modes */
-  ap_dae *dae;              /* DAE mode */
-  int n, k, b, ny;          /* ny = n + l (minimal), n + k (projected), n + k + b (DAE) */
-  double t;                 /* time of the last accepted state */
-  double *y, *ytry;         /* (n + k + b) stepper state, trial state */
-  double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
-  int rhs_status;           /* last failure of the right-hand side */
-  char rhs_msg[512];
-  ap_sim_stats stats;
-  char msg[512];
-  char warning[512];        /* the first warning, "" when none */
-};
-
-static int sim_fail(ap_sim *s, int status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-
-static int sim_fail(ap_sim *s, int status, const char *fmt, ...) {
-  va_list ap;
+int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...) {
+       va_list ap;
   va_start(ap, fmt);
   vsnprintf(s->msg, sizeof s->msg, fmt, ap);
   va_end(ap);
@@ -76,256 +49,45 @@ ap_sim_def ap_sim_def_default(void) {
   return def;
 }
 
-/* ---- the right-hand side ------------------------------------------------------------------ */
-
-/* Load y = (q, e') or (q, v) into the data at time t. */
-static void load_state(ap_sim *s, double t, const double *y) {
-  ap_data *d = s->d;
-  d->t = t;
-  memcpy(d->q, y, sizeof(double) * (size_t)s->n);
-  if (s->def.mode == AP_MODE_MINIMAL) {
-    memcpy(d->e, y + s->n, sizeof(double) * (size_t)d->l);
-    d->speeds_from_e = 1;
-  } else {
-    memcpy(d->v, y + s->n, sizeof(double) * (size_t)s->k);
-    d->speeds_from_e = 0;
-  }
-}
-
-static int rhs(double t, const double *y, double *ydot, void *user) {
-  ap_sim *s = user;
-  ap_data *d = s->d;
-  load_state(s, t, y);
-  int rc = ap_forward(s->m, d);
-  if (rc != AP_OK) {
-    s->rhs_status = rc;
-    memcpy(s->rhs_msg, d->msg, sizeof s->rhs_msg);
-    return rc > 0 ? 1 : -1;
-  }
-  memcpy(ydot, d->qdot, sizeof(double) * (size_t)s->n);
-  if (s->def.mode == AP_MODE_MINIMAL)
-    memcpy(ydot + s->n, d->edd, sizeof(double) * (size_t)d->l);
-  else
-    memcpy(ydot + s->n, d->vdot, sizeof(double) * (size_t)s->k);
-  return 0;
-}
-
-/* ---- after each accepted step ------------------------------------------------------------ */
-
-/* Body models: unit quaternions and loop closures back on their manifold after each step. The
- * stepper restarts only when something moved. */
-static int project_coordinates(ap_sim *s, double t) {
-  if (!s->m->ev.project_q) return AP_OK;
-  double change = 0.0, *q = s->ytry;   /* project a copy: it may not be applied */
-  ap_data *d = s->d;
-  load_state(s, t, s->y);
-  memcpy(q, s->y, sizeof(double) * (size_t)s->n);
-  int rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  if (change == 0.0) return AP_OK;
-  if (s->meth->backend == &ap_step_cvode) {
-    /* A restart drops CVODE to order 1 with a tiny step: apply the correction only once it
-     * exceeds a tenth of the tolerance (measured: the rolling disk took 1.48 million steps
-     * when its quaternion was re-normalized and CVODE restarted after every step). */
-    double qmax = 0.0;
-    for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(s->y[i]));
-    if (change <= 0.1 * (s->def.rtol * qmax + s->def.atol)) return AP_OK;
-  }
-  memcpy(s->y, q, sizeof(double) * (size_t)s->n);
-  s->stats.restarts++;
-  rc = ap_step_reset(s->st, t, s->y);
-  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
-}
-
-/* Minimal mode: re-partition when the frozen basis has degraded. */
-static int after_step_minimal(ap_sim *s, double t) {
-  ap_data *d = s->d;
-  load_state(s, t, s->y);
-  int rc = ap_fwd_position(s->m, d);
-  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
-  if (rc != AP_OK)
-    return sim_fail(s, AP_ERR_SINGULAR, "%s (at an accepted step; lower switch_growth)",
-                    d->msg);
-  if (s->m->b == 0) return AP_OK;
-  ap_core_speeds(s->m, d);                       /* v = B e' + b0 at the new state */
-  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
-  if (d->growth <= s->def.switch_growth) return AP_OK;
-
-  double old_growth = d->growth;
-  int old_rank = d->rank;
-  memcpy(s->v, d->v, sizeof(double) * (size_t)s->k);
-  int *old_perm = (int *)s->ytry;               /* k ints fit in the trial buffer */
-  memcpy(old_perm, d->perm, sizeof(int) * (size_t)s->k);
-  rc = ap_partition(s->m, d);
-  if (rc == AP_OK && d->rank != old_rank)
-    return sim_fail(s, AP_ERR_RANK, "system '%s': the rank of A changed from %d to %d at "
-                    "t = %.17g: the number of free speeds changed", s->m->name, old_rank,
-                    d->rank, t);
-  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
-  if (rc < 0) return sim_fail(s, rc, "%s", d->msg);
-  if (rc != AP_OK || d->growth >= old_growth) { /* no better partition: keep the old one */
-    memcpy(d->perm, old_perm, sizeof(int) * (size_t)s->k);
-    return AP_OK;
-  }
-  for (int j = 0; j < d->l; j++) s->y[s->n + j] = s->v[d->perm[d->rank + j]];
-  s->stats.partition_switches++;
-  s->stats.restarts++;
-  rc = ap_step_reset(s->st, t, s->y);
-  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
-}
-
-/* CVODE's projection hook (projected mode): v onto A v + a0 = 0 nearest in g, and the error
- * estimate onto the tangent space, inside CVODE's step so its history stays consistent. */
-static int sim_proj(double t, const double *y, double *corr, double *err, void *user) {
-  ap_sim *s = user;
-  ap_data *d = s->d;
-  load_state(s, t, y);
-  int rc = ap_fwd_position(s->m, d);
-  double change = 0.0, *v = corr + s->n;
-  memset(corr, 0, sizeof(double) * (size_t)s->n);
-  memcpy(v, y + s->n, sizeof(double) * (size_t)s->k);
-  if (rc == AP_OK) rc = ap_core_project_here(s->m, d, v, &change);
-  if (rc != AP_OK) {
-    s->rhs_status = rc;
-    memcpy(s->rhs_msg, d->msg, sizeof s->rhs_msg);
-    return rc > 0 ? 1 : -1;
-  }
-  for (int i = 0; i < s->k; i++) v[i] -= y[s->n + i];
-  if (err) ap_core_project_tangent(s->m, d, err + s->n);
-  s->stats.projections++;
-  s->stats.max_projection = fmax(s->stats.max_projection, change);
-  return 0;
-}
-
-/* Plain mode: nothing is projected; only the residual is recorded. */
-static int after_step_plain(ap_sim *s, double t) {
-  if (s->m->b == 0) return AP_OK;
-  load_state(s, t, s->y);
-  int rc = ap_fwd_position(s->m, s->d);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", s->d->msg);
-  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(s->d, s->d->v));
-  return AP_OK;
-}
-
-/* Projected mode: put v back on the constraint set, nearest in the metric g. One-step methods
- * project after every accepted step and restart (it costs them one evaluation); CVODE
- * projects inside its own step through sim_proj (a restart would drop it to order 1). */
-static int after_step_projected(ap_sim *s, double t) {
-  ap_data *d = s->d;
-  if (s->m->b == 0) return AP_OK;
-  load_state(s, t, s->y);
-  double change = 0.0, *v = s->y + s->n;
-  int rc = ap_fwd_position(s->m, d);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
-  if (s->meth->backend == &ap_step_cvode) {   /* CVODE projected inside the step (sim_proj) */
-    s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, v));
-    return AP_OK;
-  }
-  rc = ap_core_project_here(s->m, d, v, &change);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
-  s->stats.projections++;
-  s->stats.max_projection = fmax(s->stats.max_projection, change);
-  s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, v));
-  if (change == 0.0) return AP_OK;
-  s->stats.restarts++;
-  rc = ap_step_reset(s->st, t, s->y);
-  return rc == AP_OK ? AP_OK : sim_fail(s, rc, "%s", ap_step_message(s->st));
-}
-
-/* DAE mode: IDA keeps q on phi = 0 itself (GGL rows), so nothing is corrected here and IDA's
- * state is never touched. The body model's checks of project_q run on the accepted q (a disk
- * or torus reaching lying flat stops the run); the velocity-constraint residual and |phi| are
- * recorded. */
-static int after_step_dae(ap_sim *s, double t) {
-  ap_data *d = s->d;
-  const ap_model *m = s->m;
-  int nphi = m->ev.phi ? m->nphi : 0, rc = AP_OK;
-  load_state(s, t, s->y);
-  if (m->ev.check_q) rc = m->ev.check_q(m, d, s->y, ((ap_scratch *)d->internal)->ev);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
-  if (m->b == 0 && nphi == 0) return AP_OK;
-  d->basis = AP_BASIS_NONE;
-  rc = ap_fwd_position(m, d);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  if (m->b > 0)
-    s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
-  if (nphi == 0) return AP_OK;
-  double *phi = s->ytry;                        /* free between steps */
-  rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
-  return AP_OK;
-}
-
-/* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the
- * requested accuracy is then out of reach of the linear algebra itself. */
-static void check_condition(ap_sim *s) {
-  const ap_data *d = s->d;
-  int partitioned = s->def.mode == AP_MODE_MINIMAL && s->m->b > 0;
-  double rc = partitioned ? fmin(d->rcond_G, d->rcond_R) : d->rcond_G;
-  s->stats.min_rcond = fmin(s->stats.min_rcond, rc);
-  if (s->warning[0] || rc * s->def.rtol >= DBL_EPSILON) return;
-  const char *what = partitioned && d->rcond_R < d->rcond_G ? "the dependent-speed block R11"
-                                                              : "G = B^T g B";
-  snprintf(s->warning, sizeof s->warning, "system '%s': %s has condition number %.3g at "
-           "t = %.17g; with rtol = %.3g the linear solves lose about %.0f digits, so results "
-           "may miss the requested accuracy%s", s->m->name, what, 1.0 / rc, s->t,
-           s->def.rtol, log10(1.0 / rc),
-           s->def.mode == AP_MODE_PROJECTED ? " (the orthonormal basis inherits cond(g); "
-           "minimal mode's partitioned basis may be better conditioned)" : "");
-}
-
-/* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
-static int evaluate_current(ap_sim *s) {
-  s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
-  s->d->estimate_cond = 1;
-  int rc = rhs(s->t, s->y, s->ytry, s);
-  s->d->estimate_cond = 0;
-  if (rc != 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
-  check_condition(s);
-  memcpy(s->q, s->d->q, sizeof(double) * (size_t)s->n);
-  memcpy(s->v, s->d->v, sizeof(double) * (size_t)s->k);
-  return AP_OK;
-}
 
 /* ---- creation ----------------------------------------------------------------------------- */
 
 static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED &&
       def->mode != AP_MODE_DAE && def->mode != AP_MODE_PLAIN)
-    return sim_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);
+    return ap_drv_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);
   s->meth = ap_step_method_find(def->mode == AP_MODE_DAE ? "bdf" : def->method ? def->method : "");
   if (!s->meth)
-    return sim_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
-                    def->method ? def->method : "(null)");
+    return ap_drv_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
+                         def->method ? def->method : "(null)");
   if (def->mode == AP_MODE_PROJECTED && s->meth->backend == &ap_step_cvode &&
       !ap_step_native_projection(s->meth))
-    return sim_fail(s, AP_ERR_UNSUPPORTED, "method '%s' cannot run in projected mode: CVODE "
-                    "projects only with BDF (use method 'bdf', an ERK method, or minimal "
-                    "mode)", s->meth->name);
+    return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "method '%s' cannot run in projected mode: CVODE "
+                         "projects only with BDF (use method 'bdf', an ERK method, or minimal "
+                         "mode)", s->meth->name);
   if (!(def->rtol > 0) || !(def->atol > 0))
-    return sim_fail(s, AP_ERR_ARG, "tolerances must be positive (rtol %g, atol %g)",
-                    def->rtol, def->atol);
+    return ap_drv_fail(s, AP_ERR_ARG, "tolerances must be positive (rtol %g, atol %g)",
+                         def->rtol, def->atol);
   if (!s->meth->adaptive && !(def->h_fixed > 0))
-    return sim_fail(s, AP_ERR_ARG, "method '%s' needs a positive h_fixed (got %g)",
-                    s->meth->name, def->h_fixed);
+    return ap_drv_fail(s, AP_ERR_ARG, "method '%s' needs a positive h_fixed (got %g)",
+                         s->meth->name, def->h_fixed);
   if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||
       !(def->init_tol > 0))
-    return sim_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
-                    "init_tol positive (%g, %g), max_steps >= 1 (%ld)", def->switch_growth,
-                    def->rank_rtol, def->init_tol, def->max_steps);
+    return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
+                         "init_tol positive (%g, %g), max_steps >= 1 (%ld)", def->switch_growth,
+                         def->rank_rtol, def->init_tol, def->max_steps);
   return AP_OK;
 }
 
 static int check_initial(ap_sim *s, const double *q0, const double *v0) {
   for (int i = 0; i < s->n; i++)
     if (!isfinite(q0[i]))
-      return sim_fail(s, AP_ERR_ARG, "initial coordinate '%s' is %g",
-                      ap_model_coord_name(s->m, i), q0[i]);
+      return ap_drv_fail(s, AP_ERR_ARG, "initial coordinate '%s' is %g",
+                           ap_model_coord_name(s->m, i), q0[i]);
   for (int i = 0; i < s->k; i++)
     if (!isfinite(v0[i]))
-      return sim_fail(s, AP_ERR_ARG, "initial speed '%s' is %g", ap_model_speed_name(s->m, i),
-                      v0[i]);
+      return ap_drv_fail(s, AP_ERR_ARG, "initial speed '%s' is %g", ap_model_speed_name(s->m, i),
+                           v0[i]);
   return AP_OK;
 }
 
@@ -342,11 +104,12 @@ static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
   int rc = ap_body_loop_residual(s->m, d, &phi);
   if (rc == AP_OK && phi > s->def.init_tol)
-    return sim_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
-                    "loop closures open by %.3g m, more than init_tol %.3g: close them first "
-                    "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
+    return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
+                         "loop closures open by %.3g m, more than init_tol %.3g: close them first "
+                         "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
   if (rc == AP_OK) rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", d->msg);
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
+                                      d->msg);
   return AP_OK;
 }
 
@@ -358,22 +121,23 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   memcpy(s->v, v0, sizeof(double) * (size_t)s->k);
   if (s->def.mode == AP_MODE_MINIMAL) {
     int rc = ap_partition(s->m, d);
-    if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+    if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   }
   if (s->m->b == 0) return AP_OK;
   int rc = ap_fwd_position(s->m, d);
-  if (rc != AP_OK) return sim_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", d->msg);
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
+                                      d->msg);
   double resid = ap_constraint_residual(d, s->v), size = sqrt(2 * ap_kinetic_energy(d, s->v));
   double change = 0.0;
   rc = ap_project_speeds(s->m, d, s->v, &change);
-  if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   size = fmax(size, sqrt(2 * ap_kinetic_energy(d, s->v)));
   s->stats.init_correction = change;
   if (change > s->def.init_tol * size)
-    return sim_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial speeds violate the "
-                    "constraints (max |A v + a0| = %.3g; the nearest admissible speeds differ "
-                    "by %.3g in the metric g, more than init_tol %.3g relative to %.3g)",
-                    s->m->name, resid, change, s->def.init_tol, size);
+    return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial speeds violate the "
+                         "constraints (max |A v + a0| = %.3g; the nearest admissible speeds differ "
+                         "by %.3g in the metric g, more than init_tol %.3g relative to %.3g)",
+                         s->m->name, resid, change, s->def.init_tol, size);
   return AP_OK;
 }
 
@@ -382,7 +146,7 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
 static int setup_dae(ap_sim *s) {
   ap_data *d = s->d;
   int rc = ap_fwd_reactions(s->m, d);
-  if (rc != AP_OK) return sim_fail(s, rc, "initial state: %s", d->msg);
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   int nalg = s->b + (s->m->ev.phi ? s->m->nphi : 0);
   s->ny = s->n + s->k + nalg;
   double *yp = s->ytry;
@@ -407,7 +171,7 @@ static int setup_dae(ap_sim *s) {
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   int rc = check_initial(s, q0, v0);
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
-  if (rc != AP_OK) return rc == AP_ERR_NOMEM ? sim_fail(s, rc, "out of memory") : rc;
+  if (rc != AP_OK) return rc == AP_ERR_NOMEM ? ap_drv_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
@@ -423,15 +187,16 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
     memcpy(s->y + s->n, s->v, sizeof(double) * (size_t)s->k);
     s->ny = s->n + s->k;
   }
-  rc = evaluate_current(s);
+  rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   if (s->def.mode == AP_MODE_DAE) return setup_dae(s);
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
                     s->def.h_init, s->def.h_max, s->def.max_steps, NULL};
-  if (s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) o.proj = sim_proj;
-  return ap_step_create(s->meth, s->ny, rhs, s, t0, s->y, &o, &s->st, s->msg, sizeof s->msg);
+  if (s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) o.proj = ap_drv_proj;
+  return ap_step_create(s->meth, s->ny, ap_drv_rhs, s, t0, s->y, &o, &s->st, s->msg,
+                        sizeof s->msg);
 }
 
 int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
@@ -480,40 +245,36 @@ void ap_sim_free(ap_sim *s) {
 
 int ap_sim_advance(ap_sim *s, double tout) {
   if (!(tout >= s->t))
-    return sim_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
-                    s->t);
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
+                         s->t);
   for (long steps = 0; s->t < tout; steps++) {
     if (steps >= s->def.max_steps)
-      return sim_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
-                      "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
+      return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
+                           "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
     double t = s->t;
     s->rhs_status = AP_OK;
     if (s->dae) {
       int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
-      if (rc != AP_OK) return sim_fail(s, rc, "%s", ap_dae_message(s->dae));
+      if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
       s->t = t;
       memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-      rc = after_step_dae(s, t);
+      rc = ap_drv_after_step_dae(s, t);
       if (rc != AP_OK) return rc;
       continue;
     }
     int rc = ap_step_one(s->st, tout, &t, s->ytry);
     if (rc != AP_OK) {
-      if (s->rhs_status < 0) return sim_fail(s, s->rhs_status, "%s", s->rhs_msg);
-      return sim_fail(s, rc, "%s%s%s", ap_step_message(s->st),
-                      s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
-                      s->rhs_status > 0 ? s->rhs_msg : "");
+      if (s->rhs_status < 0) return ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg);
+      return ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
+                           s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
+                           s->rhs_status > 0 ? s->rhs_msg : "");
     }
     s->t = t;
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-    rc = project_coordinates(s, t);
-    if (rc == AP_OK)
-      rc = s->def.mode == AP_MODE_MINIMAL ? after_step_minimal(s, t)
-           : s->def.mode == AP_MODE_PLAIN   ? after_step_plain(s, t)
-                                            : after_step_projected(s, t);
+    rc = ap_drv_after_step(s, t);
     if (rc != AP_OK) return rc;
   }
-  return evaluate_current(s);
+  return ap_drv_evaluate_current(s);
 }
 
 /* ---- queries ------------------------------------------------------------------------------ */
@@ -531,7 +292,7 @@ int ap_sim_reactions(ap_sim *s, const double **lambda) {
     return AP_OK;
   }
   int rc = ap_fwd_reactions(s->m, s->d);   /* the pipeline holds the current state */
-  if (rc != AP_OK) return sim_fail(s, rc, "%s", s->d->msg);
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", s->d->msg);
   if (lambda) *lambda = s->d->lambda;
   return AP_OK;
 }

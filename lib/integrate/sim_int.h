@@ -1,0 +1,54 @@
+/* Simulation drivers (internal): the ap_sim struct shared by sim.c (creation, advancing,
+ * queries) and sim_step.c (the right-hand side and the work after each accepted step, per
+ * mode). Functions here carry the prefix ap_drv_. */
+#ifndef AP_INTEGRATE_SIM_INT_H
+#define AP_INTEGRATE_SIM_INT_H
+
+#include <stddef.h>
+
+#include "appell/sim.h"
+#include "core/core.h"
+#include "integrate/dae.h"
+#include "integrate/stepper.h"
+
+struct ap_sim {
+  const ap_model *m;
+  ap_data *d;
+  ap_sim_def def;
+  const ap_step_method *meth;
+  ap_stepper *st;           /* minimal and projected modes */
+  ap_dae *dae;              /* DAE mode */
+  int n, k, b, ny;          /* ny = n + l (minimal), n + k (projected), n + k + b (DAE) */
+  double t;                 /* time of the last accepted state */
+  double *y, *ytry;         /* (n + k + b) stepper state, trial state */
+  double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
+  int rhs_status;           /* last failure of the right-hand side */
+  char rhs_msg[512];
+  ap_sim_stats stats;
+  char msg[512];
+  char warning[512];        /* the first warning, "" when none */
+};
+
+/* printf into s->msg; returns status. */
+int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Load y = (q, e') (minimal mode) or (q, v) into the data at time t. */
+void ap_drv_load_state(ap_sim *s, double t, const double *y);
+/* The stepper's right-hand side (ap_rhs_fn) with user = ap_sim. */
+int ap_drv_rhs(double t, const double *y, double *ydot, void *user);
+/* CVODE's projection hook (ap_proj_fn) for projected mode, user = ap_sim. */
+int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user);
+/* After an accepted step of a one-step or multistep method at t (s->y holds the new state):
+ * coordinates onto their manifold, then the mode's own work (re-partition, projection,
+ * residuals). May restart the stepper. */
+int ap_drv_after_step(ap_sim *s, double t);
+/* After an accepted IDA step (DAE mode): checks and residuals only. */
+int ap_drv_after_step_dae(ap_sim *s, double t);
+/* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
+int ap_drv_evaluate_current(ap_sim *s);
+
+#endif
