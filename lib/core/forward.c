@@ -40,13 +40,15 @@ int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const 
   for (int j = 0; j < cols; j++)
     for (int i = 0; i < rows; i++) {
       double xi = x[i + (size_t)j * rows];
-      if (isfinite(xi)) continue;
+      if (fabs(xi) <= AP_HUGE) continue;
+      const char *why = isfinite(xi) ? " (more than 1e150 in magnitude: too large to integrate)"
+                                     : "";
       if (cols == 1)
-        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry %d at t = %.17g",
-                    m->name, what, xi, i, d->t);
+        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry %d at t = %.17g%s",
+                    m->name, what, xi, i, d->t, why);
       else
         ap_core_msg(d, "system '%s': callback '%s' produced %g in entry (%d, %d) at "
-                    "t = %.17g", m->name, what, xi, i, j, d->t);
+                    "t = %.17g%s", m->name, what, xi, i, j, d->t, why);
       return AP_ERR_NAN;
     }
   return AP_OK;

@@ -22,11 +22,15 @@ struct ap_sim {
   double t;                 /* time of the last accepted state */
   double *y, *ytry;         /* (n + k + b) stepper state, trial state */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
+  double *phi;              /* (nphi) DAE mode: scratch for phi(q) after a step */
   int rhs_status;           /* last failure of the right-hand side */
+  int failed;               /* DAE mode: a check after an IDA step failed; every later advance
+                               returns it (IDA has moved past the state kept in y) */
   char rhs_msg[512];
   ap_sim_stats stats;
   char msg[512];
-  char warning[512];        /* the first warning, "" when none */
+  char warning[1024];       /* redundant rows dropped at t0, then the first condition warning */
+  int cond_warned;
 };
 
 /* printf into s->msg; returns status. */

@@ -30,9 +30,34 @@ void ap_drv_load_state(ap_sim *s, double t, const double *y) {
   }
 }
 
+/* The stepper's trial point must be finite: a step size or a stage that overflowed would
+ * otherwise reach the model as t = NaN and be reported as the model's fault. */
+static int check_trial(ap_sim *s, double t, const double *y) {
+  const char *what = NULL;
+  int bad = -1, ny = s->def.mode == AP_MODE_MINIMAL ? s->n + s->d->l : s->n + s->k;
+  for (int i = 0; i < ny && bad < 0; i++)
+    if (!isfinite(y[i])) bad = i;
+  if (isfinite(t) && bad < 0) return AP_OK;
+  if (bad >= 0 && bad < s->n) what = ap_model_coord_name(s->m, bad);
+  else if (bad >= 0 && s->def.mode == AP_MODE_MINIMAL)
+    what = ap_model_speed_name(s->m, s->d->perm[s->d->rank + bad - s->n]);
+  else if (bad >= 0) what = ap_model_speed_name(s->m, bad - s->n);
+  s->rhs_status = AP_ERR_NAN;
+  if (!isfinite(t))
+    snprintf(s->rhs_msg, sizeof s->rhs_msg, "system '%s': the %s stepper's step from t = %.17g "
+             "overflowed (its next time is %g): the state's derivatives there are too large "
+             "for its error norm", s->m->name, s->meth->name, s->t, t);
+  else
+    snprintf(s->rhs_msg, sizeof s->rhs_msg, "system '%s': the %s stepper's trial state has "
+             "%s = %g at t = %.17g (stepping from t = %.17g): the step diverged", s->m->name,
+             s->meth->name, what, y[bad], t, s->t);
+  return AP_ERR_NAN;
+}
+
 int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
   ap_sim *s = user;
   ap_data *d = s->d;
+  if (check_trial(s, t, y) != AP_OK) return -1;
   ap_drv_load_state(s, t, y);
   int rc = ap_forward(s->m, d);
   if (rc != AP_OK) {
@@ -117,6 +142,7 @@ static int after_step_minimal(ap_sim *s, double t) {
 int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user) {
   ap_sim *s = user;
   ap_data *d = s->d;
+  if (check_trial(s, t, y) != AP_OK) return -1;
   ap_drv_load_state(s, t, y);
   int rc = ap_fwd_position(s->m, d);
   double change = 0.0, *v = corr + s->n;
@@ -172,23 +198,32 @@ static int after_step_projected(ap_sim *s, double t) {
 
 /* DAE mode: IDA keeps q on phi = 0 itself (GGL rows), so nothing is corrected here and IDA's
  * state is never touched. The body model's checks of project_q run on the accepted q (a disk
- * or torus reaching lying flat stops the run); the velocity-constraint residual and |phi| are
- * recorded. */
+ * or torus reaching lying flat stops the run); the velocity-constraint residual (all rows) and
+ * |phi| are recorded. With redundant rows (IDA keeps only the independent ones chosen at t0)
+ * the orthonormal basis stage judges, as in projected mode, that the rank has not changed and
+ * that the dropped rows' a0 and gamma stay consistent. */
 int ap_drv_after_step_dae(ap_sim *s, double t) {
   ap_data *d = s->d;
   const ap_model *m = s->m;
   int nphi = m->ev.phi ? m->nphi : 0, rc = AP_OK;
-  ap_drv_load_state(s, t, s->y);
-  if (m->ev.check_q) rc = m->ev.check_q(m, d, s->y, ((ap_scratch *)d->internal)->ev);
+  int redundant = m->b > 0 && ap_dae_rows(s->dae, NULL) < m->b;
+  ap_drv_load_state(s, t, s->ytry);
+  if (m->ev.check_q) rc = m->ev.check_q(m, d, s->ytry, ((ap_scratch *)d->internal)->ev);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
   if (m->b == 0 && nphi == 0) return AP_OK;
-  d->basis = AP_BASIS_NONE;
+  d->basis = redundant ? AP_BASIS_ORTHONORMAL : AP_BASIS_NONE;
   rc = ap_fwd_position(m, d);
+  if (rc == AP_OK && redundant && d->rank != ap_dae_rows(s->dae, NULL))
+    return ap_drv_fail(s, AP_ERR_RANK, "system '%s': the rank of A changed from %d to %d at "
+                       "t = %.17g (DAE mode keeps the independent rows chosen at the start)",
+                       m->name, ap_dae_rows(s->dae, NULL), d->rank, t);
+  if (rc == AP_OK && redundant) rc = ap_fwd_velocity(m, d);
+  d->basis = AP_BASIS_NONE;
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   if (m->b > 0)
     s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
   if (nphi == 0) return AP_OK;
-  double *phi = s->ytry;                        /* free between steps */
+  double *phi = s->phi;
   rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
@@ -212,13 +247,15 @@ static void check_condition(ap_sim *s) {
   int partitioned = s->def.mode == AP_MODE_MINIMAL && s->m->b > 0;
   double rc = partitioned ? fmin(d->rcond_G, d->rcond_R) : d->rcond_G;
   s->stats.min_rcond = fmin(s->stats.min_rcond, rc);
-  if (s->warning[0] || rc * s->def.rtol >= DBL_EPSILON) return;
+  if (s->cond_warned || rc * s->def.rtol >= DBL_EPSILON) return;
+  s->cond_warned = 1;
+  size_t used = strlen(s->warning);   /* after the redundant-rows note, if any */
   const char *what = partitioned && d->rcond_R < d->rcond_G ? "the dependent-speed block R11"
                                                               : "G = B^T g B";
-  snprintf(s->warning, sizeof s->warning, "system '%s': %s has condition number %.3g at "
-           "t = %.17g; with rtol = %.3g the linear solves lose about %.0f digits, so results "
-           "may miss the requested accuracy%s", s->m->name, what, 1.0 / rc, s->t,
-           s->def.rtol, log10(1.0 / rc),
+  snprintf(s->warning + used, sizeof s->warning - used, "%ssystem '%s': %s has condition "
+           "number %.3g at t = %.17g; with rtol = %.3g the linear solves lose about %.0f "
+           "digits, so results may miss the requested accuracy%s", used ? "; " : "",
+           s->m->name, what, 1.0 / rc, s->t, s->def.rtol, log10(1.0 / rc),
            s->def.mode == AP_MODE_PROJECTED ? " (the orthonormal basis inherits cond(g); "
            "minimal mode's partitioned basis may be better conditioned)" : "");
 }
