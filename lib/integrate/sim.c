@@ -25,6 +25,7 @@
 
 #include "appell/body.h"
 #include "integrate/sim_int.h"
+#include "linalg/linalg.h"
 
 int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...) {
        va_list ap;
@@ -201,7 +202,18 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
                     s->def.h_init, s->def.h_max, s->def.max_steps, NULL};
-  if (s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) o.proj = ap_drv_proj;
+  int nphi = s->m->ev.phi && s->m->ev.project_q ? s->m->nphi : 0;
+  if (ap_step_native_projection(s->meth) &&
+      ((s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) || nphi > 0)) {
+    o.proj = ap_drv_proj;
+    s->native_q = nphi > 0;
+  }
+  if (s->native_q) {                   /* gn_project_q's scratch */
+    size_t n = (size_t)s->n, np = (size_t)nphi;
+    s->gn = calloc(2 * np * n + np + ap_la_work_size(s->n, nphi) + n, sizeof *s->gn);
+    s->gn_iwork = calloc(ap_la_iwork_size(s->n, nphi), sizeof *s->gn_iwork);
+    if (!s->gn || !s->gn_iwork) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  }
   return ap_step_create(s->meth, s->ny, ap_drv_rhs, s, t0, s->y, &o, &s->st, s->msg,
                         sizeof s->msg);
 }
@@ -245,6 +257,8 @@ void ap_sim_free(ap_sim *s) {
   ap_step_free(s->st);
   ap_dae_free(s->dae);
   ap_data_free(s->d);
+  free(s->gn);
+  free(s->gn_iwork);
   free(s->y);
   free(s);
 }

@@ -31,6 +31,9 @@ struct ap_sim {
   char msg[512];
   char warning[1024];       /* redundant rows dropped at t0, then the first condition warning */
   int cond_warned;
+  int native_q;             /* CVODE BDF projects q inside its step (ap_drv_proj) */
+  double *gn;               /* native_q: Phi_q, Phi_q^T (nphi x n), phi (nphi), work */
+  int *gn_iwork;
 };
 
 /* printf into s->msg; returns status. */
@@ -44,7 +47,8 @@ int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...)
 void ap_drv_load_state(ap_sim *s, double t, const double *y);
 /* The stepper's right-hand side (ap_rhs_fn) with user = ap_sim. */
 int ap_drv_rhs(double t, const double *y, double *ydot, void *user);
-/* CVODE's projection hook (ap_proj_fn) for projected mode, user = ap_sim. */
+/* CVODE BDF's projection hook (ap_proj_fn), user = ap_sim: q onto its manifold (body models)
+ * and, in projected mode, v onto the constraints. */
 int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user);
 /* After an accepted step of a one-step or multistep method at t (s->y holds the new state):
  * coordinates onto their manifold, then the mode's own work (re-partition, projection,
