@@ -99,7 +99,8 @@ int sc_expr_check_jet(sc_ctx *c, const sc_expr *e, const sc_jet *t, const sc_jet
   char why[200], head[64];
   snprintf(head, sizeof head, what[bad], t->c[1] != 0.0 ? "time " : "");
   sc_prog_explain(e->prog, t, x, order, why, sizeof why);
-  return sc_err(c, e->node, "'%.200s' %s at t = %.17g: %s", e->text, head, t->c[0], why);
+  return sc_err(c, e->node, "'%.200s%s' %s at t = %.17g: %s", e->text,
+                strlen(e->text) > 200 ? "..." : "", head, t->c[0], why);
 }
 
 int sc_expr_check(sc_ctx *c, const sc_expr *e, double t) {

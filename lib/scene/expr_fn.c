@@ -3,8 +3,8 @@
  * For a function phi and an argument jet a = (a0, a1, a2) (Taylor coefficients: a1 = u',
  * a2 = u''/2), the result is the chain rule truncated at second order,
  *   r0 = phi(a0),  r1 = phi'(a0) a1,  r2 = phi'(a0) a2 + phi''(a0) a1^2 / 2,
- * with phi' and phi'' the closed forms below (each written with phi's own value y where that
- * saves a libm call). An argument jet with a1 = a2 = 0 (the argument does not move) gives
+ * with phi' and phi'' the closed forms below (written with phi's own value y where that saves
+ * a libm call without a cancellation: tanh' is 1/cosh^2, not 1 - tanh^2). An argument jet with a1 = a2 = 0 (the argument does not move) gives
  * r1 = r2 = 0 whatever phi' is there, so sqrt(x) of a variable x = 0 held fixed is fine.
  *
  * Definitions, as libmatheval 1.1 (the evaluator this one replaced) gave them: cot = 1/tan,
@@ -120,8 +120,9 @@ static void derivs(int fn, double u, double y, double *d1, double *d2) {
     case SC_FN_CSC: c = 1.0 / tan(u), *d1 = -y * c, *d2 = y * (c * c + y * y); return;
     case SC_FN_SINH: *d1 = cosh(u), *d2 = y; return;
     case SC_FN_COSH: *d1 = sinh(u), *d2 = y; return;
-    case SC_FN_TANH: case SC_FN_COTH: *d1 = 1.0 - y * y, *d2 = -2.0 * y * *d1; return;
-    case SC_FN_SECH: c = tanh(u), *d1 = -y * c, *d2 = y * (c * c - y * y); return;
+    case SC_FN_TANH: c = cosh(u), *d1 = 1.0 / (c * c), *d2 = -2.0 * y * *d1; return;
+    case SC_FN_COTH: c = sinh(u), *d1 = -1.0 / (c * c), *d2 = -2.0 * y * *d1; return;
+    case SC_FN_SECH: c = sinh(u), *d1 = -c * y * y, *d2 = (c * c - 1.0) * y * y * y; return;
     case SC_FN_CSCH: c = 1.0 / tanh(u), *d1 = -y * c, *d2 = y * (c * c + y * y); return;
     case SC_FN_ERF: *d1 = SC_2_SQRTPI * exp(-u * u), *d2 = -2.0 * u * *d1; return;
     case SC_FN_ABS: *d1 = u > 0.0 ? 1.0 : u < 0.0 ? -1.0 : NAN, *d2 = u != 0.0 ? 0.0 : NAN; return;

@@ -44,6 +44,7 @@ typedef struct parser {
   int n, nk, nslots, cap, uses_t;
   sc_prog_err *err;       /* the first error that stops the parse */
   sc_prog_err late;       /* the first unresolved name (reported when the parse succeeds) */
+  char shown[96];         /* the text as messages quote it (long texts shortened) */
 } parser;
 
 /* ---- messages ---------------------------------------------------------------------------- */
@@ -97,8 +98,8 @@ static const char *expected_kind(const sc_symtab *sym) {
 static int expected(parser *p, const char *what) {
   if (p->s[p->i] == '.')
     return set_err(p, AP_ERR_ARG, p->i, "unexpected '.' in expression '%s' (column %zu of the "
-                   "value)", p->s, p->i + 1);
-  return set_err(p, AP_ERR_ARG, p->i, "cannot parse '%s' as %s: expected %s at column %zu", p->s,
+                   "value)", p->shown, p->i + 1);
+  return set_err(p, AP_ERR_ARG, p->i, "cannot parse '%s' as %s: expected %s at column %zu", p->shown,
                  expected_kind(p->sym), what, p->i + 1);
 }
 
@@ -110,7 +111,7 @@ static int check_bytes(parser *p) {
   unsigned char ch = (unsigned char)p->s[bad];
   if (ch >= 0x20 && ch < 0x7f)
     return set_err(p, AP_ERR_ARG, bad, "unexpected character '%c' in expression '%s' (column "
-                   "%zu of the value)", ch, p->s, bad + 1);
+                   "%zu of the value)", ch, p->shown, bad + 1);
   return set_err(p, AP_ERR_ARG, bad, "unexpected byte 0x%02x in expression (column %zu of the "
                  "value)", ch, bad + 1);
 }
@@ -223,8 +224,8 @@ static int number(parser *p) {
   buf[p->i - start] = '\0';
   double x = strtod(buf, NULL);
   if (!isfinite(x))
-    return set_err(p, AP_ERR_ARG, start, "number '%s' out of range in expression '%s' (column "
-                   "%zu of the value)", buf, s, start + 1);
+    return set_err(p, AP_ERR_ARG, start, "number '%.40s' out of range in expression '%s' "
+                   "(column %zu of the value)", buf, p->shown, start + 1);
   return emit_k(p, x, start);
 }
 
@@ -251,19 +252,18 @@ static int unknown_name(parser *p, size_t at, size_t len, int call) {
   char word[SC_EXPR_MAX + 1];
   memcpy(word, p->s + at, len);
   word[len] = '\0';
-  const char *near = closest(p, word, call);
-  const char *what = call ? "function" : "name";
+  const char *near = closest(p, word, call), *what = call ? "function" : "name";
   if (near)
-    return name_err(p, at, "unknown %s '%s' in expression '%s' (column %zu of the "
-                   "value; did you mean '%s'?)", what, word, p->s, at + 1, near);
+    return name_err(p, at, "unknown %s '%.60s' in expression '%s' (column %zu of the value; "
+                    "did you mean '%s'?)", what, word, p->shown, at + 1, near);
   if (call)
-    return name_err(p, at, "unknown function '%s' in expression '%s' (column %zu of "
-                   "the value; the functions are listed in docs/scenes.md)", word, p->s, at + 1);
+    return name_err(p, at, "unknown function '%.60s' in expression '%s' (column %zu of the "
+                    "value; the functions are listed in docs/scenes.md)", word, p->shown, at + 1);
   int vars = p->sym->names && p->sym->names[0];
-  return name_err(p, at, "unknown name '%s' in expression '%s' (column %zu of the "
-                 "value; allowed: %snumbers, pi, e, deg, %sand functions such as sin, cos, exp, "
-                 "sqrt)", word, p->s, at + 1, p->sym->allow_t ? "t, " : "",
-                 vars ? "the names of the state, " : "");
+  return name_err(p, at, "unknown name '%.60s' in expression '%s' (column %zu of the value; "
+                  "allowed: %snumbers, pi, e, deg, %sand functions such as sin, cos, exp, sqrt)",
+                  word, p->shown, at + 1, p->sym->allow_t ? "t, " : "",
+                  vars ? "the variable names, " : "");
 }
 
 /* A name that is not a call: t, a constant or a variable. */
@@ -272,7 +272,7 @@ static int variable(parser *p, size_t at, size_t len) {
   if (len == 1 && w[0] == 't') {
     if (!p->sym->allow_t)
       return name_err(p, at, "the time t is not allowed here: '%s' must be a "
-                     "constant (column %zu of the value)", p->s, at + 1);
+                     "constant (column %zu of the value)", p->shown, at + 1);
     p->uses_t = 1;
     return emit(p, SC_OP_T, 0, at, 0);
   }
@@ -421,16 +421,16 @@ static int compile(parser *p, sc_prog **out) {
   if (p->s[p->i]) return expected(p, "an operator");
   if (p->late.status != AP_OK) return *p->err = p->late, -1;
   sc_prog *g = finish(p);
-  if (!g) return set_err(p, AP_ERR_NOMEM, 0, "out of memory compiling '%s'", p->s);
+  if (!g) return set_err(p, AP_ERR_NOMEM, 0, "out of memory compiling '%s'", p->shown);
   double x = 0.0;
   if (g->depth > SC_PROG_STACK) {
     sc_prog_free(g);
     return set_err(p, AP_ERR_ARG, 0, "'%s' nests too deeply (its evaluation needs more than %d "
-                   "stack entries)", p->s, SC_PROG_STACK);
+                   "stack entries)", p->shown, SC_PROG_STACK);
   }
   if (sc_prog_constant(g, &x) && !isfinite(x)) {
     sc_prog_free(g);
-    return set_err(p, AP_ERR_ARG, 0, "'%s' is not a finite number (it is %g)", p->s, x);
+    return set_err(p, AP_ERR_ARG, 0, "'%s' is not a finite number (it is %g)", p->shown, x);
   }
   *out = g;
   return 0;
@@ -444,11 +444,12 @@ int sc_prog_compile(const char *text, const sc_symtab *sym, sc_prog **out, sc_pr
   if (!out || !text) return err->status = AP_ERR_ARG;
   *out = NULL;
   parser p = {text, 0, strlen(text), 0, sym ? sym : &time_only, NULL, NULL, NULL, 0, 0, 0, 0, 0,
-              err, {AP_OK, 0, ""}};
+              err, {AP_OK, 0, ""}, ""};
+  snprintf(p.shown, sizeof p.shown, p.len > 80 ? "%.72s..." : "%s", text);
   if (p.len <= SC_EXPR_MAX) {
     p.cap = (int)p.len + 4;
     p.code = malloc((sizeof(sc_ins) + sizeof(double) + sizeof(int)) * (size_t)p.cap);
-    if (!p.code) return set_err(&p, AP_ERR_NOMEM, 0, "out of memory compiling '%s'", text),
+    if (!p.code) return set_err(&p, AP_ERR_NOMEM, 0, "out of memory compiling '%s'", p.shown),
                         err->status;
     p.k = (double *)(p.code + p.cap);
     p.slots = (int *)(p.k + p.cap);
