@@ -7,10 +7,12 @@
  * agree bit for bit; jets of variables (partial derivatives, derivatives along a motion); the
  * symbol table (dotted names, slots, did-you-mean); errors with their columns; the kinks of
  * abs, step and delta; explanations of values that are not finite; the deepest nesting the
- * grammar accepts; evaluation from four threads at once; no heap allocation per evaluation;
- * and every allocation failure in compile returned as AP_ERR_NOMEM without a leak. */
+ * grammar accepts; numbers under a locale with a decimal comma (when one is installed);
+ * evaluation from four threads at once; no heap allocation per evaluation; and every
+ * allocation failure in compile returned as AP_ERR_NOMEM without a leak. */
 #define _GNU_SOURCE
 #include <float.h>
+#include <locale.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -219,6 +221,19 @@ static void test_composites(void) {
   }
 }
 
+/* Numbers read the same whatever the locale's decimal point (a program may set LC_NUMERIC). */
+static void test_locale(void) {
+  static const char *const locales[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", NULL};
+  const char *set = NULL;
+  for (int i = 0; locales[i] && !set; i++) set = setlocale(LC_NUMERIC, locales[i]);
+  if (!set) return (void)printf("no locale with a decimal comma installed: locale not tested\n");
+  double x = 0.0;
+  sc_prog *p = compile("2.5 + .25", NULL);
+  AP_CHECK(p && sc_prog_constant(p, &x) && x == 2.75);
+  sc_prog_free(p);
+  setlocale(LC_NUMERIC, "C");
+}
+
 /* ---- variables: the symbol table and jets of x ---------------------------------------------- */
 
 static void test_variables(void) {
@@ -249,7 +264,8 @@ static void test_variables(void) {
   AP_CHECK_NEAR(2 * f.c[2], -2, 2 * EPS);
   /* Along a motion: x = (x, x', x''/2), t = (t, 1, 0). */
   tj.c[1] = 1;
-  x[0] = (sc_jet){{h, vh, ah / 2}}, x[3] = (sc_jet){{a, va, aa / 2}}, x[5] = (sc_jet){{r, vr, ar / 2}};
+  x[0] = (sc_jet){{h, vh, ah / 2}}, x[3] = (sc_jet){{a, va, aa / 2}};
+  x[5] = (sc_jet){{r, vr, ar / 2}};
   AP_CHECK_EQ_INT(sc_prog_jet(p, &tj, x, &f), 0);
   double d1 = vr * t + r + cos(a) * va - 2 * h * vh;
   double d2 = ar * t + 2 * vr + cos(a) * aa - sin(a) * va * va - 2 * vh * vh - 2 * h * ah;
@@ -524,6 +540,7 @@ static void test_allocation_failures(void) {
 int main(void) {
   test_functions();
   test_composites();
+  test_locale();
   test_variables();
   test_errors();
   test_nesting();

@@ -26,36 +26,47 @@ int sc_op_push(int op) {
   return op <= SC_OP_K ? 1 : op >= SC_OP_ADD && op <= SC_OP_POW ? -1 : 0;
 }
 
+#if defined(__GNUC__)
+#define SC_INLINE inline __attribute__((always_inline))
+#else
+#define SC_INLINE inline
+#endif
+
 static double pow_value(double u, double k) { return k == 2.0 ? u * u : pow(u, k); }
 
-static inline double op_value(const sc_ins *in, const double *k, double b, double a) {
+/* One instruction on a stack of values whose top is *top; returns the new top. */
+static SC_INLINE double *step_value(const sc_ins *in, const double *k, double t, const double *x,
+                                    double *top) {
   switch ((sc_op)in->op) {
-    case SC_OP_NEG: return -a;
-    case SC_OP_FN: return sc_fn_value(in->fn, a);
-    case SC_OP_ADD: return b + a;
-    case SC_OP_SUB: return b - a;
-    case SC_OP_MUL: return b * a;
-    case SC_OP_DIV: return b / a;
-    case SC_OP_POW: return pow_value(b, a);
-    case SC_OP_ADDK: return a + k[in->arg];
-    case SC_OP_RSUBK: return k[in->arg] - a;
-    case SC_OP_MULK: return a * k[in->arg];
-    case SC_OP_DIVK: return a / k[in->arg];
-    case SC_OP_RDIVK: return k[in->arg] / a;
-    case SC_OP_POWK: return pow_value(a, k[in->arg]);
-    case SC_OP_RPOWK: return pow_value(k[in->arg], a);
-    case SC_OP_T: case SC_OP_X: case SC_OP_K: break;
+    case SC_OP_T: *++top = t; break;
+    case SC_OP_X: *++top = x[in->arg]; break;
+    case SC_OP_K: *++top = k[in->arg]; break;
+    case SC_OP_NEG: *top = -*top; break;
+    case SC_OP_FN: *top = sc_fn_value(in->fn, *top); break;
+    case SC_OP_ADD: top--, top[0] = top[0] + top[1]; break;
+    case SC_OP_SUB: top--, top[0] = top[0] - top[1]; break;
+    case SC_OP_MUL: top--, top[0] = top[0] * top[1]; break;
+    case SC_OP_DIV: top--, top[0] = top[0] / top[1]; break;
+    case SC_OP_POW: top--, top[0] = pow_value(top[0], top[1]); break;
+    case SC_OP_ADDK: *top = *top + k[in->arg]; break;
+    case SC_OP_RSUBK: *top = k[in->arg] - *top; break;
+    case SC_OP_MULK: *top = *top * k[in->arg]; break;
+    case SC_OP_DIVK: *top = *top / k[in->arg]; break;
+    case SC_OP_RDIVK: *top = k[in->arg] / *top; break;
+    case SC_OP_POWK: *top = pow_value(*top, k[in->arg]); break;
+    case SC_OP_RPOWK: *top = pow_value(k[in->arg], *top); break;
   }
-  return NAN;
+  return top;
 }
 
 double sc_op_value(const sc_ins *in, const double *k, double b, double a) {
-  return op_value(in, k, b, a);
+  double st[3] = {b, a, 0.0};   /* room for a push (not called with one) */
+  return *step_value(in, k, 0.0, NULL, st + 1);
 }
 
 /* ---- jet rules ---------------------------------------------------------------------------- */
 
-static void jet_mul(const sc_jet *b, const sc_jet *a, sc_jet *r) {
+static SC_INLINE void jet_mul(const sc_jet *b, const sc_jet *a, sc_jet *r) {
   double r0 = b->c[0] * a->c[0], r1 = b->c[0] * a->c[1] + b->c[1] * a->c[0];
   r->c[2] = b->c[0] * a->c[2] + b->c[1] * a->c[1] + b->c[2] * a->c[0];
   r->c[0] = r0, r->c[1] = r1;
@@ -104,73 +115,54 @@ static void jet_pow(const sc_jet *b, const sc_jet *a, sc_jet *r) {
   r->c[0] = y, r->c[1] = y * m1, r->c[2] = y * (m2 + 0.5 * m1 * m1);
 }
 
-static inline void op_jet(const sc_ins *in, const double *kk, const sc_jet *b, const sc_jet *a,
-                          sc_jet *r) {
+/* One instruction on a stack of jets whose top is *top; returns the new top. */
+static SC_INLINE sc_jet *step_jet(const sc_ins *in, const double *kk, const sc_jet *t,
+                                  const sc_jet *x, sc_jet *top) {
   double k = sc_op_reads_k(in->op) ? kk[in->arg] : 0.0;
   sc_jet c = {{k, 0.0, 0.0}};
   switch ((sc_op)in->op) {
-    case SC_OP_NEG: r->c[0] = -a->c[0], r->c[1] = -a->c[1], r->c[2] = -a->c[2]; return;
-    case SC_OP_FN: sc_fn_jet(in->fn, a, r); return;
+    case SC_OP_T: *++top = *t; break;
+    case SC_OP_X: *++top = x[in->arg]; break;
+    case SC_OP_K: *++top = c; break;
+    case SC_OP_NEG: top->c[0] = -top->c[0], top->c[1] = -top->c[1], top->c[2] = -top->c[2]; break;
+    case SC_OP_FN: sc_fn_jet(in->fn, top, top); break;
     case SC_OP_ADD:
-      r->c[0] = b->c[0] + a->c[0], r->c[1] = b->c[1] + a->c[1], r->c[2] = b->c[2] + a->c[2];
-      return;
+      top--;
+      top->c[0] = top->c[0] + top[1].c[0], top->c[1] += top[1].c[1], top->c[2] += top[1].c[2];
+      break;
     case SC_OP_SUB:
-      r->c[0] = b->c[0] - a->c[0], r->c[1] = b->c[1] - a->c[1], r->c[2] = b->c[2] - a->c[2];
-      return;
-    case SC_OP_MUL: jet_mul(b, a, r); return;
-    case SC_OP_DIV: jet_div(b, a, r); return;
-    case SC_OP_POW: jet_pow(b, a, r); return;
-    case SC_OP_ADDK: r->c[0] = a->c[0] + k, r->c[1] = a->c[1], r->c[2] = a->c[2]; return;
-    case SC_OP_RSUBK: r->c[0] = k - a->c[0], r->c[1] = -a->c[1], r->c[2] = -a->c[2]; return;
-    case SC_OP_MULK: r->c[0] = a->c[0] * k, r->c[1] = a->c[1] * k, r->c[2] = a->c[2] * k; return;
-    case SC_OP_DIVK: r->c[0] = a->c[0] / k, r->c[1] = a->c[1] / k, r->c[2] = a->c[2] / k; return;
-    case SC_OP_RDIVK: jet_div(&c, a, r); return;
-    case SC_OP_POWK: jet_powk(a, k, r); return;
-    case SC_OP_RPOWK: jet_pow(&c, a, r); return;
-    case SC_OP_T: case SC_OP_X: case SC_OP_K: break;
+      top--;
+      top->c[0] = top->c[0] - top[1].c[0], top->c[1] -= top[1].c[1], top->c[2] -= top[1].c[2];
+      break;
+    case SC_OP_MUL: top--, jet_mul(top, top + 1, top); break;
+    case SC_OP_DIV: top--, jet_div(top, top + 1, top); break;
+    case SC_OP_POW: top--, jet_pow(top, top + 1, top); break;
+    case SC_OP_ADDK: top->c[0] = top->c[0] + k; break;
+    case SC_OP_RSUBK: top->c[0] = k - top->c[0], top->c[1] = -top->c[1], top->c[2] = -top->c[2];
+      break;
+    case SC_OP_MULK: top->c[0] *= k, top->c[1] *= k, top->c[2] *= k; break;
+    case SC_OP_DIVK: top->c[0] /= k, top->c[1] /= k, top->c[2] /= k; break;
+    case SC_OP_RDIVK: jet_div(&c, top, top); break;
+    case SC_OP_POWK: jet_powk(top, k, top); break;
+    case SC_OP_RPOWK: jet_pow(&c, top, top); break;
   }
-}
-
-void sc_op_jet(const sc_ins *in, const double *k, const sc_jet *b, const sc_jet *a, sc_jet *r) {
-  op_jet(in, k, b, a, r);
+  return top;
 }
 
 /* ---- the interpreters --------------------------------------------------------------------- */
 
 int sc_prog_value(const sc_prog *p, double t, const double *x, double *f) {
-  double st[SC_PROG_STACK];
-  int sp = -1;
-  for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
-    switch ((sc_op)in->op) {
-      case SC_OP_T: st[++sp] = t; break;
-      case SC_OP_X: st[++sp] = x[in->arg]; break;
-      case SC_OP_K: st[++sp] = p->k[in->arg]; break;
-      case SC_OP_ADD: case SC_OP_SUB: case SC_OP_MUL: case SC_OP_DIV: case SC_OP_POW:
-        sp--;
-        st[sp] = op_value(in, p->k, st[sp], st[sp + 1]);
-        break;
-      default: st[sp] = op_value(in, p->k, 0.0, st[sp]); break;
-    }
-  }
+  double st[SC_PROG_STACK], *top = st - 1;
+  for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++)
+    top = step_value(in, p->k, t, x, top);
   *f = st[0];
   return isfinite(st[0]) ? 0 : -1;
 }
 
 int sc_prog_jet(const sc_prog *p, const sc_jet *t, const sc_jet *x, sc_jet *f) {
-  sc_jet st[SC_PROG_STACK];
-  int sp = -1;
-  for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
-    switch ((sc_op)in->op) {
-      case SC_OP_T: st[++sp] = *t; break;
-      case SC_OP_X: st[++sp] = x[in->arg]; break;
-      case SC_OP_K: ++sp, st[sp].c[0] = p->k[in->arg], st[sp].c[1] = st[sp].c[2] = 0.0; break;
-      case SC_OP_ADD: case SC_OP_SUB: case SC_OP_MUL: case SC_OP_DIV: case SC_OP_POW:
-        sp--;
-        op_jet(in, p->k, &st[sp], &st[sp + 1], &st[sp]);
-        break;
-      default: op_jet(in, p->k, NULL, &st[sp], &st[sp]); break;
-    }
-  }
+  sc_jet st[SC_PROG_STACK], *top = st - 1;
+  for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++)
+    top = step_jet(in, p->k, t, x, top);
   *f = st[0];
   return isfinite(f->c[0]) && isfinite(f->c[1]) && isfinite(f->c[2]) ? 0 : -1;
 }
@@ -238,25 +230,16 @@ static void describe(const sc_prog *p, const sc_ins *in, const sc_jet *b, const 
 
 int sc_prog_explain(const sc_prog *p, const sc_jet *t, const sc_jet *x, int order, char *buf,
                     size_t len) {
-  sc_jet st[SC_PROG_STACK];
-  int sp = -1;
+  sc_jet st[SC_PROG_STACK], *top = st - 1;
   if (len) buf[0] = '\0';
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
-    sc_jet a = {{0.0, 0.0, 0.0}}, b = a;
+    sc_jet zero = {{0.0, 0.0, 0.0}};
     int push = sc_op_push(in->op);
-    if (push > 0) {
-      ++sp;
-      if (in->op == SC_OP_T) st[sp] = *t;
-      else if (in->op == SC_OP_X) st[sp] = x[in->arg];
-      else st[sp] = b, st[sp].c[0] = p->k[in->arg];
-    } else {
-      a = st[sp];
-      if (push < 0) b = st[--sp];
-      op_jet(in, p->k, &b, &a, &st[sp]);
-    }
+    sc_jet a = push > 0 ? zero : top[0], b = push < 0 ? top[-1] : zero;
+    top = step_jet(in, p->k, t, x, top);
     for (int c = 0; c <= order && c < 3; c++) {
-      if (isfinite(st[sp].c[c])) continue;
-      describe(p, in, &b, &a, &st[sp], c, buf, len);
+      if (isfinite(top->c[c])) continue;
+      describe(p, in, &b, &a, top, c, buf, len);
       return in->col + 1;
     }
   }

@@ -4,8 +4,9 @@
  * a2 = u''/2), the result is the chain rule truncated at second order,
  *   r0 = phi(a0),  r1 = phi'(a0) a1,  r2 = phi'(a0) a2 + phi''(a0) a1^2 / 2,
  * with phi' and phi'' the closed forms below (written with phi's own value y where that saves
- * a libm call without a cancellation: tanh' is 1/cosh^2, not 1 - tanh^2). An argument jet with a1 = a2 = 0 (the argument does not move) gives
- * r1 = r2 = 0 whatever phi' is there, so sqrt(x) of a variable x = 0 held fixed is fine.
+ * a libm call without a cancellation: tanh' is 1/cosh^2, not 1 - tanh^2). An argument jet
+ * with a1 = a2 = 0 (the argument does not move) gives r1 = r2 = 0 whatever phi' is there, so
+ * sqrt(x) of a variable x = 0 held fixed is fine.
  *
  * Definitions, as libmatheval 1.1 (the evaluator this one replaced) gave them: cot = 1/tan,
  * sec = 1/cos, csc = 1/sin, acot(u) = atan(1/u), asec(u) = acos(1/u), acsc(u) = asin(1/u),

@@ -61,12 +61,10 @@ extern const char *const sc_fn_names[SC_FN_COUNT + 1];   /* NULL-terminated */
 double sc_fn_value(int fn, double u);
 void sc_fn_jet(int fn, const sc_jet *a, sc_jet *r);
 
-/* expr_eval.c: one operation (not a push) on values and on jets: the evaluator's own code, so
- * constants folded at compile time equal what evaluation computes. a is the top of the stack,
- * b the entry under it (the left operand of two-operand operations; ignored by the others);
- * r may alias a or b. */
+/* expr_eval.c: one operation (not a push) on values, b the left operand of two-operand
+ * operations (ignored by the others) and a the right one: the evaluator's own code, so
+ * constants folded at compile time equal what evaluation computes. */
 double sc_op_value(const sc_ins *in, const double *k, double b, double a);
-void sc_op_jet(const sc_ins *in, const double *k, const sc_jet *b, const sc_jet *a, sc_jet *r);
 /* How many entries an instruction pushes (+1), pops (-1) or leaves (0). */
 int sc_op_push(int op);
 

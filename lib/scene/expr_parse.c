@@ -20,6 +20,7 @@
  * one for the scratch, each failure AP_ERR_NOMEM. Messages give the 1-based column of the
  * value where the problem was found. */
 #include <ctype.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -99,8 +100,8 @@ static int expected(parser *p, const char *what) {
   if (p->s[p->i] == '.')
     return set_err(p, AP_ERR_ARG, p->i, "unexpected '.' in expression '%s' (column %zu of the "
                    "value)", p->shown, p->i + 1);
-  return set_err(p, AP_ERR_ARG, p->i, "cannot parse '%s' as %s: expected %s at column %zu", p->shown,
-                 expected_kind(p->sym), what, p->i + 1);
+  return set_err(p, AP_ERR_ARG, p->i, "cannot parse '%s' as %s: expected %s at column %zu",
+                 p->shown, expected_kind(p->sym), what, p->i + 1);
 }
 
 /* Every byte must belong to the grammar's alphabet. */
@@ -219,10 +220,18 @@ static int number(parser *p) {
     if (isdigit((unsigned char)s[p->i + 1 + sign]))
       for (p->i += 1 + (size_t)sign; isdigit((unsigned char)s[p->i]);) p->i++;
   }
-  char buf[SC_EXPR_MAX + 1];
+  char buf[SC_EXPR_MAX + 1], *end = NULL, *dot = NULL;
   memcpy(buf, s + start, p->i - start);
   buf[p->i - start] = '\0';
-  double x = strtod(buf, NULL);
+  double x = strtod(buf, &end);
+  if (*end && (dot = strchr(buf, '.')) != NULL) {   /* a locale whose decimal point is not '.' */
+    *dot = localeconv()->decimal_point[0];
+    x = strtod(buf, &end);
+    *dot = '.';
+  }
+  if (*end)
+    return set_err(p, AP_ERR_ARG, start, "cannot read the number '%.40s' in expression '%s' "
+                   "(column %zu of the value)", buf, p->shown, start + 1);
   if (!isfinite(x))
     return set_err(p, AP_ERR_ARG, start, "number '%.40s' out of range in expression '%s' "
                    "(column %zu of the value)", buf, p->shown, start + 1);
