@@ -8,8 +8,9 @@
  * derivatives; of those not finite it reports the one written first in the file, at its node
  * (sc_expr_check). It only reads the scene: any thread may call it (ap_scene_check_time).
  * sc_check_start runs the pipeline (ap_forward, orthonormal basis) at (t0, q0, v0); when that
- * fails but succeeds with every speed 0, the speeds overflow, and the message goes to the
- * largest number under initial: (heading_rate: 1e200). */
+ * gives a value that is not finite (other failures are left to the simulation, which reports
+ * them as before) but works with every speed 0, the speeds overflow, and the message goes to
+ * the largest number under initial: (heading_rate: 1e200). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,7 +95,7 @@ int sc_check_start(sc_ctx *c, const sc_scene *s, const ap_model *m, const double
     return c->status = AP_ERR_NOMEM;
   }
   int rc = forward_at(m, d, s->run.t0, q0, v0);
-  if (rc == AP_OK) return ap_data_free(d), AP_OK;
+  if (rc != AP_ERR_NAN && rc != AP_ERR_CALLBACK) return ap_data_free(d), AP_OK;   /* not ours */
   char why[sizeof d->msg], hint[96] = "";
   memcpy(why, d->msg, sizeof why);
   const sc_node *init = sc_map_get(s->root, "initial"), *at = init ? init : s->root;

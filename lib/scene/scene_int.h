@@ -260,8 +260,8 @@ int sc_initial_state(sc_ctx *c, const sc_scene *s, const ap_model *m, double *q0
 /* Every expression of t in the scene, with both derivatives, at t: AP_OK, or a message at the
  * first one (in file order) that is not finite. Reads the scene only. */
 int sc_check_exprs(sc_ctx *c, const sc_scene *s, double t);
-/* The equations of motion at (t0, q0, v0): AP_OK, or a located message (speeds that overflow
- * are blamed on the largest number under initial:). */
+/* The equations of motion at (t0, q0, v0): AP_OK, or a located message when they are not
+ * finite there (speeds that overflow are blamed on the largest number under initial:). */
 int sc_check_start(sc_ctx *c, const sc_scene *s, const ap_model *m, const double *q0,
                    const double *v0);
 
