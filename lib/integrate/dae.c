@@ -1,14 +1,15 @@
 /* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (DESIGN.md §1, "The DAE
  * cross-check").
  *
- * Variables y = (q, v, lambda, mu), n + k + bs + nphi of them, and the residual
+ * Variables y = (q, v, lambda, mu), n + k + bs + nps of them, and the residual
  *
- *     F_q   = q' - N(q) v - Phi_q^T mu
+ *     F_q   = q' - N(q) v - Phi_s^T mu
  *     F_v   = g v' + h - Q - A_s^T lambda
  *     F_c   = A_s v + a0_s
- *     F_phi = phi(q, t)
+ *     F_phi = phi_s(q, t)
  *
- * A_s, a0_s are the bs independent rows of A, a0 ("kept rows", below). The last rows are the
+ * A_s, a0_s are the bs independent rows of A, a0, and phi_s, Phi_s the nps independent rows of
+ * phi and of its Jacobian Phi_q ("kept rows", below). The last rows are the
  * implicit holonomic constraints (loop closures, unit-quaternion norms) of a body model in the
  * stabilized index-2 form of Gear, Gupta and Leimkuhler (1985): their velocity form is already
  * among the rows of A (loops) or holds identically (quaternions, Phi_q N = 0), and the extra
@@ -19,11 +20,13 @@
  * makes Phi_q^T mu a vector of q-space, and it lets the quaternion rows |p|^2 - 1 (whose
  * gradient 2 p is normal to every N v) correct the norm.
  *
- * Kept rows. Redundant rows would make IDA's Newton matrix singular. At creation the row-pivoted
- * QR of A^T (the factorization ap_partition uses to find and name redundant rows) picks the
- * rank-many independent rows; IDA carries multipliers for those only, and the choice is held
- * for the whole run (the driver checks after every step that the rank has not changed and that
- * the dropped rows stay consistent). The multipliers of dropped rows are reported as 0.
+ * Kept rows. Redundant rows (two wheels on one axle, a loop closure written twice) would make
+ * IDA's Newton matrix singular. At creation the row-pivoted QR of A^T (the factorization
+ * ap_partition uses to find and name redundant rows) picks the rank-many independent rows of A,
+ * and the same on Phi_q^T those of phi; IDA carries multipliers for those only, and the choice
+ * is held for the whole run (the driver checks after every step that the rank has not changed
+ * and that the dropped rows stay consistent). The multipliers of dropped rows are reported
+ * as 0.
  *
  * Scaling (measured: without it IDA's Newton iteration failed at rtol 1e-12 on every model with
  * a plane contact or a loop). lambda and mu are algebraic (IDASetId 0) and out of the error test
@@ -75,12 +78,12 @@ struct ap_dae {
   N_Vector yy, yp, id;
   SUNMatrix J;
   SUNLinearSolver LS;
-  int n, k, b, bs, nphi, ny;  /* ny = n + k + bs + nphi */
-  int *rows;                /* (bs) the kept constraint rows, ascending */
+  int n, k, b, bs, nphi, nps, ny;  /* ny = n + k + bs + nps */
+  int *rows, *prows;        /* (bs), (nps) the kept rows of A and of phi, ascending */
   double rtol, atol, h0;     /* h0: the first step (weights before IDA has a step size) */
   double qtyp, vtyp;        /* typical |q|, |v|: difference-quotient increments */
-  double *Phi_q, *dq;       /* (nphi x n) Jacobian of phi in q, (n) Phi_q^T mu */
-  double *jg, *jN, *jA, *jP;/* the Jacobian's base point: g, N, A_s (bs x k), Phi_q */
+  double *Phi_q, *phi;      /* (nphi x n) Jacobian of phi in q, (nphi) phi: all rows */
+  double *jg, *jN, *jA, *jP;/* the Jacobian's base point: g, N, A_s (bs x k), Phi_s (nps x n) */
   double *Ms, *gf;          /* g^-1 A_s^T (k x bs) for the multipliers' weights; g's factor */
   long nres;                /* residual evaluations, the Newton matrix's included */
   int res_status;           /* last failure of the residual */
@@ -100,7 +103,7 @@ static int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
   ap_dae *s = user;
   const ap_model *m = s->m;
   ap_data *d = s->d;
-  int n = s->n, k = s->k, b = s->b, bs = s->bs;
+  int n = s->n, k = s->k, b = s->b, bs = s->bs, np = s->nphi;
   const double *y = N_VGetArrayPointer(yy), *y1 = N_VGetArrayPointer(yp);
   double *r = N_VGetArrayPointer(rr);
   s->nres++;
@@ -119,15 +122,17 @@ static int residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
   if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
   if (rc != AP_OK) return res_fail(s, rc);
   const double *lambda = y + n + k, *mu = lambda + bs;
-  ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v - Phi_q^T mu */
+  ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v - Phi_s^T mu */
   for (int i = 0; i < n; i++) r[i] = y1[i] - r[i];
-  if (s->nphi > 0) {
-    int np = s->nphi;
+  if (np > 0) {
     memset(s->Phi_q, 0, sizeof(double) * (size_t)np * (size_t)n);
-    rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, r + n + k + bs, s->Phi_q);
+    rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, s->phi, s->Phi_q);
     if (rc != AP_OK) return res_fail(s, rc);
-    ap_la_gemv_t(np, n, s->Phi_q, mu, s->dq);
-    for (int i = 0; i < n; i++) r[i] -= s->dq[i];
+    for (int c = 0; c < s->nps; c++) {
+      int row = s->prows[c];
+      r[n + k + bs + c] = s->phi[row];
+      for (int i = 0; i < n; i++) r[i] -= s->Phi_q[row + (size_t)i * np] * mu[c];
+    }
   }
   ap_la_gemv(k, k, d->g, y1 + n, r + n);                   /* F_v = g v' + h - Q - A_s^T l */
   for (int i = 0; i < k; i++) r[n + i] += d->h[i] - d->Q[i];
@@ -178,10 +183,10 @@ static int weights(N_Vector yv, N_Vector ewt, void *user) {
     for (int i = 0; i < k; i++) x = fmax(x, fabs(s->Ms[i + (size_t)c * k]) * w[n + i]);
     w[n + k + c] = h * x;
   }
-  for (int r = 0; r < np; r++) {
+  for (int c = 0; c < s->nps; c++) {
     double x = 0.0;
-    for (int i = 0; i < n; i++) x = fmax(x, fabs(s->Phi_q[r + (size_t)i * np]) * w[i]);
-    w[n + k + bs + r] = h * x;
+    for (int i = 0; i < n; i++) x = fmax(x, fabs(s->Phi_q[s->prows[c] + (size_t)i * np]) * w[i]);
+    w[n + k + bs + c] = h * x;
   }
   for (int i = n + k; i < s->ny; i++)
     if (!(w[i] > 0) || !isfinite(w[i])) w[i] = 1.0 / (s->rtol * fabs(y[i]) + s->atol);
@@ -192,7 +197,7 @@ static int weights(N_Vector yv, N_Vector ewt, void *user) {
 static int jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J,
                     void *user, N_Vector t1, N_Vector t2, N_Vector t3) {
   ap_dae *s = user;
-  int n = s->n, k = s->k, b = s->b, bs = s->bs, np = s->nphi, nd = n + k;
+  int n = s->n, k = s->k, b = s->b, bs = s->bs, np = s->nps, nd = n + k;
   double *y = N_VGetArrayPointer(yy), *y1 = N_VGetArrayPointer(yp), h = 0.0;
   const double *f0 = N_VGetArrayPointer(t3), *f1 = N_VGetArrayPointer(t2);
   (void)rr, (void)t1;
@@ -203,7 +208,9 @@ static int jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
   memcpy(s->jN, s->d->N, sizeof(double) * (size_t)n * k);
   for (int c = 0; c < bs; c++)
     for (int i = 0; i < k; i++) s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * b];
-  if (np > 0) memcpy(s->jP, s->Phi_q, sizeof(double) * (size_t)np * n);
+  for (int c = 0; c < np; c++)
+    for (int i = 0; i < n; i++)
+      s->jP[c + (size_t)i * np] = s->Phi_q[s->prows[c] + (size_t)i * s->nphi];
   multiplier_scales(s);
   SUNMatZero(J);
   for (int j = 0; j < nd; j++) {                           /* q and v columns */
@@ -247,32 +254,43 @@ static void err_handler(int code, const char *module, const char *function, char
 
 double ap_dae_rtol(double rtol) { return fmax(rtol / AP_DAE_TOL_FACTOR, fmin(rtol, 1e-12)); }
 
-/* The kept rows: the first rank rows of the row-pivoted QR of A^T at the data's state (the
- * choice ap_partition makes), in ascending order. */
-static int choose_rows(ap_dae *s, double rank_rtol) {
-  int b = s->b, k = s->k, rank = 0;
-  if (b == 0) return AP_OK;
-  size_t lw = ap_la_work_size(b, k);
-  double *buf = calloc((size_t)k * b + (size_t)(b > k ? b : k) + 2 * (size_t)k * k + lw,
+/* The independent rows of M (rows x cols): the first rank rows of the row-pivoted QR of M^T
+ * (the choice ap_partition makes for A), ascending, into keep; their number into *nkeep. */
+static int independent_rows(int rows, int cols, const double *M, double rank_rtol, int *keep,
+                            int *nkeep) {
+  int rank = 0, mx = rows > cols ? rows : cols;
+  *nkeep = 0;
+  if (rows == 0) return AP_OK;
+  size_t lw = ap_la_work_size(rows, cols);
+  double *buf = calloc((size_t)cols * rows + (size_t)mx + 2 * (size_t)cols * cols + lw,
                        sizeof *buf);
-  int *jpvt = calloc((size_t)b + ap_la_iwork_size(b, k), sizeof *jpvt);
+  int *jpvt = calloc((size_t)rows + ap_la_iwork_size(rows, cols), sizeof *jpvt);
   int rc = buf && jpvt ? AP_OK : AP_ERR_NOMEM;
   if (rc == AP_OK) {
-    double *F = buf, *tau = F + (size_t)k * b, *Qf = tau + (b > k ? b : k), *Z = Qf + k * k;
+    double *F = buf, *tau = F + (size_t)cols * rows, *Qf = tau + mx, *Z = Qf + (size_t)cols * cols;
     double resid = 0.0;
-    rc = ap_la_orth_basis(b, k, s->d->A, NULL, rank_rtol, &rank, F, tau, jpvt, Qf, Z, NULL,
-                          &resid, Z + (size_t)k * k, jpvt + b);
+    rc = ap_la_orth_basis(rows, cols, M, NULL, rank_rtol, &rank, F, tau, jpvt, Qf, Z, NULL,
+                          &resid, Z + (size_t)cols * cols, jpvt + rows);
   }
-  if (rc == AP_OK) {
-    for (int i = 0; i < rank; i++) {                       /* insertion sort of jpvt[0..rank) */
-      int x = jpvt[i], j = i;
-      for (; j > 0 && s->rows[j - 1] > x; j--) s->rows[j] = s->rows[j - 1];
-      s->rows[j] = x;
-    }
-    s->bs = rank;
+  for (int i = 0; rc == AP_OK && i < rank; i++) {          /* insertion sort of jpvt[0..rank) */
+    int x = jpvt[i], j = i;
+    for (; j > 0 && keep[j - 1] > x; j--) keep[j] = keep[j - 1];
+    keep[j] = x;
   }
+  if (rc == AP_OK) *nkeep = rank;
   free(buf);
   free(jpvt);
+  return rc;
+}
+
+/* The kept rows of A and of phi at the data's state (the position stage at t0). */
+static int choose_rows(ap_dae *s, double rank_rtol) {
+  int rc = independent_rows(s->b, s->k, s->d->A, rank_rtol, s->rows, &s->bs);
+  if (rc != AP_OK || s->nphi == 0) return rc;
+  memset(s->Phi_q, 0, sizeof(double) * (size_t)s->nphi * s->n);
+  rc = s->m->ev.phi(s->m, s->d, ((ap_scratch *)s->d->internal)->ev, s->phi, s->Phi_q);
+  if (rc == AP_OK)
+    rc = independent_rows(s->nphi, s->n, s->Phi_q, rank_rtol, s->prows, &s->nps);
   return rc;
 }
 
@@ -282,7 +300,7 @@ static int initial_multipliers(ap_dae *s, double t0) {
   N_Vector rr = N_VClone(s->yy);
   if (!rr) return AP_ERR_NOMEM;
   double *y = N_VGetArrayPointer(s->yy), *r = N_VGetArrayPointer(rr);
-  memset(y + n + k, 0, sizeof(double) * (size_t)(bs + s->nphi));
+  memset(y + n + k, 0, sizeof(double) * (size_t)(bs + s->nps));
   int rc = residual(t0, s->yy, s->yp, rr, s) == 0 ? AP_OK : s->res_status;
   if (rc == AP_OK && bs > 0) {
     for (int c = 0; c < bs; c++)
@@ -306,11 +324,13 @@ static int initial_multipliers(ap_dae *s, double t0) {
 
 static int alloc_arrays(ap_dae *s) {
   size_t n = (size_t)s->n, k = (size_t)s->k, b = (size_t)s->b, np = (size_t)s->nphi;
-  s->rows = calloc(b + 1, sizeof *s->rows);
-  s->Phi_q = calloc(np * n + n + k * k + n * k + b * k + np * n + k * b + k * k + 1,
+  s->rows = calloc(b + np + 2, sizeof *s->rows);
+  s->Phi_q = calloc(np * n + np + k * k + n * k + b * k + np * n + k * b + k * k + 1,
                     sizeof *s->Phi_q);
   if (!s->rows || !s->Phi_q) return AP_ERR_NOMEM;
-  s->dq = s->Phi_q + np * n, s->jg = s->dq + n, s->jN = s->jg + k * k, s->jA = s->jN + n * k;
+  s->prows = s->rows + b + 1;
+  s->phi = s->Phi_q + np * n, s->jg = s->phi + np, s->jN = s->jg + k * k;
+  s->jA = s->jN + n * k;
   s->jP = s->jA + b * k, s->Ms = s->jP + np * n, s->gf = s->Ms + k * b;
   return AP_OK;
 }
@@ -359,7 +379,7 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     return rc;
   }
   int n = s->n, k = s->k, nd = n + k;
-  s->ny = nd + s->bs + s->nphi;
+  s->ny = nd + s->bs + s->nps;
   for (int i = 0; i < n; i++) s->qtyp = fmax(s->qtyp, fabs(y0[i]));
   for (int i = 0; i < k; i++) s->vtyp = fmax(s->vtyp, fabs(y0[n + i]));
   if (!(s->qtyp > 0)) s->qtyp = 1.0;
@@ -400,8 +420,9 @@ void ap_dae_state(const ap_dae *s, double *y) {
   int nd = s->n + s->k;
   memcpy(y, x, sizeof(double) * (size_t)nd);
   memset(y + nd, 0, sizeof(double) * (size_t)s->b);
+  memset(y + nd + s->b, 0, sizeof(double) * (size_t)s->nphi);
   for (int c = 0; c < s->bs; c++) y[nd + s->rows[c]] = x[nd + c];
-  memcpy(y + nd + s->b, x + nd + s->bs, sizeof(double) * (size_t)s->nphi);
+  for (int c = 0; c < s->nps; c++) y[nd + s->b + s->prows[c]] = x[nd + s->bs + c];
 }
 
 /* IDA's steps shrank to the round-off of t without a failing evaluation: a model that stops
@@ -472,6 +493,11 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
 int ap_dae_rows(const ap_dae *s, const int **rows) {
   if (rows) *rows = s->rows;
   return s->bs;
+}
+
+int ap_dae_phi_rows(const ap_dae *s, const int **rows) {
+  if (rows) *rows = s->prows;
+  return s->nps;
 }
 
 void ap_dae_stats(const ap_dae *s, ap_step_stats *st) {

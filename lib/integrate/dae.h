@@ -2,11 +2,12 @@
  * residual of DESIGN.md §1 and GGL rows for implicit holonomic constraints (dae.c). Used by
  * sim.c for AP_MODE_DAE. No SUNDIALS type in this header.
  *
- * Redundant constraint rows. IDA carries multipliers only for the independent rows of A,
- * chosen once at creation from A at (t0, q0) by the row-pivoted QR of A^T that ap_partition
- * uses to find (and name) redundant rows; the choice is kept for the whole run. Vectors in this
- * interface are always laid out with all b rows, y = (q, v, lambda (b), mu (nphi)): the
- * multipliers of dropped rows are ignored on input and returned as 0. Whether the dropped rows
+ * Redundant rows. IDA carries multipliers only for the independent rows of A, chosen once at
+ * creation from A at (t0, q0) by the row-pivoted QR of A^T that ap_partition uses to find (and
+ * name) redundant rows, and likewise for the independent rows of phi (a loop closure written
+ * twice); the choice is kept for the whole run. Vectors in this interface are always laid out
+ * with all rows, y = (q, v, lambda (b), mu (nphi)): the multipliers of dropped rows are ignored
+ * on input and returned as 0. Whether the dropped rows
  * are consistent (at t0 and along the motion) is the caller's business: sim.c judges it with
  * ap_partition at t0 and with the orthonormal basis stage after every step, as in the other
  * modes. */
@@ -42,6 +43,8 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y);
 void ap_dae_state(const ap_dae *s, double *y);
 /* The kept constraint rows (ascending, into A's rows); returns their number (<= b). */
 int ap_dae_rows(const ap_dae *s, const int **rows);
+/* The kept rows of phi (ascending); returns their number (<= nphi). */
+int ap_dae_phi_rows(const ap_dae *s, const int **rows);
 void ap_dae_stats(const ap_dae *s, ap_step_stats *st);
 const char *ap_dae_message(const ap_dae *s);
 void ap_dae_free(ap_dae *s);

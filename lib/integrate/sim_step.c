@@ -283,6 +283,19 @@ int ap_drv_after_step_dae(ap_sim *s, double t) {
   rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
+  const int *kept = NULL;
+  int nk = ap_dae_phi_rows(s->dae, &kept);
+  for (int i = 0, c = 0; i < nphi && nk < nphi; i++) {   /* dropped rows of phi: consistent? */
+    if (c < nk && kept[c] == i) {
+      c++;
+      continue;
+    }
+    if (fabs(phi[i]) > s->def.init_tol)
+      return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': an implicit holonomic row dropped "
+                         "as redundant at the start (row %d of phi) is open by %.3g at t = %.17g, "
+                         "more than init_tol %.3g: the loop closures became inconsistent",
+                         m->name, i, phi[i], t, s->def.init_tol);
+  }
   return AP_OK;
 }
 
