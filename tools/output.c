@@ -41,7 +41,7 @@
 
 static volatile sig_atomic_t caught = 0;    /* the first terminating signal, or 0 */
 static volatile sig_atomic_t armed = 0;     /* cleanup_path names a file to remove */
-static char cleanup_path[PATH_MAX + 32];
+static char cleanup_path[sizeof ((cli_out *)0)->tmp];
 static struct sigaction previous[65];       /* the actions replaced for faults */
 
 /* SIGXFSZ and SIGPIPE come from our own writes, once per failed write (a file size limit, a
@@ -107,12 +107,14 @@ void cli_signals_install(void) {
   struct sigaction sa;
   memset(&sa, 0, sizeof sa);
   sigfillset(&sa.sa_mask);   /* one handler at a time */
+  sa.sa_flags = SA_RESTART;  /* a write to a slow reader goes on; the run stops at its poll */
   sa.sa_handler = on_signal;
   for (size_t i = 0; i < sizeof async_signals / sizeof async_signals[0]; i++)
     sigaction(async_signals[i], &sa, NULL);
 #if defined(SIGRTMIN) && defined(SIGRTMAX)
   for (int s = SIGRTMIN; s <= SIGRTMAX; s++) sigaction(s, &sa, NULL);
 #endif
+  sa.sa_flags = 0;
   sa.sa_handler = on_fault;
   for (size_t i = 0; i < sizeof fault_signals / sizeof fault_signals[0]; i++)
     if (fault_signals[i] < 65) sigaction(fault_signals[i], &sa, &previous[fault_signals[i]]);
