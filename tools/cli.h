@@ -2,13 +2,14 @@
  *
  * Exit codes (docs/cli.md): 0 success, 2 bad input (scene, options, CSV columns), 3 numerical
  * failure (the integrator or a pipeline stage failed during the run), 1 internal error (out of
- * memory, a missing program, an I/O failure), 130 interrupted. Only the public API is used. */
+ * memory, a missing program, an I/O failure such as a failed write), 128 + N stopped by signal
+ * N (EXIT_SIGNAL; 130 for SIGINT). Only the public API is used. */
 #ifndef APPELL_CLI_H
 #define APPELL_CLI_H
 
 #include <stddef.h>
 
-enum { EXIT_OK = 0, EXIT_INTERNAL = 1, EXIT_INPUT = 2, EXIT_NUMERIC = 3, EXIT_INTERRUPT = 130 };
+enum { EXIT_OK = 0, EXIT_INTERNAL = 1, EXIT_INPUT = 2, EXIT_NUMERIC = 3 };
 
 /* Exit code of a run stopped by signal sig: 128 + sig (SIGINT 130, SIGTERM 143). */
 #define EXIT_SIGNAL(sig) (128 + (sig))
