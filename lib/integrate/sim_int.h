@@ -34,6 +34,8 @@ struct ap_sim {
   int native_q;             /* CVODE BDF projects q inside its step (ap_drv_proj) */
   double *gn;               /* native_q: Phi_q, Phi_q^T (nphi x n), phi (nphi), work */
   int *gn_iwork;
+  ap_sim_poll_fn poll;      /* called before every internal step (ap_sim_set_poll), or NULL */
+  void *poll_user;
 };
 
 /* printf into s->msg; returns status. */
