@@ -104,7 +104,7 @@ static void test_spinning_ball(void) {
 /* Largest |q - qref|, |v - vref| over NOUT outputs; the steps. */
 static int cvode_run(const ap_model *m, ap_mode mode, const char *method, double rtol,
                      const double *q0, const double *v0, double t_end, double *Q, double *V,
-                     long *steps) {
+                     long *steps, long *restarts) {
   int n = ap_model_n(m), k = ap_model_k(m), rc = AP_ERR_ARG;
   ap_sim *s = bs_start(m, mode, method, rtol, rtol / 100, q0, v0);
   for (int i = 1; s && i <= NOUT; i++) {
@@ -117,7 +117,7 @@ static int cvode_run(const ap_model *m, ap_mode mode, const char *method, double
     memcpy(V + (size_t)(i - 1) * k, ap_sim_v(s), sizeof(double) * (size_t)k);
   }
   ap_sim_stats st;
-  if (s) ap_sim_get_stats(s, &st), *steps = st.steps;
+  if (s) ap_sim_get_stats(s, &st), *steps = st.steps, *restarts = st.restarts;
   ap_sim_free(s);
   return rc;
 }
@@ -127,23 +127,24 @@ static void cvode_case(const char *name, const ap_model *m, const double *q0, co
   const double rtol = 1e-8;
   int n = ap_model_n(m), k = ap_model_k(m);
   double Qr[NOUT * 8], Vr[NOUT * 8], Q[NOUT * 8], V[NOUT * 8];
-  long ref_steps = 0, dp_steps = 0, steps = 0;
+  long ref_steps = 0, dp_steps = 0, steps = 0, restarts = 0;
   AP_CHECK_EQ_INT(cvode_run(m, AP_MODE_MINIMAL, "verner6", 1e-13, q0, v0, t_end, Qr, Vr,
-                            &ref_steps), AP_OK);
+                            &ref_steps, &restarts), AP_OK);
   AP_CHECK_EQ_INT(cvode_run(m, AP_MODE_MINIMAL, "dopri5", rtol, q0, v0, t_end, Q, V,
-                            &dp_steps), AP_OK);
+                            &dp_steps, &restarts), AP_OK);
   double qm = max_abs(Qr, NOUT * n), vm = max_abs(Vr, NOUT * k);
   const char *methods[3] = {"bdf", "adams", "bdf"};
   for (int c = 0; c < 3; c++) {
     ap_mode mode = c == 2 ? AP_MODE_PROJECTED : AP_MODE_MINIMAL;
-    int rc = cvode_run(m, mode, methods[c], rtol, q0, v0, t_end, Q, V, &steps);
+    int rc = cvode_run(m, mode, methods[c], rtol, q0, v0, t_end, Q, V, &steps, &restarts);
     AP_CHECK_EQ_INT(rc, AP_OK);
     double dq = 0.0, dv = 0.0;
     for (int i = 0; i < NOUT * n; i++) dq = fmax(dq, fabs(Q[i] - Qr[i]));
     for (int i = 0; i < NOUT * k; i++) dv = fmax(dv, fabs(V[i] - Vr[i]));
-    printf("%-15s %-5s %-9s rtol %.0e, %.0f s: %6ld steps (dopri5 %ld), dq %.1e (%.0f tol), "
-           "dv %.1e (%.0f tol)\n", name, methods[c], mode ? "projected" : "minimal", rtol, t_end,
-           steps, dp_steps, dq, dq / (rtol * qm + rtol / 100), dv, dv / (rtol * vm + rtol / 100));
+    printf("%-15s %-5s %-9s rtol %.0e, %.0f s: %6ld steps (dopri5 %ld), %ld restarts, dq %.1e "
+           "(%.0f tol), dv %.1e (%.0f tol)\n", name, methods[c], mode ? "projected" : "minimal",
+           rtol, t_end, steps, dp_steps, restarts, dq, dq / (rtol * qm + rtol / 100), dv,
+           dv / (rtol * vm + rtol / 100));
     AP_CHECK(steps <= 5 * dp_steps);
     AP_CHECK_LE(dq, 1e3 * (rtol * qm + rtol / 100));
     AP_CHECK_LE(dv, 1e3 * (rtol * vm + rtol / 100));
