@@ -304,7 +304,8 @@ static int initial_multipliers(ap_dae *s, double t0) {
   int rc = residual(t0, s->yy, s->yp, rr, s) == 0 ? AP_OK : s->res_status;
   if (rc == AP_OK && bs > 0) {
     for (int c = 0; c < bs; c++)
-      for (int i = 0; i < k; i++) s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b];
+      for (int i = 0; i < k; i++)
+        s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b];
     size_t lw = ap_la_work_size(bs, k);
     double *work = calloc(lw, sizeof *work);
     int *iwork = calloc(ap_la_iwork_size(bs, k) + 1, sizeof *iwork);
@@ -445,6 +446,30 @@ static int probe_ahead(ap_dae *s, double t, double tout, double h) {
   return rc;
 }
 
+/* IDA's step failed at tret: the residual's own failure when it stopped IDA, else IDA's
+ * message; when the step had fallen to hmin, what a probe ahead finds first. */
+static int step_failed(ap_dae *s, double tret, double tout, double hmin) {
+  if (s->res_status < 0) {
+    snprintf(s->msg, sizeof s->msg, "%s", s->res_msg);
+    return s->res_status;
+  }
+  double hl = 0.0;
+  IDAGetCurrentStep(s->mem, &hl);
+  int tiny = hmin > 0 && fabs(hl) <= 2.0 * hmin;
+  if (tiny) {
+    int rc = probe_ahead(s, tret, tout, fabs(hl));
+    if (rc != AP_OK) return rc;
+  }
+  char tmp[256];
+  memcpy(tmp, s->msg, sizeof tmp);   /* the handler's text, cut to fit */
+  tmp[sizeof tmp - 1] = '\0';
+  snprintf(s->msg, sizeof s->msg, "IDA failed at t = %.17g for system '%s': %.200s%s%.200s%s",
+           tret, s->m->name, tmp, s->res_status > 0 ? "; last residual failure: " : "",
+           s->res_status > 0 ? s->res_msg : "", tiny ? " (the step size fell to the round-off "
+           "of t: the solution is not smooth there)" : "");
+  return AP_ERR_SOLVER;
+}
+
 int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
   s->res_status = AP_OK;
   /* Never leave a sliver before tout: when the next step h would stop short of tout by less
@@ -462,27 +487,7 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
     return AP_ERR_SOLVER;
   double tret = *t;
   int flag = IDASolve(s->mem, stop, &tret, s->yy, s->yp, IDA_ONE_STEP);
-  if (flag < 0) {
-    if (s->res_status < 0) {
-      snprintf(s->msg, sizeof s->msg, "%s", s->res_msg);
-      return s->res_status;
-    }
-    double hl = 0.0;
-    IDAGetCurrentStep(s->mem, &hl);
-    if (hmin > 0 && fabs(hl) <= 2.0 * hmin) {
-      int rc = probe_ahead(s, tret, tout, fabs(hl));
-      if (rc != AP_OK) return rc;
-    }
-    char tmp[256];
-    memcpy(tmp, s->msg, sizeof tmp);   /* the handler's text, cut to fit */
-    tmp[sizeof tmp - 1] = '\0';
-    snprintf(s->msg, sizeof s->msg, "IDA failed at t = %.17g for system '%s': %.200s%s%.200s%s",
-             tret, s->m->name, tmp, s->res_status > 0 ? "; last residual failure: " : "",
-             s->res_status > 0 ? s->res_msg : "",
-             hmin > 0 && fabs(hl) <= 2.0 * hmin ? " (the step size fell to the round-off of t: the solution "
-             "is not smooth there)" : "");
-    return AP_ERR_SOLVER;
-  }
+  if (flag < 0) return step_failed(s, tret, tout, hmin);
   *t = tret;
   ap_dae_state(s, y);
   return AP_OK;

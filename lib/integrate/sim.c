@@ -72,7 +72,8 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (!s->meth->adaptive && !(def->h_fixed > 0))
     return ap_drv_fail(s, AP_ERR_ARG, "method '%s' needs a positive h_fixed (got %g)",
                          s->meth->name, def->h_fixed);
-  if (!(def->h_init >= 0 && def->h_init <= HUGE_VAL) || !(def->h_max >= 0 && def->h_max <= HUGE_VAL))
+  if (!(def->h_init >= 0 && def->h_init <= HUGE_VAL) ||
+      !(def->h_max >= 0 && def->h_max <= HUGE_VAL))
     return ap_drv_fail(s, AP_ERR_ARG, "h_init and h_max must be >= 0 (0: none; got %g, %g)",
                        def->h_init, def->h_max);
   if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||

@@ -78,12 +78,12 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
 
 /* Body models: unit quaternions and loop closures back on their manifold after each step. The
  * stepper restarts only when something moved. CVODE BDF projects q inside its step
- * (ap_drv_proj), so only the model's checks (lying flat) are left to do here. For CVODE Adams (no native projection) a
- * restart costs the history and the order: the correction is applied only once it exceeds a
- * tenth of the tolerance, and a drift of the quaternions' norms alone (the loops closed) only
- * once it exceeds 1e3 times the tolerance, since rotations use p / |p| and the motion does not
- * depend on |p| (tests/test_robust.c, rolling disk, rtol 1e-8, 5 s: 20 230 restarts in
- * 24 641 steps with the tenth, 491 steps and no restart now). */
+ * (ap_drv_proj), so only the model's checks (lying flat) are left to do here. For CVODE Adams
+ * (no native projection) a restart costs the history and the order: the correction is applied
+ * only once it exceeds a tenth of the tolerance, and a drift of the quaternions' norms alone
+ * (the loops closed) only once it exceeds 1e3 times the tolerance, since rotations use p / |p|
+ * and the motion does not depend on |p| (tests/test_robust.c, rolling disk, rtol 1e-8, 5 s:
+ * 20 230 restarts in 24 641 steps with the tenth, 491 steps and no restart now). */
 static int project_coordinates(ap_sim *s, double t) {
   if (!s->m->ev.project_q) return AP_OK;
   double change = 0.0, *q = s->ytry;   /* project a copy: it may not be applied */
