@@ -45,8 +45,8 @@
  * tolerances left only round-off in the quotient.
  *
  * Tolerances. IDA controls the local error of each BDF step; its global error on the example
- * motions came out 20 to 250 times rtol where the Runge-Kutta methods of the Appell modes stay
- * at 1 to 40 times (measured against rtol 1e-13 runs, docs/architecture.md). So that the
+ * motions came out 4 to 720 times rtol where the Runge-Kutta methods of the Appell modes stay
+ * at 0.1 to 30 times (bench/dae_accuracy.c, docs/architecture.md). So that the
  * cross-check compares like with like, IDA runs at rtol / AP_DAE_TOL_FACTOR (and atol scaled
  * alike), but not below rtol 1e-12, where BDF's error test begins to see round-off.
  *
