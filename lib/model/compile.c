@@ -371,6 +371,7 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->ev.project_q = ap_bm_project_q;
   m->ev.check_q = ap_bm_check_q;
   m->nphi = M->nloop + M->nquat;
+  m->nhol = M->nloop;
   if (m->nphi > 0) m->ev.phi = ap_bm_phi;
   *out = m;
   return AP_OK;
