@@ -128,7 +128,7 @@ typedef struct ap_data {
                            redundant only where the implicit holonomic rows (loop closures,
                            wheel contacts) hold: judged by ap_partition and at accepted steps,
                            not at every evaluation (a stepper's trial states are off that
-                           manifold); default 1e-8, the drivers set 1e3 (rtol + 1e-12) */
+                           manifold); default 1e-8, the drivers set 100 (rtol + 1e-12) */
 
   /* partition (partitioned basis): set by ap_partition, frozen between calls */
   int *perm;           /* (k) perm[0..rank-1] dependent speeds, perm[rank..k-1] independent */

@@ -89,6 +89,38 @@ static void name_redundant(const ap_model *m, ap_data *d, const int *jpvt, int r
               verdict, d->t, rows, resid);
 }
 
+/* The dropped rows that contradict the kept ones, each with its own residual: from the pivoted
+ * QR A^T P = Q R of ap_la_orth_basis (R in the upper triangle of F, ld k), dropped row j is the
+ * combination c = R11^-1 R12[:, j] of the kept rows, and x_j - c . x_kept is its disagreement
+ * (x = a0 or gamma). Rows within tol are listed as consistent. work: b doubles. */
+static int name_inconsistent(const ap_model *m, ap_data *d, const double *F, const int *jpvt,
+                             int r, const double *x, double tol, const char *what,
+                             double *work) {
+  int k = m->k, nbad = 0;
+  char bad[320] = "";
+  size_t used = 0;
+  for (int j = r; j < m->b; j++) {
+    double *c = work, res = x[jpvt[j]];
+    for (int i = r - 1; i >= 0; i--) {   /* R11 c = R12[:, j] */
+      double t = F[i + (size_t)j * k];
+      for (int l = i + 1; l < r; l++) t -= F[i + (size_t)l * k] * c[l];
+      c[i] = t / F[i + (size_t)i * k];
+    }
+    for (int i = 0; i < r; i++) res -= c[i] * x[jpvt[i]];
+    if (!(fabs(res) > tol)) continue;
+    nbad++;
+    if (used + 60 >= sizeof bad) continue;
+    int len = snprintf(bad + used, sizeof bad - used, "%s'%s' (by %.3g)", used ? ", " : "",
+                       m->constraint_names[jpvt[j]], res);
+    if (len > 0) used += (size_t)len;
+  }
+  if (nbad)
+    ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and %d of them "
+                "inconsistent at t = %.17g: %s disagree%s with the combination of the others "
+                "(%s)", m->name, m->b - r, m->b, nbad, d->t, bad, nbad == 1 ? "s" : "", what);
+  return nbad;
+}
+
 /* ---- partition ---------------------------------------------------------------------------- */
 
 static int position_callbacks(const ap_model *m, ap_data *d);
@@ -158,14 +190,16 @@ int ap_partition(const ap_model *m, ap_data *d) {
   double scale = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A,
                                                                        (size_t)m->b * m->k)));
   double tol = d->redundant_manifold ? d->manifold_rtol : consistency_rtol;
-  int bad = resid > tol * scale;
-  char verdict[160];
-  snprintf(verdict, sizeof verdict, "%s%s", bad ? "inconsistent: the free terms a0 disagree"
-           : "consistent, dropped", !d->redundant_manifold ? "" : d->redundant_manifold ==
-           d->redundant ? "; only where the loops and contacts close" : "; some only where the "
-           "loops and contacts close");
-  name_redundant(m, d, s->jpvt, rr, verdict, resid);
-  return bad ? AP_ERR_INCONSISTENT : AP_OK;
+  if (resid > tol * scale) {
+    name_inconsistent(m, d, s->F, s->jpvt, rr, d->a0, tol * scale, "the free terms a0",
+                      s->work);
+    return AP_ERR_INCONSISTENT;
+  }
+  name_redundant(m, d, s->jpvt, rr, !d->redundant_manifold ? "consistent, dropped"
+                 : d->redundant_manifold == d->redundant ? "consistent, dropped; only where "
+                 "the loops and contacts close" : "consistent, dropped; some only where the "
+                 "loops and contacts close", resid);
+  return AP_OK;
 }
 
 /* ---- position stage ---------------------------------------------------------------------- */
@@ -262,11 +296,15 @@ int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
   if (ap_la_orth_basis(m->b, m->k, d->A, d->a0, -1.0, &rr, s->F, s->tau, s->jpvt, s->Qf, s->gB,
                        s->tk1, &resid, s->work, s->iwork) != AP_OK)
     return AP_ERR_INCONSISTENT;
-  char verdict[200];
-  snprintf(verdict, sizeof verdict, "inconsistent along the motion: %s relative %.3g, more "
-           "than manifold_rtol %.3g", bad_a ? "the rows or a0 disagree by" : "gamma disagrees by",
-           bad_a ? d->resid_a0 / sa : d->resid_gamma / sg, tol);
-  name_redundant(m, d, s->jpvt, rr, verdict, bad_a ? d->resid_a0 : d->resid_gamma);
+  if (!name_inconsistent(m, d, s->F, s->jpvt, rr, bad_a ? d->a0 : d->gamma,
+                         tol * (bad_a ? sa : sg), bad_a ? "the free terms a0" : "gamma",
+                         s->work)) {
+    char verdict[160];
+    snprintf(verdict, sizeof verdict, "inconsistent along the motion: %s by %.3g relative, "
+             "more than manifold_rtol %.3g", bad_a ? "the rows drifted apart" : "gamma",
+             bad_a ? d->resid_a0 / sa : d->resid_gamma / sg, tol);
+    name_redundant(m, d, s->jpvt, rr, verdict, bad_a ? d->resid_a0 : d->resid_gamma);
+  }
   return AP_ERR_INCONSISTENT;
 }
 

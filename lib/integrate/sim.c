@@ -176,7 +176,7 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   /* Rows redundant only where the loops and wheel contacts close: judged at accepted states,
    * which lie off that manifold by the projection tolerance or, for CVODE, by up to a tenth of
    * the step tolerance (docs/vehicles.md "Redundant rows"). */
-  s->d->manifold_rtol = 1e3 * (s->def.rtol + 1e-12);
+  s->d->manifold_rtol = 100 * (s->def.rtol + 1e-12);
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
   if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0);
