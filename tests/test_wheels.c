@@ -273,10 +273,21 @@ static void test_two_forms(void) {
       ap_body_get_state(m1, ap_sim_data(s1), 0, &st);
       height = fmax(height, fabs(st.contact[2]));
     }
+    /* The contact force: the plane-contact joint's normal force comes from Newton's law, the
+     * wheel contact's is the multiplier of its row .z; friction: the rolling multipliers. */
+    const double *l0 = NULL, *l1 = NULL;
+    ap_contact_force f0, f1;
+    AP_CHECK(ap_sim_reactions(s0, &l0) == AP_OK && ap_sim_reactions(s1, &l1) == AP_OK);
+    AP_CHECK(ap_body_contact_force(m0, ap_sim_data(s0), l0, 0, &f0) == AP_OK);
+    AP_CHECK(ap_body_contact_force(m1, ap_sim_data(s1), l1, 0, &f1) == AP_OK);
+    double dforce = 0.0;
+    for (int i = 0; i < 3; i++) dforce = fmax(dforce, fabs(f0.force[i] - f1.force[i]));
     ap_sim_stats st0, st1;
     ap_sim_get_stats(s0, &st0), ap_sim_get_stats(s1, &st1);
-    printf("  %-9s centre %.1e m, quaternion %.1e, contact height %.1e m; steps %ld / %ld\n",
-           names[mi], dpos, dquat, height, st0.steps, st1.steps);
+    printf("  %-9s centre %.1e m, quaternion %.1e, contact height %.1e m, contact force %.1e N "
+           "(F_n %.6f N); steps %ld / %ld\n", names[mi], dpos, dquat, height, dforce, f1.normal,
+           st0.steps, st1.steps);
+    AP_CHECK_LE(dforce, 1e-9 * fabs(f0.normal));
     double bound = (mi == 2 ? 1e3 : 10) * def.rtol;
     AP_CHECK_LE(dpos, bound);
     AP_CHECK_LE(dquat, bound);
