@@ -105,8 +105,8 @@ static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double
   int rc = ap_body_loop_residual(s->m, d, &phi);
   if (rc == AP_OK && phi > s->def.init_tol)
     return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
-                         "loop closures open by %.3g m, more than init_tol %.3g: close them first "
-                         "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
+                         "loop closures or wheel contacts open by %.3g m, more than init_tol %.3g: "
+                         "close them first (ap_body_project_q)", s->m->name, phi, s->def.init_tol);
   if (rc == AP_OK) rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                       d->msg);

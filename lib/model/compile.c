@@ -3,8 +3,9 @@
  * Order: bodies (mass, inertia symmetric, positive definite and physical, shape), joints
  * (references, frames, axes, drives), tree (each body the child of exactly one joint, no
  * cycles; joints sorted parents first), coordinates and speeds (driven ones eliminated),
- * constraints (references, directions, row layout), effects, degrees of freedom; then names
- * ("disk.x", "disk.qw", "roll.x"), the scratch layout and the ap_model with its evaluator.
+ * constraints (compile_con.c: references, directions, row layout), effects, degrees of
+ * freedom; then names ("disk.x", "disk.qw", "roll.x"), the scratch layout and the ap_model
+ * with its evaluator.
  * Every message names the element and the offending number. */
 #include <stdio.h>
 #include <stdlib.h>

@@ -18,6 +18,7 @@ static int finite_n(const double *x, int n) {
   return 1;
 }
 
+/* ---- references and directions ------------------------------------------------------------ */
 
 static int check_body_ref(ap_builder *b, const char *nm, const char *what, int body,
                           int ground_ok) {
@@ -171,8 +172,7 @@ int ap_compile_constraints(ap_builder *b, ap_bmodel *M) {
   return AP_OK;
 }
 
-
-/* ---- names ---- */
+/* ---- row names ---------------------------------------------------------------------------- */
 
 const char *ap_con_row_suffix(const ap_mcon *c, int r, char *buf) {
   static const char *const xyz[] = {".x", ".y", ".z"};

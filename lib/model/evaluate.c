@@ -3,8 +3,9 @@
  * Position stage: kinematics at (t, q) -> g, N (quaternion blocks), A, a0.
  * Velocity stage: body velocities and bias accelerations at v -> h, Q, gamma.
  * project_q (after each accepted step): quaternions back to unit norm when they drifted by more
- * than AP_QUAT_TOL, then loop closures phi(q, t) = 0 by Gauss-Newton with minimum-norm steps
- * dv (lstsq on the loop Jacobian) mapped to q through N. Corrections below the tolerances are
+ * than AP_QUAT_TOL, then loop closures and wheel contacts phi(q, t) = 0 (the implicit
+ * holonomic rows) by Gauss-Newton with minimum-norm steps dv (lstsq on their Jacobian) mapped
+ * to q through N. Corrections below the tolerances are
  * not applied, so the stepper restarts only when something really moved.
  * Everything writes into the data's scratch; the model is never modified.
  * Counters (d->cnt, as the core counts a math-level system's callbacks): metric, kinematic
@@ -104,6 +105,17 @@ static double max_abs(const double *x, int n) {
   return mx;
 }
 
+/* The constraint row of the largest |phi| among the implicit holonomic rows. */
+static int hol_row(const ap_bmodel *M, const double *phi) {
+  int worst = 0, s = 0;
+  for (int i = 1; i < M->nloop; i++)
+    if (fabs(phi[i]) > fabs(phi[worst])) worst = i;
+  for (int ci = 0; ci < M->nc; ci++)
+    for (int r = 0; r < M->cons[ci].nhol; r++, s++)
+      if (s == worst) return M->cons[ci].row + M->cons[ci].hrow + r;
+  return 0;
+}
+
 static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
   const ap_bmodel *M = ap_bm(m);
   int k = M->k, nl = M->nloop;
@@ -124,9 +136,9 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
     step_q(M, q, dv);
     for (int c = 0; c < k; c++) *change += fabs(dv[c]);
   }
-  AP_BM_MSG(d, "model '%s': the loop closures cannot be closed at t = %.17g: residual %.3g m "
-            "after %d Gauss-Newton steps (tolerance %.3g m)", m->name, d->t, err, AP_LOOP_ITER,
-            tol);
+  AP_BM_MSG(d, "model '%s': the loop closures and wheel contacts cannot be closed at "
+            "t = %.17g: row '%s' is off by %.3g m after %d Gauss-Newton steps (tolerance %.3g m)",
+            m->name, d->t, m->constraint_names[hol_row(M, phi)], err, AP_LOOP_ITER, tol);
   return AP_ERR_INCONSISTENT;
 }
 
@@ -220,7 +232,8 @@ int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
 
 /* ---- implicit holonomic constraints for the DAE mode (GGL) ----------------------------------
  *
- * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c). Their Jacobian with
+ * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c) and the wheel contacts'
+ * rows .z, phi = the contact point's height (contact.c). Their Jacobian with
  * respect to the speeds, Jl = d phi' / d v = Phi_q N, comes from ap_con_loops; it is mapped to
  * q joint by joint: a scalar coordinate has N = 1 against its speed, so its column of Phi_q is
  * Jl's; a quaternion p enters phi only through R(p / |p|), so Phi_q p = 0, and
