@@ -5,12 +5,7 @@
  * surface moves with Vg(p, t) = V(t) + Omega(t) e_z x (p - center); along a point moving at p'
  * its rate is Ag = V' + Omega' e_z x (p - center) + Omega e_z x p'.
  *
- *  rolling   rc = R c_b (contact vector), vP = vo + w x rc (material contact point),
- *            rows e_i . (vP - Vg(o + rc)), i = x, y; no-spin row e_z . w - Omega.
- *            gamma_i = -e_i . (ao + al x rc + w x (w x rc) + w x R c_b' - Ag), where
- *            c_b' = H u', u' = R^T (w x e_z), and Ag is taken along the geometric contact point
- *            p' = vP + R c_b'. The term w x R c_b' is the contact point moving over the body
- *            surface: for a sphere it cancels w x (w x rc) exactly (rc' = 0).
+ *  rolling   and the wheel's knife edge: rows at the shape's contact point (contact.c).
  *  knife     n = R dir; row n . (vP - Vg(x)) at the body point x;
  *            gamma = -((w x n) . (vP - Vg) + n . (aP - Ag)), aP = ao + al x r + w x (w x r).
  *  speed     row v_j - f(t); gamma = f'(t).
