@@ -57,9 +57,10 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S) {
     W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
     if (ap_shape_support(&B->shape, W.u, &sigma, W.cb, W.H, &flat) != 0) {
       AP_BM_MSG(d, "model '%s': body '%s': the %s of constraint '%s' lies flat on the ground "
-                "plane at t = %.17g (its axis is %.3g degrees from the vertical; flat_tol %.3g): "
-                "the contact point is undefined", m->name, B->name,
-                B->shape.kind == AP_SHAPE_DISK ? "disk" : "torus", c->name, t,
+                "plane at t = %.17g (its axis, the body z axis, is %.3g degrees from the "
+                "vertical; flat_tol %.3g): the contact point is undefined (a wheel on an axle "
+                "needs its joint frame turned so that body z lies along the axle)", m->name,
+                B->name, B->shape.kind == AP_SHAPE_DISK ? "disk" : "torus", c->name, t,
                 asin(fmin(1.0, flat)) * 57.29577951308232, B->shape.flat_tol);
       return AP_RECOVERABLE;
     }
