@@ -156,13 +156,13 @@ static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n
   if (turn > 0)
     AP_BM_MSG(d, "model '%s': body '%s': the %s passed through lying flat between t = %.17g "
               "and t = %.17g (its contact point jumped %.0f degrees round the rim): a falling "
-              "%s hits the ground with its face, which the plane-contact joint does not "
+              "%s hits the ground with its face, which a single contact point does not "
               "describe", m->name, B->name, what, t_prev, d->t, turn, what);
   else
     AP_BM_MSG(d, "model '%s': body '%s': the %s reached lying flat at t = %.17g (its axis is "
               "%.3g degrees from the vertical, within 2 flat_tol = %.3g): the contact point is "
-              "undefined and a falling %s hits the ground with its face, which the "
-              "plane-contact joint does not describe", m->name, B->name, what, d->t,
+              "undefined and a falling %s hits the ground with its face, which a single "
+              "contact point does not describe", m->name, B->name, what, d->t,
               asin(fmin(n, 1.0)) * 57.29577951308232, 2 * B->shape.flat_tol, what);
   return AP_ERR_SINGULAR;
 }
