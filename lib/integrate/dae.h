@@ -41,6 +41,17 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y);
 /* IDA's current state in y (n + k + b + nphi); right after creation, the initial values with
  * IDA's multipliers. */
 void ap_dae_state(const ap_dae *s, double *y);
+/* After an accepted step, with the position stage at that state in the data: choose the kept
+ * rows again when they have become much worse conditioned than the rows the QR would choose
+ * now (rows redundant only where loops and contacts close can change place along the motion).
+ * Returns 1 when they changed (the caller must then call ap_dae_restart), 0 when not, or a
+ * negative status. */
+int ap_dae_review_rows(ap_dae *s, double rank_rtol);
+/* Restart IDA at (t, y) (n + k + b + nphi; lambda recomputed for the kept rows, mu = 0) with
+ * q' = qdot, v' = vdot (the Appell solve there), first step h0 (0: IDA's choice). The history
+ * is lost: BDF starts again at order 1. */
+int ap_dae_restart(ap_dae *s, double t, const double *y, const double *qdot, const double *vdot,
+                   double h0);
 /* The kept constraint rows (ascending, into A's rows); returns their number (<= b). */
 int ap_dae_rows(const ap_dae *s, const int **rows);
 /* The kept rows of phi (ascending); returns their number (<= nphi). */

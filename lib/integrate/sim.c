@@ -111,8 +111,8 @@ static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double
   int rc = ap_body_loop_residual(s->m, d, &phi);
   if (rc == AP_OK && phi > s->def.init_tol)
     return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
-                         "loop closures open by %.3g m, more than init_tol %.3g: close them first "
-                         "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
+                         "loop closures or wheel contacts open by %.3g m, more than init_tol %.3g: "
+                         "close them first (ap_body_project_q)", s->m->name, phi, s->def.init_tol);
   if (rc == AP_OK) rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                       d->msg);
@@ -126,9 +126,9 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
   memcpy(s->v, v0, sizeof(double) * (size_t)s->k);
   if (s->m->b == 0 && s->def.mode != AP_MODE_MINIMAL) return AP_OK;
-  /* Rank and redundant rows, in every mode: inconsistent rows are refused with their names;
-   * consistent ones are dropped (the partition, the orthonormal basis and the DAE's kept rows
-   * make the same choice) and named in the warning. */
+  /* Rank, redundant rows and which redundancy is structural, in every mode: inconsistent rows
+   * are refused with their names; consistent ones are dropped (the partition, the orthonormal
+   * basis and the DAE's kept rows make the same choice) and named in the warning. */
   int rc = ap_partition(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   if (s->m->b == 0) return AP_OK;
@@ -162,14 +162,7 @@ static int setup_dae(ap_sim *s) {
   memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
-  /* First step: IDA's own guess from |y'| is far too small at tight tolerances. Use the BDF1
-   * local error h^2 |q''| / 2 = rtol |q| + atol (IDA's tolerances, ap_dae_rtol) with
-   * q'' ~ N v' from the Appell solve. */
-  double qmax = 0.0, amax = 0.0;
-  for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(s->y[i]));
-  for (int i = 0; i < s->k; i++) amax = fmax(amax, fabs(d->vdot[i]));
-  double h0 = s->def.h_init, rt = ap_dae_rtol(s->def.rtol), at = s->def.atol * rt / s->def.rtol;
-  if (!(h0 > 0) && amax > 0) h0 = sqrt(2.0 * (rt * fmax(1.0, qmax) + at) / amax);
+  double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, s->y, d->vdot);
   ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL};
   int rc = ap_dae_create(s->m, d, s->t, s->y, yp, &o, s->def.rank_rtol, &s->dae, s->msg,
                          sizeof s->msg);
@@ -182,6 +175,10 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
   if (rc != AP_OK) return rc == AP_ERR_NOMEM ? ap_drv_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
+  /* Rows redundant only where the loops and wheel contacts close: judged at accepted states,
+   * which lie off that manifold by the projection tolerance or, for CVODE, by up to a tenth of
+   * the step tolerance (docs/vehicles.md "Redundant rows"). */
+  s->d->manifold_rtol = 100 * (s->def.rtol + 1e-12);
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
   if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0);

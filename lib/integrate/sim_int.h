@@ -56,7 +56,13 @@ int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user
  * coordinates onto their manifold, then the mode's own work (re-partition, projection,
  * residuals). May restart the stepper. */
 int ap_drv_after_step(ap_sim *s, double t);
-/* After an accepted IDA step (DAE mode): checks and residuals only. */
+/* IDA's first step from (q, v'): IDA's own guess from |y'| is far too small at tight
+ * tolerances; the BDF1 local error h^2 |q''| / 2 = rtol |q| + atol at IDA's tolerances
+ * (ap_dae_rtol) with q'' ~ N v' from the Appell solve gives it. 0 when v' = 0. */
+double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
+/* After an accepted IDA step (DAE mode; the state in s->ytry): checks and residuals, and with
+ * redundant rows a new choice of kept rows when the old one degraded (IDA restarts then, and
+ * s->ytry gets its multipliers). */
 int ap_drv_after_step_dae(ap_sim *s, double t);
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 int ap_drv_evaluate_current(ap_sim *s);

@@ -257,7 +257,11 @@ static int after_step_projected(ap_sim *s, double t) {
  * or torus reaching lying flat stops the run); the velocity-constraint residual (all rows) and
  * |phi| are recorded. With redundant rows (IDA keeps only the independent ones chosen at t0)
  * the orthonormal basis stage judges, as in projected mode, that the rank has not changed and
- * that the dropped rows' a0 and gamma stay consistent. */
+ * that the dropped rows' a0 and gamma stay consistent (rows redundant only where the loops and
+ * wheel contacts close: against manifold_rtol, ap_core_judge_redundant). */
+static int dropped_phi_rows(ap_sim *s, double t, const double *phi);
+static int review_rows(ap_sim *s, double t);
+
 int ap_drv_after_step_dae(ap_sim *s, double t) {
   ap_data *d = s->d;
   const ap_model *m = s->m;
@@ -274,6 +278,7 @@ int ap_drv_after_step_dae(ap_sim *s, double t) {
                        "t = %.17g (DAE mode keeps the independent rows chosen at the start)",
                        m->name, ap_dae_rows(s->dae, NULL), d->rank, t);
   if (rc == AP_OK && redundant) rc = ap_fwd_velocity(m, d);
+  if (rc == AP_OK && redundant) rc = ap_core_judge_redundant(m, d);   /* of the manifold */
   d->basis = AP_BASIS_NONE;
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   if (m->b > 0)
@@ -283,6 +288,16 @@ int ap_drv_after_step_dae(ap_sim *s, double t) {
   rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
   for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
+  rc = dropped_phi_rows(s, t, phi);
+  return rc == AP_OK ? review_rows(s, t) : rc;
+}
+
+/* ---- DAE mode: redundant rows --------------------------------------------------------------- */
+
+/* Dropped rows of phi must stay closed (within init_tol). */
+static int dropped_phi_rows(ap_sim *s, double t, const double *phi) {
+  const ap_model *m = s->m;
+  int nphi = m->ev.phi ? m->nphi : 0;
   const int *kept = NULL;
   int nk = ap_dae_phi_rows(s->dae, &kept);
   for (int i = 0, c = 0; i < nphi && nk < nphi; i++) {   /* dropped rows of phi: consistent? */
@@ -299,14 +314,58 @@ int ap_drv_after_step_dae(ap_sim *s, double t) {
   return AP_OK;
 }
 
+double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot) {
+  double qmax = 0.0, amax = 0.0, rt = ap_dae_rtol(s->def.rtol);
+  double at = s->def.atol * rt / s->def.rtol;
+  for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(q[i]));
+  for (int i = 0; i < s->k; i++) amax = fmax(amax, fabs(vdot[i]));
+  return amax > 0 ? sqrt(2.0 * (rt * fmax(1.0, qmax) + at) / amax) : 0.0;
+}
+
+/* With redundant rows: when the kept ones degraded (ap_dae_review_rows), restart IDA at the
+ * accepted state (s->ytry) from the Appell solve there, with the new choice. */
+static int review_rows(ap_sim *s, double t) {
+  const ap_model *m = s->m;
+  ap_data *d = s->d;
+  int nphi = m->ev.phi ? m->nphi : 0;
+  if (ap_dae_rows(s->dae, NULL) == m->b && ap_dae_phi_rows(s->dae, NULL) == nphi) return AP_OK;
+  ap_drv_load_state(s, t, s->ytry);
+  d->basis = AP_BASIS_NONE;
+  int rc = ap_fwd_position(m, d);
+  if (rc == AP_OK) rc = ap_dae_review_rows(s->dae, s->def.rank_rtol);
+  if (rc <= 0) return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", d->msg);
+  d->basis = AP_BASIS_ORTHONORMAL;   /* the Appell solve gives q', v' */
+  rc = ap_forward(m, d);
+  d->basis = AP_BASIS_NONE;
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+  rc = ap_dae_restart(s->dae, t, s->ytry, d->qdot, d->vdot, ap_drv_dae_h0(s, s->ytry, d->vdot));
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
+  ap_dae_state(s->dae, s->ytry);
+  s->stats.restarts++;
+  return AP_OK;
+}
+
+/* Rows redundant only on the holonomic manifold are not judged at trial states (they lie off
+ * it); here, at the accepted and projected state, their residuals must be within
+ * manifold_rtol. */
+static int judge_redundant(ap_sim *s, double t) {
+  ap_data *d = s->d;
+  ap_drv_load_state(s, t, s->y);
+  int rc = ap_fwd_position(s->m, d);
+  if (rc == AP_OK) rc = ap_fwd_velocity(s->m, d);
+  if (rc == AP_OK) rc = ap_core_judge_redundant(s->m, d);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+}
+
 int ap_drv_after_step(ap_sim *s, double t) {
   int rc = project_coordinates(s, t);
   if (rc != AP_OK) return rc;
   switch (s->def.mode) {
-    case AP_MODE_MINIMAL: return after_step_minimal(s, t);
-    case AP_MODE_PLAIN: return after_step_plain(s, t);
-    default: return after_step_projected(s, t);
+    case AP_MODE_MINIMAL: rc = after_step_minimal(s, t); break;
+    case AP_MODE_PLAIN: rc = after_step_plain(s, t); break;
+    default: rc = after_step_projected(s, t); break;
   }
+  return rc == AP_OK && s->d->redundant_manifold ? judge_redundant(s, t) : rc;
 }
 
 /* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the
