@@ -5,7 +5,8 @@
  * Redundant rows. IDA carries multipliers only for the independent rows of A, chosen once at
  * creation from A at (t0, q0) by the row-pivoted QR of A^T that ap_partition uses to find (and
  * name) redundant rows, and likewise for the independent rows of phi (a loop closure written
- * twice); the choice is kept for the whole run. Vectors in this interface are always laid out
+ * twice); the choice is kept along the motion, and made again (IDA restarted) only when it has
+ * degraded (ap_dae_review_rows). Vectors in this interface are always laid out
  * with all rows, y = (q, v, lambda (b), mu (nphi)): the multipliers of dropped rows are ignored
  * on input and returned as 0. Whether the dropped rows
  * are consistent (at t0 and along the motion) is the caller's business: sim.c judges it with
