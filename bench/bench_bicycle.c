@@ -8,10 +8,11 @@
  *           from e'), at the scene's initial state: median and spread over `blocks` blocks of
  *           `reps` evaluations (thread CPU time), evaluations per second; the target is under
  *           8 us (PyDy's generated bicycle right-hand side: 8.34 us);
- *   run     10 s at rtol 1e-8 (atol 1e-10; dopri5, and IDA in DAE mode) in every mode: steps,
- *           evaluations, CPU time, and the error against a run at rtol 1e-13 (minimal mode):
- *           the largest difference of the lean, the steer (rad) and the rear wheel centre's
- *           x, y (m) at 0.01 s outputs.
+ *   run     10 s at rtol 1e-8 (--rtol; atol 1e-2 rtol; dopri5, and IDA in DAE mode) in every
+ *           mode: steps, evaluations, CPU time, the largest contact row |phi| (the wheels'
+ *           lowest points off the ground, not timed) and the error against a run at rtol 1e-13
+ *           (minimal mode): the largest difference of the lean, the steer (rad) and the rear
+ *           wheel centre's x, y (m) at 0.01 s outputs.
  * Instructions do not depend on the load of the machine:
  *   valgrind --tool=callgrind --toggle-collect=eval_block build/bench/bench_bicycle \
  *       --only bicycle --reps 1000 --blocks 3 --loads 1 --no-run
@@ -19,7 +20,7 @@
  * (printed as the divisor); --toggle-collect=load_one counts the loads with their initial
  * states (a warm-up, `loads` timed ones and the one evaluated: divide by loads + 2).
  * Usage: bench_bicycle [--only bicycle|rolling_disk] [--reps N] [--blocks N] [--loads N]
- *                      [--no-run]
+ *                      [--rtol X] [--no-run]
  * Run with OPENBLAS_NUM_THREADS=1. */
 #include <math.h>
 #include <stdio.h>
@@ -150,13 +151,30 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
   int n = ap_model_n(m), iq = ap_model_find_coord(m, "rear_frame.qw");
   int ix = ap_model_find_coord(m, "rear_frame.x"), is = ap_model_find_coord(m, "front_frame.angle");
   if (iq < 0 || ix < 0 || is < 0) die("bicycle", "coordinates not found");
+  int wheel[2] = {ap_model_find_body(m, "rear_wheel"), ap_model_find_body(m, "front_wheel")};
   char msg[1024];
   ap_sim *sim = NULL;
-  double t0 = now_ns(), ang = 0, pos = 0;
+  ap_data *d = NULL;
+  double t0 = now_ns(), ang = 0, pos = 0, phi = 0, cpu = 0;
+  if (ap_data_create(m, &d) != AP_OK) die("run", "ap_data_create");
   if (ap_sim_create(m, &run.sim, 0, x, x + n, &sim, msg, sizeof msg) != AP_OK) die("run", msg);
   for (int i = 0; i <= NOUT; i++) {
-    if (i > 0 && ap_sim_advance(sim, 0.01 * i) != AP_OK) die("run", ap_sim_message(sim));
+    if (i > 0 && ap_sim_advance(sim, 0.01 * i) != AP_OK) {
+      printf("%-13s run   mode %d rtol %.0e failed: %s\n", "bicycle", (int)mode, rtol,
+             ap_sim_message(sim));
+      ap_sim_free(sim), ap_data_free(d);
+      return;
+    }
     const double *q = ap_sim_q(sim), *p = q + iq;
+    double t1 = now_ns();           /* the contact rows, outside the timed part */
+    ap_body_state st;
+    memcpy(d->q, q, sizeof(double) * (size_t)n);
+    memcpy(d->v, ap_sim_v(sim), sizeof(double) * (size_t)ap_model_k(m));
+    d->t = 0.01 * i;
+    for (int w = 0; w < 2; w++)
+      if (ap_body_eval(m, d) == AP_OK && ap_body_get_state(m, d, wheel[w], &st) == AP_OK)
+        phi = fmax(phi, fabs(st.contact[2]));
+    cpu -= now_ns() - t1;
     double nn = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
     double *o = tr->v[i];
     o[0] = acos(1 - 2 * (p[1] * p[1] + p[2] * p[2]) / nn) - acos(-1.0) / 2;   /* tilt - pi/2 */
@@ -165,13 +183,15 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
       ang = fmax(ang, fmax(fabs(o[0] - ref->v[i][0]), fabs(o[1] - ref->v[i][1]))),
       pos = fmax(pos, fmax(fabs(o[2] - ref->v[i][2]), fabs(o[3] - ref->v[i][3])));
   }
-  double cpu = (now_ns() - t0) * 1e-9;
+  cpu = (cpu + now_ns() - t0) * 1e-9;
   ap_sim_stats st;
   ap_sim_get_stats(sim, &st);
+  ap_data_free(d);
   const char *mn = mode == AP_MODE_MINIMAL ? "minimal" : mode == AP_MODE_PROJECTED ? "projected"
                                                                                     : "dae";
   printf("%-13s run   %-9s rtol %.0e  steps %6ld  evals %7ld  cpu %6.3f s", "bicycle", mn,
          rtol, st.steps, st.rhs_evals, cpu);
+  printf("  contact rows %.1e m", phi);
   if (ref) printf("  error: lean, steer %.1e rad; x, y %.1e m", ang, pos);
   printf("\n");
   ap_sim_free(sim);
@@ -180,16 +200,19 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
 int main(int argc, char **argv) {
   const char *only = NULL;
   int reps = 20000, blocks = 9, loads = 51, runs = 1;
+  double rtol = 1e-8;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
     else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = atoi(argv[++i]);
     else if (strcmp(argv[i], "--blocks") == 0 && i + 1 < argc) blocks = atoi(argv[++i]);
     else if (strcmp(argv[i], "--loads") == 0 && i + 1 < argc) loads = atoi(argv[++i]);
+    else if (strcmp(argv[i], "--rtol") == 0 && i + 1 < argc) rtol = atof(argv[++i]);
     else if (strcmp(argv[i], "--no-run") == 0) runs = 0;
     else die("usage", "bench_bicycle [--only bicycle|rolling_disk] [--reps N] [--blocks N] "
-             "[--loads N] [--no-run]");
+             "[--loads N] [--rtol X] [--no-run]");
   }
-  if (reps < 1 || blocks < 1 || loads < 1) die("usage", "--reps, --blocks, --loads must be > 0");
+  if (reps < 1 || blocks < 1 || loads < 1 || !(rtol > 0))
+    die("usage", "--reps, --blocks, --loads and --rtol must be > 0");
   const char *names[2] = {"rolling_disk", "bicycle"};
   for (int c = 0; c < 2; c++) {
     if (only && strcmp(only, names[c]) != 0) continue;
@@ -202,7 +225,7 @@ int main(int argc, char **argv) {
     if (runs && c == 1) {
       static track ref, tr;
       bench_run(sc, x, AP_MODE_MINIMAL, 1e-13, &ref, NULL);
-      for (int mode = 0; mode < 3; mode++) bench_run(sc, x, (ap_mode)mode, 1e-8, &tr, &ref);
+      for (int mode = 0; mode < 3; mode++) bench_run(sc, x, (ap_mode)mode, rtol, &tr, &ref);
     }
     ap_scene_free(sc);
   }
