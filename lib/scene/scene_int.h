@@ -158,6 +158,8 @@ typedef struct sc_eff {
   ap_effect_def def;
   sc_expr force[3], torque[3];
   int timed;               /* some component depends on t: use the wrench callback */
+  sc_expr value;           /* joint_torque, joint_force: the value; motor: the set-point */
+  int is_torque;           /* written as joint_torque (an AP_EFFECT_JOINT_FORCE) */
 } sc_eff;
 
 /* Output channels (bit mask). */
@@ -195,6 +197,11 @@ typedef struct sc_scene {
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
 int sc_parse_con_eff(sc_ctx *c, sc_scene *s);
+/* Joint effects (parse_act.c): the scene kinds joint_torque, joint_force, motor. */
+enum { SC_EFF_TORQUE = 0, SC_EFF_FORCE = 1, SC_EFF_MOTOR = 2 };
+int sc_parse_joint_effect(sc_ctx *c, sc_scene *s, const sc_node *n, sc_eff *e, int which);
+/* A value node (number or expression) into e and d->value, d->value_fn (user = e). */
+int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effect_def *d);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
