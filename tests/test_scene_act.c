@@ -6,6 +6,13 @@
  * and settings and is compared with a closed form at every output row:
  *   act_flywheel.yaml   rate motor, saturated then exponential (as test_actuators)
  *   act_torque_t.yaml   joint torque 0.1 cos(t) on a flywheel from rest: w = 0.1 sin(t) / I
+ *   act_spring.yaml     torque "-3*hinge.angle": a = a0 cos(W t) + (w0 / W) sin(W t),
+ *                       W = sqrt(k / I)
+ *   act_slider.yaml     vertical slider, force "-40*slider.position - 0.8*slider.pos_dot":
+ *                       damped oscillation about -m g / k
+ *   act_follow.yaml     angle motor with set-point "leader.angle" (leader at 3 rad/s): the
+ *                       follower lags by kd w / kp (no feed-forward of a state set-point)
+ * and the partial derivatives of a state expression from the evaluator's jets (exact).
  * Tolerances: 100 x the scene's rtol times the scale of the solution, as in test_actuators.
  * The source directory comes as argv[1] (meson passes it). */
 #include <math.h>
@@ -45,15 +52,35 @@ static const bad_case bad[] = {
      "no joint named 'wheeel' (did you mean 'wheel'?)"},
     {"act_motor_driven.yaml", "act_motor_driven.yaml:8:31: effects.servo.joint:",
      "the angle of joint 'arm' is driven"},
+    {"act_state_unknown.yaml", "act_state_unknown.yaml:6:54: effects.spring.torque:",
+     "unknown name 'hinge.angel' in expression '-3*hinge.angel' (column 4 of the value; did "
+     "you mean 'hinge.angle'?)"},
+    {"act_state_driven.yaml", "act_state_driven.yaml:8:46: effects.follow.angle:",
+     "reads 'arm.angle', a driven coordinate"},
+    {"act_state_not_finite.yaml", "act_state_not_finite.yaml:6:54: effects.spring.torque:",
+     "is not finite at t = 0: log(-0.6) = nan (column 4 of the expression)"},
 };
+
+/* Load a scene and, if that works, make its initial state (where values of the state are
+ * checked). */
+static int load_and_init(const char *file, char *msg, size_t len) {
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load(file, NULL, 0, &sc, msg, len);
+  if (rc == AP_OK) {
+    const ap_model *m = ap_scene_model(sc);
+    double *x = calloc((size_t)(ap_model_n(m) + ap_model_k(m)), sizeof *x);
+    rc = ap_scene_initial_state(sc, x, x + ap_model_n(m), NULL, 0, msg, len);
+    free(x);
+  }
+  ap_scene_free(sc);
+  return rc;
+}
 
 static void test_bad_scenes(void) {
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     char file[1200], msg[1024] = "";
     snprintf(file, sizeof file, "%s/tests/scenes/%s", srcdir, bad[i].file);
-    ap_scene *sc = NULL;
-    int rc = ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg);
-    ap_scene_free(sc);
+    int rc = load_and_init(file, msg, sizeof msg);
     AP_CHECK_EQ_INT(rc, AP_ERR_ARG);
     int where = strstr(msg, bad[i].where) != NULL, what = strstr(msg, bad[i].what) != NULL;
     AP_CHECK(where && what);
@@ -69,8 +96,10 @@ static void test_bad_scenes(void) {
 
 typedef void (*closed_fn)(double t, double *a, double *w);
 
-/* Run a one-joint scene (q = angle, v = rate) over its output times; largest errors. */
-static void run_scene(const char *name, closed_fn f, double *ea, double *ew, double *rtol) {
+/* Run a scene over its output times and compare coordinate `col` and speed `col` (its rate)
+ * with a closed form; largest errors, and the scene's rtol. */
+static void run_scene(const char *name, int col, closed_fn f, double *ea, double *ew,
+                      double *rtol) {
   char file[1200], msg[1024] = "";
   snprintf(file, sizeof file, "%s/tests/scenes/%s", srcdir, name);
   ap_scene *sc = NULL;
@@ -85,11 +114,12 @@ static void run_scene(const char *name, closed_fn f, double *ea, double *ew, dou
   ap_scene_run run;
   ap_scene_get_run(sc, &run);
   *rtol = run.sim.rtol;
-  double x[2] = {0, 0};
+  double x[4] = {0, 0, 0, 0};
+  int n = ap_model_n(m);
   ap_sim *sim = NULL;
-  AP_CHECK_EQ_INT(ap_model_n(m), 1);
-  if (ap_scene_initial_state(sc, x, x + 1, NULL, 0, msg, sizeof msg) != AP_OK ||
-      ap_sim_create(m, &run.sim, run.t0, x, x + 1, &sim, msg, sizeof msg) != AP_OK) {
+  AP_CHECK(n == ap_model_k(m) && n <= 2);
+  if (ap_scene_initial_state(sc, x, x + n, NULL, 0, msg, sizeof msg) != AP_OK ||
+      ap_sim_create(m, &run.sim, run.t0, x, x + n, &sim, msg, sizeof msg) != AP_OK) {
     fprintf(stderr, "%s: %s\n", name, msg);
     AP_CHECK(0);
   }
@@ -103,8 +133,8 @@ static void run_scene(const char *name, closed_fn f, double *ea, double *ew, dou
       break;
     }
     f(t, &a, &w);
-    *ea = fmax(*ea, fabs(ap_sim_q(sim)[0] - a));
-    *ew = fmax(*ew, fabs(ap_sim_v(sim)[0] - w));
+    *ea = fmax(*ea, fabs(ap_sim_q(sim)[col] - a));
+    *ew = fmax(*ew, fabs(ap_sim_v(sim)[col] - w));
   }
   ap_sim_free(sim);
   ap_scene_free(sc);
@@ -129,23 +159,118 @@ static void torque_closed(double t, double *a, double *w) {
   *a = 0.1 * (1.0 - cos(t)) / 0.05;
 }
 
+/* I e'' + c e' + k e = 0 (underdamped) from e(0) = e0, e'(0) = de0: e and e'. */
+static void oscillator(double t, double I, double k, double c, double e0, double de0, double *e,
+                       double *de) {
+  double W0 = sqrt(k / I), z = c / (2.0 * sqrt(k * I)), s = z * W0, Wd = W0 * sqrt(1 - z * z);
+  double A = e0, B = (de0 + s * e0) / Wd, ex = exp(-s * t), C = cos(Wd * t), S = sin(Wd * t);
+  *e = ex * (A * C + B * S);
+  *de = ex * ((-s * A + Wd * B) * C + (-s * B - Wd * A) * S);
+}
+
+/* act_spring.yaml: I = 0.05, torque -3 angle, from (0.4, 2). */
+static void spring_closed(double t, double *a, double *w) {
+  oscillator(t, 0.05, 3.0, 0.0, 0.4, 2.0, a, w);
+}
+
+/* act_slider.yaml: m = 1, force -40 x - 0.8 x' - 9.81, from (0.3, 0). */
+static void slider_closed(double t, double *a, double *w) {
+  double xe = -9.81 / 40.0;
+  oscillator(t, 1.0, 40.0, 0.8, 0.3 - xe, 0.0, a, w);
+  *a += xe;
+}
+
+/* act_follow.yaml: follower I = 0.05, kp 2, kd 0.06, set-point 3 t from rest: e = a - (3 t -
+ * kd 3 / kp) obeys the oscillator from e(0) = 0.09, e'(0) = -3. */
+static void follow_closed(double t, double *a, double *w) {
+  double lag = 0.06 * 3.0 / 2.0;
+  oscillator(t, 0.05, 2.0, 0.06, lag, -3.0, a, w);
+  *a += 3.0 * t - lag, *w += 3.0;
+}
+
+/* The partials of act_slider's force from the scene's jets: exactly -40, -0.8, 0; then of a
+ * nonlinear force of t and the state set with --set, against its derivatives by hand. */
+static void test_partials(void) {
+  char file[1200], msg[1024] = "";
+  snprintf(file, sizeof file, "%s/tests/scenes/act_slider.yaml", srcdir);
+  ap_scene *sc = NULL;
+  const char *set[] = {"effects.suspension.force=-40*sin(slider.position)*t - "
+                       "0.8*slider.pos_dot^2"};
+  if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) {
+    fprintf(stderr, "%s\n", msg);
+    AP_CHECK(0);
+    return;
+  }
+  const ap_model *m = ap_scene_model(sc);
+  ap_data *d = NULL;
+  AP_CHECK(ap_data_create(m, &d) == AP_OK);
+  d->t = 0.3, d->q[0] = 0.2, d->v[0] = -1.5;
+  double tau = 0, dq = 0, dv = 0, dt = 1;
+  int col = -1;
+  AP_CHECK(ap_body_actuator_partials(m, d, 1, &col, &tau, &dq, &dv, &dt) == AP_OK);
+  printf("act_slider.yaml partials from the jets: tau %.17g, dtau/dx %.17g, dtau/dx' %.17g, "
+         "dtau/dt %g\n", tau, dq, dv, dt);
+  AP_CHECK_EQ_INT(col, 0);
+  AP_CHECK_NEAR(tau, -40 * 0.2 - 0.8 * -1.5, 1e-15);
+  AP_CHECK_EQ_INT(dq == -40.0 && dv == -0.8 && dt == 0.0, 1);
+  ap_data_free(d);
+  ap_scene_free(sc);
+  sc = NULL;
+  if (ap_scene_load(file, set, 1, &sc, msg, sizeof msg) != AP_OK) {
+    fprintf(stderr, "%s\n", msg);
+    AP_CHECK(0);
+    return;
+  }
+  m = ap_scene_model(sc);
+  AP_CHECK(ap_data_create(m, &d) == AP_OK);
+  double t = 0.3, x = 0.2, v = -1.5;
+  d->t = t, d->q[0] = x, d->v[0] = v;
+  AP_CHECK(ap_body_actuator_partials(m, d, 1, &col, &tau, &dq, &dv, &dt) == AP_OK);
+  double e_tau = -40 * sin(x) * t - 0.8 * v * v, e_dq = -40 * cos(x) * t, e_dv = -1.6 * v;
+  double e_dt = -40 * sin(x), err = fmax(fmax(fabs(tau - e_tau), fabs(dq - e_dq)),
+                                         fmax(fabs(dv - e_dv), fabs(dt - e_dt)));
+  printf("%s: partials from the jets vs by hand: max difference %.1e\n", set[0], err);
+  AP_CHECK_LE(err, 4 * 2.2e-16 * 40);
+  ap_data_free(d);
+  ap_scene_free(sc);
+}
+
 static void test_good_scenes(void) {
   double ea, ew, rtol = 0;
-  run_scene("act_flywheel.yaml", flywheel_closed, &ea, &ew, &rtol);
+  run_scene("act_flywheel.yaml", 0, flywheel_closed, &ea, &ew, &rtol);
   printf("act_flywheel.yaml (rate motor, saturated then exponential): max |w - closed| %.2e "
          "rad/s, |a - closed| %.2e rad\n", ew, ea);
   AP_CHECK_LE(ew, 100 * rtol * 15.0);
   AP_CHECK_LE(ea, 100 * rtol * 15.0 * 3.0);
-  run_scene("act_torque_t.yaml", torque_closed, &ea, &ew, &rtol);
+  run_scene("act_torque_t.yaml", 0, torque_closed, &ea, &ew, &rtol);
   printf("act_torque_t.yaml (joint torque 0.1 cos t): max |w - closed| %.2e rad/s, |a - "
          "closed| %.2e rad\n", ew, ea);
   AP_CHECK_LE(ew, 100 * rtol * 2.0);
   AP_CHECK_LE(ea, 100 * rtol * 4.0 * 6.0);
+  double W = sqrt(3.0 / 0.05), scale = 0.4 * W + 2.0;   /* 4 s = 4.9 periods */
+  run_scene("act_spring.yaml", 0, spring_closed, &ea, &ew, &rtol);
+  printf("act_spring.yaml (torque -3*hinge.angle): W = sqrt(k/I) = %.4f rad/s: max |a - "
+         "closed| %.2e rad, |a' - closed| %.2e rad/s\n", W, ea, ew);
+  AP_CHECK_LE(ea, 100 * rtol * scale * 4.0);
+  AP_CHECK_LE(ew, 100 * rtol * scale * W * 4.0);
+  W = sqrt(40.0), scale = (0.3 + 9.81 / 40) * W;
+  run_scene("act_slider.yaml", 0, slider_closed, &ea, &ew, &rtol);
+  printf("act_slider.yaml (force -40*slider.position - 0.8*slider.pos_dot): max |x - closed| "
+         "%.2e m, |x' - closed| %.2e m/s\n", ea, ew);
+  AP_CHECK_LE(ea, 100 * rtol * scale * 5.0);
+  AP_CHECK_LE(ew, 100 * rtol * scale * W * 5.0);
+  W = sqrt(2.0 / 0.05), scale = 3.0 + 0.09 * W;
+  run_scene("act_follow.yaml", 1, follow_closed, &ea, &ew, &rtol);
+  printf("act_follow.yaml (angle motor, set-point leader.angle): lag kd w / kp = 0.09 rad: "
+         "max |a - closed| %.2e rad, |a' - closed| %.2e rad/s\n", ea, ew);
+  AP_CHECK_LE(ea, 100 * rtol * scale * 5.0);
+  AP_CHECK_LE(ew, 100 * rtol * scale * W * 5.0);
 }
 
 int main(int argc, char **argv) {
   if (argc > 1) srcdir = argv[1];
   test_bad_scenes();
   test_good_scenes();
+  test_partials();
   return ap_check_finish("test_scene_act");
 }

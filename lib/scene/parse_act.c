@@ -6,8 +6,9 @@
  * set-point a linear one, a rate set-point any speed. Checks that can point at a line happen
  * here (torque on a prismatic joint, motor on a driven joint, gains, limits); the builder
  * checks again when compiling. The value (torque, force or set-point) is a number or an
- * expression, read by sc_read_value; its sc_expr lives in the sc_eff, which the definition's
- * user pointer refers to (s->effs does not move after parsing). */
+ * expression of t and the state, read by sc_read_value (state.c); its sc_expr lives in the
+ * sc_eff, which the definition's user pointer refers to (s->effs does not move after
+ * parsing). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -208,11 +209,3 @@ int sc_parse_joint_effect(sc_ctx *c, sc_scene *s, const sc_node *n, sc_eff *e, i
                                : parse_joint_force(c, s, n, e, which == SC_EFF_TORQUE);
 }
 
-/* Until the scene's evaluator binds state names: numbers and functions of t. */
-int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effect_def *d) {
-  (void)s;
-  if (sc_expr_read(c, v, e)) return AP_ERR_ARG;
-  d->value = e->value;
-  if (e->timed) d->value_fn = sc_expr_time_fn;
-  return AP_OK;
-}

@@ -145,6 +145,7 @@ int ap_scene_initial_state(ap_scene *sc, double *q0, double *v0, char *report,
   sc_ctx c = {sc->s.file, "", AP_OK};
   int rc = sc_check_exprs(&c, &sc->s, sc->s.run.t0);
   if (rc == AP_OK) rc = sc_initial_state(&c, &sc->s, sc->m, q0, v0, report, report_len);
+  if (rc == AP_OK) rc = sc_check_state_exprs(&c, &sc->s, sc->m, sc->s.run.t0, q0, v0);
   if (rc == AP_OK) rc = sc_check_start(&c, &sc->s, sc->m, q0, v0);
   if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
   return rc;
