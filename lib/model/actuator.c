@@ -14,9 +14,7 @@
  * The inputs x of a state function are gathered from q and v through indices resolved at
  * compile time (in_idx, in_v), in the order declared. Partial derivatives of tau follow by the
  * chain rule from the function's own partials df; while saturated they vanish.
- * Layout: each effect's last tau is kept in the scratch after the effect counters (the contact
- * forces of evaluate.c read it). Invariant: ap_act_force reads only q, v and the inputs; it runs
- * no kinematics. */
+ * Invariant: ap_act_force reads only t, q and v; it runs no kinematics. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -164,14 +162,11 @@ static double law(const ap_meff *ef, const double *q, const double *v, const dou
 }
 
 int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
-                 const double *v, double *S, double *Q) {
-  const ap_bmodel *M = ap_bm(m);
+                 const double *v, double *Q) {
   double f[3];
   int sat, rc = source(m, d, ef, t, q, v, f, NULL);
   if (rc != AP_OK) return rc;
-  double tau = law(ef, q, v, f, &sat);
-  Q[ef->col] += tau;
-  S[M->off_cnt + M->ne + (size_t)(ef - M->effs)] = tau;
+  Q[ef->col] += law(ef, q, v, f, &sat);
   return AP_OK;
 }
 

@@ -140,7 +140,7 @@ int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, cons
       case AP_EFFECT_APPLIED: rc = applied(m, d, ef, t, S, Q); break;
       case AP_EFFECT_USER: rc = user_effect(m, d, ef, t, q, v, S, Q); break;
       case AP_EFFECT_JOINT_FORCE:
-      case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, t, q, v, S, Q); break;
+      case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, t, q, v, Q); break;
     }
     if (rc != AP_OK) return rc;
   }
@@ -175,9 +175,11 @@ double ap_eff_potential(const ap_bmodel *M, double *S) {
  * plane-contact body), after ap_kin_velocity at the same state. Gravity and applied forces on
  * its bodies count; a spring counts at the end in the subtree (nothing when both are); joint
  * damping inside the subtree is internal, and on the root's plane-contact joint it is the
- * horizontal force -c (vx, vy) plus torques. Joint forces and motors likewise: internal, or on
- * the root's vx, vy a horizontal force at the body origin (their last tau, from the scratch). A user effect's generalized force cannot be
- * attributed to bodies: AP_ERR_UNSUPPORTED. */
+ * horizontal force -c (vx, vy) plus torques. Joint forces and motors are left out: between
+ * bodies of the subtree they are internal, and on the root's plane-contact joint they are a
+ * horizontal force (vx, vy) or a pure torque, which the contact force (it reads only F[2],
+ * the normal) does not need; F[0], F[1] do not include them. A user effect's generalized
+ * force cannot be attributed to bodies: AP_ERR_UNSUPPORTED. */
 int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *v, int root,
                          double *F) {
   F[0] = F[1] = F[2] = 0.0;
@@ -228,12 +230,7 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
       }
       case AP_EFFECT_USER: return AP_ERR_UNSUPPORTED;
       case AP_EFFECT_JOINT_FORCE:
-      case AP_EFFECT_MOTOR: {   /* on the root's plane-contact x or y: a horizontal force */
-        const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
-        if (j->child == root && j->kind == AP_JOINT_PLANE_CONTACT && e->speed < 2)
-          F[e->speed] += S[M->off_cnt + M->ne + (size_t)i];
-        break;
-      }
+      case AP_EFFECT_MOTOR: break;   /* see above */
     }
   }
   return AP_OK;

@@ -36,7 +36,7 @@ void ap_kin_layout(ap_bmodel *M) {
   M->off_joint = M->off_body + (size_t)M->nb * M->body_stride;
   M->off_con = M->off_joint + (size_t)M->nj * JOINT_STRIDE;
   M->off_cnt = M->off_con + (size_t)M->nc * CON_STRIDE;
-  M->off_tmp = M->off_cnt + 2 * (size_t)M->ne;   /* counts, last efforts */
+  M->off_tmp = M->off_cnt + (size_t)M->ne;
   size_t tmp = 6 * K1 + 2 * k + (size_t)M->max_user_rows * (k + 2) + 16;
   M->off_proj = M->off_tmp + tmp;
   M->proj_work = nl ? ap_la_work_size(M->k, M->nloop) : 0;

@@ -9,8 +9,7 @@
  *   bodies       nb blocks of BODY_STRIDE(K1) doubles (kbody below)
  *   joints       nj blocks of JOINT_STRIDE (kjoint below)
  *   constraints  nc blocks of CON_STRIDE: ground motion and prescribed values at t
- *   counters     ne effect evaluation counts (stored as doubles), then ne last efforts (the
- *                tau of each joint force or motor at its last evaluation; 0 for the others)
+ *   counters     ne effect evaluation counts (stored as doubles)
  *   tmp          scratch for constraint and effect assembly
  *   proj         loop-closure projection: Jacobian, residual, step, lstsq work
  *
@@ -260,9 +259,9 @@ double ap_eff_potential(const ap_bmodel *M, double *S);
 /* Validate a joint force or motor effect and resolve its indices into ef (after the joints
  * and coordinates are laid out). Fails through the builder's message. */
 int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef);
-/* Q[ef->col] += tau at (t, q, v); tau is also stored as the effect's last effort in S. */
+/* Q[ef->col] += tau at (t, q, v). */
 int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
-                 const double *v, double *S, double *Q);
+                 const double *v, double *Q);
 
 /* ---- evaluator (evaluate.c) ------------------------------------------------------------- */
 
