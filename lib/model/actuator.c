@@ -123,7 +123,8 @@ static int not_finite(const ap_model *m, ap_data *d, const ap_meff *ef, const ch
 
 /* The value F (joint force) or set-point s (motor): f[0], and f[1], f[2] its first and second
  * time derivatives when it is a function of time alone (0 otherwise). With df (1 + ninputs
- * entries), the state function's partial derivatives (zero for the other sources). */
+ * entries), the partial derivatives: the state function's, or df[0] = f[1] for a function of
+ * time (0 for a constant). */
 static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
                   const double *v, double f[3], double *df) {
   const ap_effect_def *e = &ef->def;
