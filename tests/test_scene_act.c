@@ -40,11 +40,11 @@ static const bad_case bad[] = {
     {"act_speed_wrong_sort.yaml", "act_speed_wrong_sort.yaml:12:50: effects.turn.speed:",
      "speed 'vx' of joint 'sled' is linear"},
     {"act_motor_two_setpoints.yaml",
-     "act_motor_two_setpoints.yaml:12:55: effects.motor.angle:", "rate and angle are both"},
+     "act_motor_two_setpoints.yaml:12:55: effects.motor.angle:", "a motor holds one set-point, and rate is given too"},
     {"act_motor_no_kd.yaml", "act_motor_no_kd.yaml:12:10: effects.motor:",
      "a rate motor needs kd > 0"},
     {"act_motor_kp_rate.yaml", "act_motor_kp_rate.yaml:12:52: effects.motor.kp:",
-     "kp belongs to a motor that holds an angle"},
+     "belongs to a motor that holds an angle"},
     {"act_motor_angle_ball.yaml", "act_motor_angle_ball.yaml:12:54: effects.motor.angle:",
      "a motor can hold its rate only"},
     {"act_motor_max.yaml", "act_motor_max.yaml:12:62: effects.motor.max:", "must be positive"},
@@ -56,7 +56,7 @@ static const bad_case bad[] = {
      "unknown name 'hinge.angel' in expression '-3*hinge.angel' (column 4 of the value; did "
      "you mean 'hinge.angle'?)"},
     {"act_state_driven.yaml", "act_state_driven.yaml:8:46: effects.follow.angle:",
-     "reads 'arm.angle', a driven coordinate"},
+     "'arm.angle' is driven: a function of t, not part of the state"},
     {"act_state_not_finite.yaml", "act_state_not_finite.yaml:6:54: effects.spring.torque:",
      "is not finite at t = 0: log(-0.6) = nan (column 4 of the expression)"},
 };

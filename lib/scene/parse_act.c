@@ -150,8 +150,7 @@ static int set_point(sc_ctx *c, const sc_node *n, int *which) {
     const sc_node *v = sc_map_get(n, keys[i]);
     if (!v) continue;
     if (first)
-      return sc_err(c, v, "a motor holds one set-point: %s and %s are both given", keys[*which],
-                    keys[i]);
+      return sc_err(c, v, "a motor holds one set-point, and %s is given too", keys[*which]);
     first = v, *which = i;
   }
   if (!first)
@@ -168,7 +167,7 @@ static int parse_gains(sc_ctx *c, const sc_node *n, ap_effect_def *d) {
     return AP_ERR_ARG;
   if (d->motor == AP_MOTOR_RATE) {
     if (sc_map_get(n, "kp"))
-      return sc_err(c, sc_map_get(n, "kp"), "kp belongs to a motor that holds an angle or a "
+      return sc_err(c, sc_map_get(n, "kp"), "belongs to a motor that holds an angle or a "
                     "position; a rate motor's torque is kd (rate - speed)");
     if (!(d->kd > 0))
       return sc_err(c, sc_map_get(n, "kd") ? sc_map_get(n, "kd") : n, "a rate motor needs "

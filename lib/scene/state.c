@@ -159,9 +159,8 @@ static int bind(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e
   const int *vars = sc_prog_vars(e->prog);
   for (int i = 0; i < count; i++)
     if (t->driven[vars[i]])
-      return sc_err(c, v, "'%s' reads '%s', a driven coordinate or speed: it is a function "
-                    "of t, not part of the state (write that function of t instead)", e->text,
-                    t->names[vars[i]]);
+      return sc_err(c, v, "'%s' is driven: a function of t, not part of the state (write "
+                    "that function of t instead)", t->names[vars[i]]);
   if (count > AP_STATE_MAX_INPUTS)
     return sc_err(c, v, "'%s' reads %d names of the state; at most %d are allowed", e->text,
                   count, AP_STATE_MAX_INPUTS);
