@@ -12,7 +12,9 @@
  *                       damped oscillation about -m g / k
  *   act_follow.yaml     angle motor with set-point "leader.angle" (leader at 3 rad/s): the
  *                       follower lags by kd w / kp (no feed-forward of a state set-point)
- * and the partial derivatives of a state expression from the evaluator's jets (exact).
+ * and the partial derivatives of a state expression from the evaluator's jets (exact); then
+ * examples/scenes/diff_drive_motors.yaml (the robot's wheel rates held by motors) against the
+ * closed-form steady circle and the motors' steady-state error (test_robot below).
  * Tolerances: 100 x the scene's rtol times the scale of the solution, as in test_actuators.
  * The source directory comes as argv[1] (meson passes it). */
 #include <math.h>
@@ -40,7 +42,8 @@ static const bad_case bad[] = {
     {"act_speed_wrong_sort.yaml", "act_speed_wrong_sort.yaml:12:50: effects.turn.speed:",
      "speed 'vx' of joint 'sled' is linear"},
     {"act_motor_two_setpoints.yaml",
-     "act_motor_two_setpoints.yaml:12:55: effects.motor.angle:", "a motor holds one set-point, and rate is given too"},
+     "act_motor_two_setpoints.yaml:12:55: effects.motor.angle:",
+     "a motor holds one set-point, and rate is given too"},
     {"act_motor_no_kd.yaml", "act_motor_no_kd.yaml:12:10: effects.motor:",
      "a rate motor needs kd > 0"},
     {"act_motor_kp_rate.yaml", "act_motor_kp_rate.yaml:12:52: effects.motor.kp:",
@@ -267,10 +270,106 @@ static void test_good_scenes(void) {
   AP_CHECK_LE(ew, 100 * rtol * scale * W * 5.0);
 }
 
+/* ---- the differential-drive robot with motors ----------------------------------------------
+ *
+ * examples/scenes/diff_drive_motors.yaml: chassis (first moment m a = 10 kg x 0.1 m ahead of
+ * the axle) on a planar joint, wheels of radius r = 0.1 m, track b = 0.5 m, rate motors with
+ * gain kd at w_l* = 8, w_r* = 12 rad/s. Held exactly, the axle midpoint would run on the circle
+ * R = (b/2)(w_r + w_l)/(w_r - w_l) at speed v = r (w_r + w_l)/2, turning at w = v / R.
+ * Steady motion on a circle needs ground forces along the heading F_l + F_r = -(m a) w^2 (the
+ * centre of mass's tangential acceleration) and F_r - F_l = 2 (m a) v w / b (no moment about
+ * the centre of mass: the lateral force M v w acts a_sys = m a / M behind it); each wheel at
+ * constant spin needs the motor torque tau_i = r F_i. A motor gives that torque only with the
+ * rate error tau_i / kd, so the steady rates solve w_i = w_i* - tau_i(v(w), w(w)) / kd (a fixed
+ * point, found by iteration). The test checks the simulated steady rates, speed and radius
+ * against that fixed point (100 rtol), and the radius and speed against the ideal closed form
+ * within the motors' steady-state error computed from the torques at the ideal motion. */
+typedef struct robot { double r, b, ma, kd, wl, wr; } robot;
+
+static void robot_torques(const robot *p, double wl, double wr, double *tl, double *tr) {
+  double v = p->r * (wl + wr) / 2, w = p->r * (wr - wl) / p->b;
+  double Fs = -p->ma * w * w, Fd = 2 * p->ma * v * w / p->b;
+  *tl = p->r * (Fs - Fd) / 2, *tr = p->r * (Fs + Fd) / 2;
+}
+
+/* One run of diff_drive_motors.yaml to T in the given mode; the steady state checked. */
+static void robot_run(ap_scene *sc, ap_mode mode, double T) {
+  robot p = {0.1, 0.5, 10.0 * 0.1, 50.0, 8.0, 12.0};
+  const ap_model *m = ap_scene_model(sc);
+  int n = ap_model_n(m), k = ap_model_k(m);
+  double x[16] = {0};
+  char msg[1024] = "";
+  ap_scene_run run;
+  ap_scene_get_run(sc, &run);
+  run.sim.mode = mode;
+  ap_sim *sim = NULL;
+  int iv = ap_model_find_speed(m, "chassis.x_dot");   /* then chassis.y_dot */
+  int ih = ap_model_find_speed(m, "chassis.heading_dot");
+  int il = ap_model_find_speed(m, "wheel_l.angle_dot");
+  int ir = ap_model_find_speed(m, "wheel_r.angle_dot");
+  AP_CHECK(n + k <= 16 && iv >= 0 && il >= 0 && ir >= 0 && ih >= 0);
+  if (ap_scene_initial_state(sc, x, x + n, NULL, 0, msg, sizeof msg) != AP_OK ||
+      ap_sim_create(m, &run.sim, run.t0, x, x + n, &sim, msg, sizeof msg) != AP_OK ||
+      ap_sim_advance(sim, T) != AP_OK) {
+    fprintf(stderr, "diff_drive_motors: %s %s\n", msg, sim ? ap_sim_message(sim) : "");
+    AP_CHECK(0);
+    ap_sim_free(sim);
+    return;
+  }
+  const double *v = ap_sim_v(sim);
+  double wl = v[il], wr = v[ir], speed = hypot(v[iv], v[iv + 1]), turn = v[ih];
+  /* the steady state with the motors' error: fixed point of w = w* - tau(w) / kd */
+  double fl = p.wl, fr = p.wr, tl, tr;
+  for (int it = 0; it < 60; it++) {
+    robot_torques(&p, fl, fr, &tl, &tr);
+    fl = p.wl - tl / p.kd, fr = p.wr - tr / p.kd;
+  }
+  double fv = p.r * (fl + fr) / 2, fw = p.r * (fr - fl) / p.b;
+  /* the ideal motion, and the motors' steady-state error at it (first order in 1 / kd) */
+  double R0 = p.b / 2 * (p.wr + p.wl) / (p.wr - p.wl), v0 = p.r * (p.wr + p.wl) / 2;
+  robot_torques(&p, p.wl, p.wr, &tl, &tr);
+  double dl = -tl / p.kd, dr = -tr / p.kd;   /* rate errors w - w* */
+  double dR = p.b / 2 * (2 * p.wr * dl - 2 * p.wl * dr) / ((p.wr - p.wl) * (p.wr - p.wl));
+  double dv = p.r * (dl + dr) / 2, Rs = speed / turn;
+  printf("diff_drive_motors, %s, t = %g s: rates %.10f, %.10f rad/s (off the fixed point by "
+         "%.1e, %.1e); R %.8f m, speed %.8f m/s (off by %.1e)\n",
+         mode == AP_MODE_MINIMAL ? "minimal" : "projected", T, wl, wr, fabs(wl - fl),
+         fabs(wr - fr), Rs, speed, fabs(speed - fv));
+  printf("  steady torques at the ideal circle tau_l = %.4f, tau_r = %.4f N m: rate errors "
+         "%.2e, %.2e rad/s; R - R0 = %.3e m (first order %.3e), speed - v0 = %.3e m/s (%.3e)\n",
+         tl, tr, dl, dr, Rs - R0, dR, speed - v0, dv);
+  double tol = 100 * run.sim.rtol;
+  AP_CHECK_NEAR(wl, fl, tol * p.wr);
+  AP_CHECK_NEAR(wr, fr, tol * p.wr);
+  AP_CHECK_NEAR(speed, fv, tol * v0);
+  AP_CHECK_NEAR(turn, fw, tol * fw);
+  /* against the ideal closed form: within the motors' steady-state error (first order; the
+   * second-order part is below 1 % of it at kd = 50) */
+  AP_CHECK_LE(fabs(Rs - R0), 1.01 * fabs(dR));
+  AP_CHECK_LE(fabs(speed - v0), 1.01 * fabs(dv) + tol * v0);
+  AP_CHECK(fabs(Rs - R0) > 0.5 * fabs(dR));   /* and the error is the motors' */
+  ap_sim_free(sim);
+}
+
+static void test_robot(void) {
+  char file[1200], msg[1024] = "";
+  snprintf(file, sizeof file, "%s/examples/scenes/diff_drive_motors.yaml", srcdir);
+  ap_scene *sc = NULL;
+  if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) {
+    fprintf(stderr, "%s\n", msg);
+    AP_CHECK(0);
+    return;
+  }
+  robot_run(sc, AP_MODE_MINIMAL, 3.0);
+  robot_run(sc, AP_MODE_PROJECTED, 3.0);
+  ap_scene_free(sc);
+}
+
 int main(int argc, char **argv) {
   if (argc > 1) srcdir = argv[1];
   test_bad_scenes();
   test_good_scenes();
   test_partials();
+  test_robot();
   return ap_check_finish("test_scene_act");
 }
