@@ -198,6 +198,8 @@ typedef struct sc_eff {
   ap_effect_def def;
   sc_expr force[3], torque[3];
   int timed;               /* some component depends on t: use the wrench callback */
+  sc_expr value;           /* joint_torque, joint_force: the value; motor: the set-point */
+  int is_torque;           /* written as joint_torque (an AP_EFFECT_JOINT_FORCE) */
 } sc_eff;
 
 /* Output channels (bit mask). */
@@ -235,6 +237,28 @@ typedef struct sc_scene {
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
 int sc_parse_con_eff(sc_ctx *c, sc_scene *s);
+/* Joint effects (parse_act.c): the scene kinds joint_torque, joint_force, motor. */
+enum { SC_EFF_TORQUE = 0, SC_EFF_FORCE = 1, SC_EFF_MOTOR = 2 };
+int sc_parse_joint_effect(sc_ctx *c, sc_scene *s, const sc_node *n, sc_eff *e, int which);
+/* A value node into e and the definition: a number (d->value), an expression of t
+ * (d->value_fn) or of the state too (d->state_fn and d->inputs); the caller sets user = e. */
+int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effect_def *d);
+
+/* Names of the state in expressions (state.c): JOINT.NAME (and BODY.NAME) for every joint
+ * coordinate and speed; name i is slot i of an expression's variables. */
+typedef struct sc_state_names {
+  int count;
+  char **names;            /* count names, then NULL */
+  ap_state_input *refs;    /* what name i reads */
+  int *driven;             /* 1: name i is a driven coordinate or speed (not in the state) */
+} sc_state_names;
+int sc_state_names_build(const sc_scene *s, sc_state_names *t);
+void sc_state_names_free(sc_state_names *t);
+/* The ap_state_fn of a scene expression of the state (user = its sc_expr). */
+int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
+/* Every expression of the state finite at (t, q, v); else a message at its node. */
+int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
+                         const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
