@@ -1,0 +1,74 @@
+/* Ridders' extrapolated central differences (C. J. F. Ridders, "Accurate computation of F'(x)
+ * and F'(x) F''(x)", Advances in Engineering Software 4 (1982) 75-76).
+ *
+ * For one column j of the Jacobian of a vector function: central differences
+ * D(h) = (f(x + h e_j) - f(x - h e_j)) / (2h) at h_i = h / 1.4^i, i = 0..NTAB-1, form the first
+ * column of a Neville tableau; since D(h) = f' + c2 h^2 + c4 h^4 + ..., each further column
+ * eliminates one power of h^2: T[i][p] = (T[i][p-1] c^p - T[i-1][p-1]) / (c^p - 1), c = 1.4^2.
+ * The error estimate of an entry is the larger of its distances to the two entries it was made
+ * from; each component keeps the entry with the least estimate. A component stops when the
+ * newest diagonal entry differs from the previous one by more than SAFE times its best
+ * estimate: round-off has taken over. The estimate is what the tests compare against: the true
+ * error of a smooth component is below it (measured in tests/test_linearize.c).
+ * Steps are made exact in binary (the difference (x + h) - (x - h) is what divides). */
+#include <math.h>
+#include <string.h>
+
+#include "analyze/analyze_int.h"
+
+#define NTAB 10
+#define CON 1.4
+#define CON2 (CON * CON)
+#define SAFE 2.0
+
+size_t ap_an_ridders_scratch(int m) { return (size_t)(2 * NTAB + 4) * (size_t)(m > 0 ? m : 1); }
+
+/* col (m) = (f(x + h e_j) - f(x - h e_j)) / (x_j+ - x_j-); fp, fm: m scratch each. */
+static int central(ap_an_fn fn, void *user, double *x, int j, double h, int m, double *col,
+                   double *fp, double *fm) {
+  double xj = x[j], xp = xj + h, xm = xj - h;
+  x[j] = xp;
+  int rc = fn(x, fp, user);
+  x[j] = xm;
+  if (rc == AP_OK) rc = fn(x, fm, user);
+  x[j] = xj;
+  if (rc != AP_OK) return rc;
+  double den = xp - xm;
+  for (int c = 0; c < m; c++) col[c] = (fp[c] - fm[c]) / den;
+  return AP_OK;
+}
+
+int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, int m,
+                  double *df, double *err, double *scratch) {
+  (void)n;
+  double *prev = scratch, *cur = prev + (size_t)NTAB * m, *fp = cur + (size_t)NTAB * m;
+  double *fm = fp + m, *active = fm + m;
+  int rc = central(fn, user, x, j, h, m, prev, fp, fm);
+  if (rc != AP_OK) return rc;
+  for (int c = 0; c < m; c++) df[c] = prev[c], err[c] = HUGE_VAL, active[c] = 1.0;
+  for (int i = 1; i < NTAB; i++) {
+    h /= CON;
+    rc = central(fn, user, x, j, h, m, cur, fp, fm);
+    if (rc != AP_OK) return rc;
+    double fac = CON2;
+    for (int p = 1; p <= i; p++, fac *= CON2) {
+      double *tp = cur + (size_t)p * m, *tl = cur + (size_t)(p - 1) * m;
+      const double *tu = prev + (size_t)(p - 1) * m;
+      for (int c = 0; c < m; c++) {
+        tp[c] = (tl[c] * fac - tu[c]) / (fac - 1.0);
+        double e = fmax(fabs(tp[c] - tl[c]), fabs(tp[c] - tu[c]));
+        if (active[c] != 0.0 && e <= err[c]) err[c] = e, df[c] = tp[c];
+      }
+    }
+    int any = 0;
+    for (int c = 0; c < m; c++) {
+      double jump = fabs(cur[(size_t)i * m + c] - prev[(size_t)(i - 1) * m + c]);
+      if (active[c] != 0.0 && jump >= SAFE * err[c]) active[c] = 0.0;
+      any |= active[c] != 0.0;
+    }
+    if (!any) break;
+    double *t = prev;
+    prev = cur, cur = t;
+  }
+  return AP_OK;
+}
