@@ -17,6 +17,7 @@
 #ifndef AP_ANALYZE_INT_H
 #define AP_ANALYZE_INT_H
 
+#include <float.h>
 #include <stddef.h>
 
 #include "appell/analyze.h"
@@ -148,11 +149,13 @@ typedef int (*ap_an_fn)(const double *x, double *f, void *user);
 /* Column j of the Jacobian of fn at x (n entries, x is restored) by Ridders' method: central
  * differences at steps h, h/1.4, h/1.4^2, ... extrapolated by Neville's scheme, each of the m
  * components keeping the extrapolation with the least error estimate and stopping when the
- * error grows past twice its best. df, err: m entries. scratch: 2 m (NTAB + 1) doubles, where
- * ap_an_ridders_scratch gives the size. Returns the first failure of fn. */
+ * error grows past twice its best. The estimate err is at least the round-off of the chosen
+ * entry for function values of relative accuracy epsf (AP_AN_EPSF: a few ulps). df, err: m
+ * entries; scratch: ap_an_ridders_scratch(m) doubles. Returns the first failure of fn. */
+#define AP_AN_EPSF (8.0 * DBL_EPSILON)
 size_t ap_an_ridders_scratch(int m);
-int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, int m,
-                  double *df, double *err, double *scratch);
+int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, double epsf,
+                  int m, double *df, double *err, double *scratch);
 
 /* ---- operating points (point.c) ----------------------------------------------------------- */
 

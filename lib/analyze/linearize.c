@@ -300,7 +300,7 @@ int ap_lin_linearize(ap_lin *L) {
   for (int j = 0; j < nx && rc == AP_OK; j++) {
     memcpy(x, L->x0, sizeof *x * (size_t)nx);
     double h = L->def.h0 * fmax(1.0, fabs(L->x0[j]));
-    rc = ap_an_ridders(rates_fn, L, nx, x, j, h, nx, L->A + (size_t)j * nx,
+    rc = ap_an_ridders(rates_fn, L, nx, x, j, h, AP_AN_EPSF, nx, L->A + (size_t)j * nx,
                        L->Aerr + (size_t)j * nx, L->ridders);
   }
   if (rc == AP_OK) rc = ap_an_rates(L, L->x0, L->F0);   /* leaves the data at x0 */

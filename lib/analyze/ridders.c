@@ -10,7 +10,14 @@
  * newest diagonal entry differs from the previous one by more than SAFE times its best
  * estimate: round-off has taken over. The estimate is what the tests compare against: the true
  * error of a smooth component is below it (measured in tests/test_linearize.c).
+ * Round-off: two tableau entries can agree by chance far below the round-off of the differences
+ * they come from, so the estimate is never less than the round-off of the entry chosen: with
+ * function values accurate to epsf (relative; the caller's model, a few ulps by default), the
+ * difference at the smallest step h_i it uses carries epsf (|f+| + |f-|) / (2 h_i), and
+ * Neville's weights at level p
+ * amplify it by prod_{j<=p} (c^j + 1) / (c^j - 1) (3.1, 5.2, 6.9, ... 8.5).
  * Steps are made exact in binary (the difference (x + h) - (x - h) is what divides). */
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -21,11 +28,13 @@
 #define CON2 (CON * CON)
 #define SAFE 2.0
 
-size_t ap_an_ridders_scratch(int m) { return (size_t)(2 * NTAB + 4) * (size_t)(m > 0 ? m : 1); }
+size_t ap_an_ridders_scratch(int m) { return (size_t)(2 * NTAB + 6) * (size_t)(m > 0 ? m : 1); }
 
 /* col (m) = (f(x + h e_j) - f(x - h e_j)) / (x_j+ - x_j-); fp, fm: m scratch each. */
-static int central(ap_an_fn fn, void *user, double *x, int j, double h, int m, double *col,
-                   double *fp, double *fm) {
+/* col (m) = (f(x + h e_j) - f(x - h e_j)) / (x_j+ - x_j-); fp, fm: m scratch each; rnd (m):
+ * the round-off epsf (|f+| + |f-|) / (x_j+ - x_j-) of each component. */
+static int central(ap_an_fn fn, void *user, double *x, int j, double h, double epsf, int m,
+                   double *col, double *fp, double *fm, double *rnd) {
   double xj = x[j], xp = xj + h, xm = xj - h;
   x[j] = xp;
   int rc = fn(x, fp, user);
@@ -34,36 +43,39 @@ static int central(ap_an_fn fn, void *user, double *x, int j, double h, int m, d
   x[j] = xj;
   if (rc != AP_OK) return rc;
   double den = xp - xm;
-  for (int c = 0; c < m; c++) col[c] = (fp[c] - fm[c]) / den;
+  for (int c = 0; c < m; c++)
+    col[c] = (fp[c] - fm[c]) / den, rnd[c] = epsf * (fabs(fp[c]) + fabs(fm[c])) / den;
   return AP_OK;
 }
 
-int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, int m,
-                  double *df, double *err, double *scratch) {
+int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, double epsf,
+                  int m, double *df, double *err, double *scratch) {
   (void)n;
   double *prev = scratch, *cur = prev + (size_t)NTAB * m, *fp = cur + (size_t)NTAB * m;
-  double *fm = fp + m, *active = fm + m;
-  int rc = central(fn, user, x, j, h, m, prev, fp, fm);
+  double *fm = fp + m, *active = fm + m, *rnd = active + m, *best = rnd + m;
+  int rc = central(fn, user, x, j, h, epsf, m, prev, fp, fm, rnd);
   if (rc != AP_OK) return rc;
-  for (int c = 0; c < m; c++) df[c] = prev[c], err[c] = HUGE_VAL, active[c] = 1.0;
+  for (int c = 0; c < m; c++) df[c] = prev[c], best[c] = HUGE_VAL, active[c] = 1.0;
   for (int i = 1; i < NTAB; i++) {
     h /= CON;
-    rc = central(fn, user, x, j, h, m, cur, fp, fm);
+    rc = central(fn, user, x, j, h, epsf, m, cur, fp, fm, rnd);
     if (rc != AP_OK) return rc;
-    double fac = CON2;
+    double fac = CON2, amp = 1.0;
     for (int p = 1; p <= i; p++, fac *= CON2) {
       double *tp = cur + (size_t)p * m, *tl = cur + (size_t)(p - 1) * m;
       const double *tu = prev + (size_t)(p - 1) * m;
+      amp *= (fac + 1.0) / (fac - 1.0);
       for (int c = 0; c < m; c++) {
         tp[c] = (tl[c] * fac - tu[c]) / (fac - 1.0);
         double e = fmax(fabs(tp[c] - tl[c]), fabs(tp[c] - tu[c]));
-        if (active[c] != 0.0 && e <= err[c]) err[c] = e, df[c] = tp[c];
+        if (active[c] != 0.0 && e <= best[c])
+          best[c] = e, df[c] = tp[c], err[c] = fmax(e, amp * rnd[c]);
       }
     }
     int any = 0;
     for (int c = 0; c < m; c++) {
       double jump = fabs(cur[(size_t)i * m + c] - prev[(size_t)(i - 1) * m + c]);
-      if (active[c] != 0.0 && jump >= SAFE * err[c]) active[c] = 0.0;
+      if (active[c] != 0.0 && jump >= SAFE * best[c]) active[c] = 0.0;
       any |= active[c] != 0.0;
     }
     if (!any) break;
