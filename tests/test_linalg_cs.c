@@ -200,8 +200,8 @@ static void ridders(path_fn f, const void *prob, int m, double *df, double *err)
   path p = {f, prob};
   double x = 0.0, *scratch = malloc(sizeof *scratch * ap_an_ridders_scratch(m));
   AP_CHECK(scratch != NULL);
-  AP_CHECK_EQ_INT(ap_an_ridders(path_eval, &p, 1, &x, 0, ridders_h, ridders_epsf, m, df, err,
-                                scratch), AP_OK);
+  AP_CHECK_EQ_INT(ap_an_ridders(path_eval, &p, 1, &x, 0, ridders_h, ridders_epsf, NULL, m, df,
+                                err, scratch), AP_OK);
   free(scratch);
 }
 

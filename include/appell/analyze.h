@@ -66,7 +66,7 @@ typedef struct ap_lin_def {
   int max_iter;            /* Newton iterations; default 40 */
   double zero_tol;         /* an entry of A is a structural zero when |A_ij| is within
                               4 times its error estimate plus zero_tol max|A|; default 1e-9 */
-  double h0;               /* Ridders' first step, times max(1, |x_j|); default 0.05 */
+  double h0;               /* Ridders' first step, times max(1, |x_j|); default 0.01 */
 } ap_lin_def;
 
 AP_API ap_lin_def ap_lin_def_default(void);

@@ -103,7 +103,7 @@ struct ap_lin {
 
   /* results (linearize.c) */
   int linearized;
-  double *A, *Aerr, *Bm, *F0;
+  double *A, *Aerr, *Bm, *F0, *noise;
   int *cyclic;              /* (nx) */
 
   /* eigenvalues (eigen.c) */
@@ -150,12 +150,21 @@ typedef int (*ap_an_fn)(const double *x, double *f, void *user);
  * differences at steps h, h/1.4, h/1.4^2, ... extrapolated by Neville's scheme, each of the m
  * components keeping the extrapolation with the least error estimate and stopping when the
  * error grows past twice its best. The estimate err is at least the round-off of the chosen
- * entry for function values of relative accuracy epsf (AP_AN_EPSF: a few ulps). df, err: m
- * entries; scratch: ap_an_ridders_scratch(m) doubles. Returns the first failure of fn. */
+ * entry for function values of relative accuracy epsf (AP_AN_EPSF: a few ulps) or absolute
+ * noise noise[c] (may be NULL; see ap_an_noise). df, err: m entries; scratch:
+ * ap_an_ridders_scratch(m) doubles. Returns the first failure of fn. */
 #define AP_AN_EPSF (8.0 * DBL_EPSILON)
 size_t ap_an_ridders_scratch(int m);
 int ap_an_ridders(ap_an_fn fn, void *user, int n, double *x, int j, double h, double epsf,
-                  int m, double *df, double *err, double *scratch);
+                  const double *noise, int m, double *df, double *err, double *scratch);
+/* The noise (standard deviation) of each of the m components of fn near x, measured from the
+ * sixth differences of fn at x + i d p, i = 0..AP_AN_NOISE_PTS-1, along a fixed direction p
+ * with |p_j| = max(1, |x_j|) and d = 1e-5 (a smooth component's sixth difference there is
+ * ~1e-30 of its sixth derivative; what remains is round-off). noise: m entries; scratch:
+ * (AP_AN_NOISE_PTS + 1) m + n doubles. */
+#define AP_AN_NOISE_PTS 14
+int ap_an_noise(ap_an_fn fn, void *user, int n, const double *x, int m, double *noise,
+                double *scratch);
 
 /* ---- operating points (point.c) ----------------------------------------------------------- */
 

@@ -2,7 +2,9 @@
  * and its queries.
  *
  * A = dF/dx at the operating point x0 column by column with Ridders' method (ridders.c), first
- * step h0 max(1, |x0_j|); Aerr holds the estimates. B = dF/dtau for a generalized force tau on
+ * step h0 max(1, |x0_j|); Aerr holds the estimates, whose round-off floor comes from the noise
+ * of F measured at x0 (ap_an_noise: near a steady motion F is small while the terms it is made
+ * of are not, so a noise relative to |F| would be far too small). B = dF/dtau for a generalized force tau on
  * model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
  * the core's basis B_c and the factor of G = B_c^T g B_c left by the evaluation at x0, and at x0
  * the heading frames are the identity (du'/dtau = dv'/dtau); coordinate rows are zero.
@@ -29,7 +31,7 @@ ap_lin_def ap_lin_def_default(void) {
   d.tol = 1e-12;
   d.max_iter = 40;
   d.zero_tol = 1e-9;
-  d.h0 = 0.05;
+  d.h0 = 0.01;
   return d;
 }
 
@@ -73,13 +75,19 @@ static char **copy_list(const char *const *list, int *ok) {
   return out;
 }
 
+/* Scratch for Ridders' columns and the noise estimate. */
+static size_t ridders_size(int nv) {
+  size_t a = ap_an_ridders_scratch(nv), b = (size_t)(AP_AN_NOISE_PTS + 1) * nv + nv;
+  return a > b ? a : b;
+}
+
 static int alloc_all(ap_lin *L) {
   int n = L->n, k = L->k, b = L->b, np = L->nphi, nc = L->ch.nc;
   int mk = k > nc ? k : nc, mb = b > np ? b : np, nv = nc + k;
   size_t big = (size_t)mk * mk + (size_t)np * n + (size_t)b * k + 1;
   L->nwork = ap_la_work_size(mb, mk);
   size_t nd = (size_t)nv * (nv + 16) + (size_t)n * (nc + 4) + (size_t)np * (nc + 2) + 3 * big +
-              (size_t)mb * mk + L->nwork + ap_an_ridders_scratch(nv) + 16;
+              (size_t)mb * mk + L->nwork + ridders_size(nv) + 16;
   double *p = calloc(nd, sizeof *p);
   L->iwork = calloc(ap_la_iwork_size(mb, mk) + (size_t)4 * nv + 8, sizeof *L->iwork);
   if (!p || !L->iwork) return free(p), AP_ERR_NOMEM;
@@ -87,10 +95,10 @@ static int alloc_all(ap_lin *L) {
   L->delta = p, p += nc, L->dq = p, p += (size_t)n * nc, L->Jh = p, p += (size_t)np * nc;
   L->phi = p, p += np + 1, L->Au = p, p += big, L->Bu = p, p += big, L->dd = p, p += big;
   L->b0u = p, p += mk + 1, L->F = p, p += (size_t)mb * mk + 1, L->tau = p, p += mk + mb + 1;
-  L->u = p, p += k, L->udot = p, p += k, L->f1 = p, p += nv, L->f2 = p, p += nv;
+  L->u = p, p += k, L->udot = p, p += k, L->f1 = p, p += 2 * nv, L->f2 = p, p += nv;
   L->x0 = p, p += nv, L->A = p, p += (size_t)nv * nv, L->Aerr = p, p += (size_t)nv * nv;
-  L->Bm = p, p += (size_t)nv * k, L->F0 = p, p += nv;
-  L->ridders = p, p += ap_an_ridders_scratch(nv), L->work = p;
+  L->Bm = p, p += (size_t)nv * k, L->F0 = p, p += nv, L->noise = p, p += nv;
+  L->ridders = p, p += ridders_size(nv), L->work = p;
   int *ip = L->iwork + ap_la_iwork_size(mb, mk);
   L->cperm = ip, ip += nv + 1, L->uperm = ip, ip += nv + 1, L->xvar = ip, ip += nv + 1;
   L->cyclic = ip;
@@ -221,17 +229,22 @@ static double max_abs(const double *x, size_t n) {
   return m;
 }
 
-/* The model must not depend on t explicitly: F(x0) at t + 1 and t + 10 equals F(x0) at t. */
+/* The model must not depend on t explicitly: F at x0 and at a point 0.01 away (the Jacobian
+ * could depend on t where F does not) is the same at t + 1 and t + 10 as at t. */
 static int check_autonomous(ap_lin *L) {
   if (!L->m->sys.rheonomic) return AP_OK;
   double t0 = L->t, worst = 0.0, scale = fmax(1.0, max_abs(L->F0, (size_t)L->nx));
-  for (int i = 1; i <= 2; i++) {
-    L->t = t0 + (i == 1 ? 1.0 : 10.0);
-    int rc = ap_an_rates(L, L->x0, L->f1);
-    L->t = t0;
-    if (rc != AP_OK) return rc;
-    for (int r = 0; r < L->nx; r++) worst = fmax(worst, fabs(L->f1[r] - L->F0[r]));
-  }
+  double *x = L->f1, *f = L->f1 + L->nx, *f0 = L->noise;   /* f1 holds 2 nx, noise nx */
+  for (int k = 0; k < 2; k++)
+    for (int i = 0; i < 3; i++) {
+      for (int j = 0; j < L->nx; j++)
+        x[j] = L->x0[j] + (k ? 0.01 * (((j * 7 + 3) % 5) - 2.0) / 2.0 : 0.0);
+      L->t = t0 + (i == 0 ? 0.0 : i == 1 ? 1.0 : 10.0);
+      int rc = ap_an_rates(L, x, i == 0 ? f0 : f);
+      L->t = t0;
+      if (rc != AP_OK) return rc;
+      for (int r = 0; i > 0 && r < L->nx; r++) worst = fmax(worst, fabs(f[r] - f0[r]));
+    }
   if (worst <= 1e-10 * scale) return AP_OK;
   ap_an_msg(L, "model '%s' depends on time explicitly (drives or a ground whose motion changes): "
             "the rates at the operating point change by %.3g between t = %g and t + 10, so it "
@@ -296,11 +309,12 @@ int ap_lin_linearize(ap_lin *L) {
   int nx = L->nx;
   rc = ap_an_rates(L, L->x0, L->F0);
   if (rc == AP_OK) rc = check_autonomous(L);
-  double *x = L->f1;   /* not touched by ap_an_rates */
+  double *x = L->f1, *noise = L->noise;   /* not touched by ap_an_rates */
+  if (rc == AP_OK) rc = ap_an_noise(rates_fn, L, nx, L->x0, nx, noise, L->ridders);
   for (int j = 0; j < nx && rc == AP_OK; j++) {
     memcpy(x, L->x0, sizeof *x * (size_t)nx);
     double h = L->def.h0 * fmax(1.0, fabs(L->x0[j]));
-    rc = ap_an_ridders(rates_fn, L, nx, x, j, h, AP_AN_EPSF, nx, L->A + (size_t)j * nx,
+    rc = ap_an_ridders(rates_fn, L, nx, x, j, h, AP_AN_EPSF, noise, nx, L->A + (size_t)j * nx,
                        L->Aerr + (size_t)j * nx, L->ridders);
   }
   if (rc == AP_OK) rc = ap_an_rates(L, L->x0, L->F0);   /* leaves the data at x0 */

@@ -11,8 +11,10 @@
  * Operating point: Gauss-Newton on the residual r(z) = (rates of the independent speeds, rates
  * of the freed coordinates) over the freed states z: Jacobian by central differences (step
  * 1e-6 max(1, |z_j|): it only steers the iteration; the accuracy is the residual's), the
- * minimum-norm least-squares step (cyclic directions leave the Jacobian rank-deficient), and
- * step halving until the residual decreases. Converged when max |r| <= tol * scale,
+ * minimum-norm least-squares step (cyclic directions leave the Jacobian rank-deficient) cut
+ * to a trust region (no state moves by more than 0.25 max(1, |x_j|): an undamped step from a
+ * rough guess can land near another equilibrium, e.g. an inverted one), and step halving until
+ * the 2-norm of the residual decreases (Armijo). Converged when max |r| <= tol * scale,
  * scale = max(1, max |rate| at the start, max |u|^2). Equilibrium: independent speeds zero,
  * every independent coordinate freed. */
 #include <float.h>
@@ -24,6 +26,7 @@
 #include "linalg/linalg.h"
 
 #define PREFER 1e-6
+#define MAX_STEP 0.25   /* trust region of one Newton step, relative to max(1, |x_j|) */
 
 static int in_list(const char *const *list, const char *name) {
   for (; list && *list; list++)
@@ -143,6 +146,12 @@ static int residual(ap_lin *L, const gn *G, const double *x, double *r) {
   return AP_OK;
 }
 
+static double norm2(const double *x, int n) {
+  double s = 0.0;
+  for (int i = 0; i < n; i++) s += x[i] * x[i];
+  return sqrt(s);
+}
+
 static double norm_inf(const double *x, int n) {
   double m = 0.0;
   for (int i = 0; i < n; i++) m = fmax(m, fabs(x[i]));
@@ -198,12 +207,16 @@ static int gn_step(ap_lin *L, gn *G, double *x, double *rn) {
   double resid = 0.0;   /* J dz = -r: A^T lambda = rhs with A = J^T (nf x nr) */
   rc = ap_la_lstsq_At(G->nf, G->nr, G->J, G->rt, 1e-10, G->dz, &resid, G->work, G->iwork);
   if (rc != AP_OK) return rc;
+  double big = 0.0, r2 = norm2(G->r, G->nr);   /* trust region: no state moves by more than */
+  for (int j = 0; j < G->nf; j++)               /* MAX_STEP max(1, |x_j|) in one step */
+    big = fmax(big, fabs(G->dz[j]) / (MAX_STEP * fmax(1.0, fabs(x[G->unk[j]]))));
+  for (int j = 0; j < G->nf && big > 1.0; j++) G->dz[j] /= big;
   for (double t = 1.0; t > 1e-4; t *= 0.5) {
     memcpy(G->xt, x, sizeof *x * (size_t)nx);
     for (int j = 0; j < G->nf; j++) G->xt[G->unk[j]] += t * G->dz[j];
     if (residual(L, G, G->xt, G->z) != AP_OK) continue;
     double rt = norm_inf(G->z, G->nr);
-    if (rt < *rn) {
+    if (norm2(G->z, G->nr) <= (1.0 - 1e-4 * t) * r2 || (rt < *rn && *rn < 1e-6)) {
       memcpy(x, G->xt, sizeof *x * (size_t)nx);
       memcpy(G->r, G->z, sizeof *G->r * (size_t)G->nr);
       *rn = rt;

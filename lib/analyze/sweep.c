@@ -4,10 +4,13 @@
  * total distance (Hungarian algorithm) to the positions predicted by linear extrapolation from
  * p_{i-2} and p_{i-1}: continuity, not sort order, so crossing branches keep their identity.
  *
- * Characteristic points, in each interval of the sweep:
- *  - crossing: a tracked eigenvalue of the same kind at both ends (real, or the upper member of a
- *    pair) whose real part changes sign, |re| above the zero threshold at both ends;
- *  - meeting: a tracked eigenvalue real at one end and complex at the other, with its partner.
+ * Characteristic points:
+ *  - crossing: a tracked eigenvalue of one kind (real, or the upper member of a pair) whose
+ *    real part changes sign between two values above the zero threshold, with at most values
+ *    of the same kind within the threshold in between (a crossing exactly at a sweep value);
+ *  - meeting: a tracked eigenvalue real at one end and complex at the other, with its partner,
+ *    the pair's spread above the zero threshold at one end at least (round-off splits a multiple
+ *    eigenvalue, e.g. a double zero, into a tiny pair and back: that is no event).
  * Each is located by the Illinois variant of regula falsi on a smooth function of the
  * eigenvalues in a cluster around the predicted event (centre c, radius rho from the interval's
  * ends): for a crossing, Re of the cluster's sum; for a meeting, 2 s2 - s1^2 with
@@ -175,38 +178,52 @@ static int partner(const sw *S, const double *r0, const double *i0, const double
   return best;
 }
 
-static int interval(sw *S, ap_lin_sweep *out, int i, double ptol) {
+/* Meetings in [p_{i-1}, p_i]: row j real at one end and complex at the other, j the upper
+ * member at its complex end, with its partner. */
+static int meetings(sw *S, ap_lin_sweep *out, int i, double ptol) {
   int n = S->n;
   double a = out->p[i - 1], b = out->p[i];
   const double *r0 = out->re + (size_t)(i - 1) * n, *i0 = out->im + (size_t)(i - 1) * n;
   const double *r1 = out->re + (size_t)i * n, *i1 = out->im + (size_t)i * n;
   for (int j = 0; j < n; j++) {
     int real0 = i0[j] == 0.0, real1 = i1[j] == 0.0;
-    event E = {AP_LIN_CROSSING, r0[j], i0[j], r1[j], i1[j], 0.0};
-    ap_lin_point pt = {AP_LIN_CROSSING, 0, 0, 0, 0, j, 0};
-    double g0, g1;
-    if (real0 == real1) {   /* crossing of a real eigenvalue or of the upper member of a pair */
-      if ((!real0 && (i0[j] < 0 || i1[j] < 0)) || fabs(r0[j]) <= S->zthr ||
-          fabs(r1[j]) <= S->zthr || (r0[j] > 0) == (r1[j] > 0))
-        continue;
-      E.rho = 0.5 * hypot(r1[j] - r0[j], i1[j] - i0[j]) + S->zthr;
-      if (!real0) E.rho = fmin(E.rho, 0.5 * fmin(i0[j], i1[j]));
-      g0 = r0[j], g1 = r1[j];
-      pt.rising = r1[j] > r0[j];
-    } else {                /* meeting: row j must be the upper member at its complex end */
-      if ((real0 ? i1[j] : i0[j]) < 0) continue;
-      int q = partner(S, r0, i0, r1, i1, j, real0);
-      if (q < 0) continue;
-      double mr0 = 0.5 * (r0[j] + r0[q]), mr1 = 0.5 * (r1[j] + r1[q]);
-      double h0 = 0.5 * hypot(r0[j] - r0[q], i0[j] - i0[q]);
-      double h1 = 0.5 * hypot(r1[j] - r1[q], i1[j] - i1[q]);
-      E = (event){AP_LIN_MEETING, mr0, 0.0, mr1, 0.0, 2.0 * fmax(h0, h1) + S->zthr};
-      g0 = real0 ? 4 * h0 * h0 : -4 * h0 * h0, g1 = real1 ? 4 * h1 * h1 : -4 * h1 * h1;
-      pt.kind = AP_LIN_MEETING, pt.rising = real0;
-    }
+    if (real0 == real1 || (real0 ? i1[j] : i0[j]) < 0) continue;
+    int q = partner(S, r0, i0, r1, i1, j, real0);
+    if (q < 0) continue;
+    double mr0 = 0.5 * (r0[j] + r0[q]), mr1 = 0.5 * (r1[j] + r1[q]);
+    double h0 = 0.5 * hypot(r0[j] - r0[q], i0[j] - i0[q]);
+    double h1 = 0.5 * hypot(r1[j] - r1[q], i1[j] - i1[q]);
+    if (fmax(h0, h1) <= S->zthr) continue;   /* a multiple zero split by round-off */
+    event E = {AP_LIN_MEETING, mr0, 0.0, mr1, 0.0, 2.0 * fmax(h0, h1) + S->zthr};
+    double g0 = real0 ? 4 * h0 * h0 : -4 * h0 * h0, g1 = real1 ? 4 * h1 * h1 : -4 * h1 * h1;
+    ap_lin_point pt = {AP_LIN_MEETING, 0, 0, 0, 0, j, real0};
     int rc = locate(S, &E, a, b, g0, g1, ptol, &pt);
     if (rc == AP_OK) rc = add_point(out, &pt);
     if (rc != AP_OK) return rc;
+  }
+  return AP_OK;
+}
+
+/* Crossings of row j: between two values of the same kind (real, or upper member of a pair)
+ * with real parts of opposite signs above the zero threshold, with only values of that kind
+ * and real parts within the threshold in between (a crossing exactly at a sweep value). */
+static int crossings(sw *S, ap_lin_sweep *out, int j, double ptol) {
+  int n = S->n, last = -1, kind = 0;
+  for (int i = 0; i < out->count; i++) {
+    double re = out->re[j + (size_t)i * n], im = out->im[j + (size_t)i * n];
+    int k = im == 0.0 ? 1 : im > 0.0 ? 2 : 3;   /* real, upper, lower */
+    if (k != kind || k == 3) last = -1, kind = k;
+    if (k == 3 || fabs(re) <= S->zthr) continue;
+    if (last >= 0 && (re > 0) != (out->re[j + (size_t)last * n] > 0)) {
+      double r0 = out->re[j + (size_t)last * n], i0 = out->im[j + (size_t)last * n];
+      event E = {AP_LIN_CROSSING, r0, i0, re, im, 0.5 * hypot(re - r0, im - i0) + S->zthr};
+      if (k == 2) E.rho = fmin(E.rho, 0.5 * fmin(i0, im));
+      ap_lin_point pt = {AP_LIN_CROSSING, 0, 0, 0, 0, j, re > r0};
+      int rc = locate(S, &E, out->p[last], out->p[i], r0, re, ptol, &pt);
+      if (rc == AP_OK) rc = add_point(out, &pt);
+      if (rc != AP_OK) return rc;
+    }
+    last = i;
   }
   return AP_OK;
 }
@@ -264,7 +281,8 @@ int ap_lin_sweep_run(ap_lin_eig_fn fn, void *user, int n, const double *p, int c
   for (size_t i = 0; rc == AP_OK && i < nn * (size_t)count; i++)
     big = fmax(big, hypot(out->re[i], out->im[i]));
   S.zthr = zero_tol * big;
-  for (int i = 1; rc == AP_OK && i < count; i++) rc = interval(&S, out, i, ptol);
+  for (int i = 1; rc == AP_OK && i < count; i++) rc = meetings(&S, out, i, ptol);
+  for (int j = 0; rc == AP_OK && j < n; j++) rc = crossings(&S, out, j, ptol);
   free(S.re), free(S.iw);
   if (rc != AP_OK) ap_lin_sweep_free(out);
   return rc;
