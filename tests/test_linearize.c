@@ -35,6 +35,7 @@
 #include <string.h>
 
 #include "analyze/analyze_int.h"
+#include "appell/scene.h"
 #include "check.h"
 #include "refsys.h"
 
@@ -562,8 +563,82 @@ static void test_errors(void) {
   ap_scene_free(sc);
 }
 
+/* ---- the scene section ---------------------------------------------------------------------- */
+
+static const char scene_text[] =
+    "bodies:\n"
+    "  disk: {mass: 1, shape: {kind: disk, radius: 0.5}, inertia: uniform}\n"
+    "joints:\n"
+    "  disk: {kind: plane_contact}\n"
+    "constraints:\n"
+    "  roll: {kind: rolling, body: disk}\n"
+    "effects:\n"
+    "  gravity: {kind: gravity}\n"
+    "initial:\n"
+    "  disk: {tilt: 90*deg, spin_rate: -6}\n"
+    "linearize:\n"
+    "  about: equilibrium\n"
+    "  initial: {disk: {tilt: 80*deg, omega: [0, 1, 2]}}\n"
+    "  speed: {disk: {spin_rate: -2, omega: [0, 0, 0.5]}}\n"
+    "  free: [disk.tilt]\n"
+    "  states: [disk.tilt, disk.wx]\n"
+    "  drop_cyclic: false\n"
+    "  sweep: {from: 0, to: 2, count: 5}\n";
+
+static void test_scene_section(void) {
+  ap_scene *sc = NULL;
+  char msg[1024];
+  AP_CHECK_EQ_INT(ap_scene_load_string(scene_text, strlen(scene_text), "s.yaml", NULL, 0, &sc,
+                                       msg, sizeof msg), AP_OK);
+  ap_scene_lin l;
+  AP_CHECK_EQ_INT(ap_scene_get_linearize(sc, &l, msg, sizeof msg), AP_OK);
+  AP_CHECK_EQ_INT(l.present, 1);
+  AP_CHECK_EQ_INT(l.about, AP_LIN_EQUILIBRIUM);
+  AP_CHECK_EQ_INT(l.nsets, 4);
+  if (l.nsets == 4) {
+    AP_CHECK(strcmp(l.sets[0], "initial.disk.tilt=80*deg") == 0);
+    AP_CHECK(strcmp(l.sets[3], "initial.disk.omega.2=2") == 0);
+  }
+  AP_CHECK_EQ_INT(l.nspeed, 4);
+  if (l.nspeed == 4) {
+    AP_CHECK(strcmp(l.speed_keys[0], "initial.disk.spin_rate") == 0);
+    AP_CHECK_NEAR(l.speed_coef[0], -2.0, 0.0);
+    AP_CHECK(strcmp(l.speed_keys[3], "initial.disk.omega.2") == 0);
+    AP_CHECK_NEAR(l.speed_coef[3], 0.5, 0.0);
+  }
+  AP_CHECK(l.free && strcmp(l.free[0], "disk.tilt") == 0 && !l.free[1]);
+  AP_CHECK(l.states && strcmp(l.states[1], "disk.wx") == 0 && !l.states[2]);
+  AP_CHECK(l.inputs == NULL && l.independent == NULL);
+  AP_CHECK_EQ_INT(l.drop_cyclic, 0);
+  AP_CHECK_EQ_INT(l.sweep_count, 5);
+  AP_CHECK_NEAR(l.sweep_to, 2.0, 0.0);
+  ap_scene_lin_free(&l);
+  ap_scene_free(sc);
+  /* bad sections: each names the line and the key path */
+  static const char *const bad[][2] = {
+      {"linearize: {abut: steady}", "did you mean 'about'"},
+      {"linearize: {about: sideways}", "unknown about 'sideways'"},
+      {"linearize: {initial: {wheel: {tilt: 1}}}", "no joint named 'wheel'"},
+      {"linearize: {speed: {disk: {spin_rate: fast}}}", "fast"},
+      {"linearize: {free: disk.tilt}", "sequence"},
+      {"linearize: {sweep: {from: 1, to: 0, count: 5}}", "greater than"},
+      {"linearize: {sweep: {from: 0, to: 1, count: 1}}", "count"}};
+  for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
+    char text[2048];
+    size_t cut = strstr(scene_text, "linearize:") - scene_text;
+    snprintf(text, sizeof text, "%.*s%s\n", (int)cut, scene_text, bad[i][0]);
+    int rc = ap_scene_load_string(text, strlen(text), "bad.yaml", NULL, 0, &sc, msg, sizeof msg);
+    AP_CHECK_EQ_INT(rc, AP_ERR_ARG);
+    if (!strstr(msg, bad[i][1]) || !strstr(msg, "bad.yaml:11:"))
+      fprintf(stderr, "  bad section %zu: %s\n", i, msg);
+    AP_CHECK(strstr(msg, bad[i][1]) != NULL);
+    AP_CHECK(strstr(msg, "bad.yaml:11:") != NULL);
+  }
+}
+
 int main(void) {
   find_srcdir();
+  test_scene_section();
   test_disk();
   test_hoffmann();
   test_sleigh();
