@@ -76,7 +76,7 @@ static void check_deriv(size_t n, const cplx *z, const double *re, const double 
 /* x = M^-1 y for a small square M (n x n, column-major) by Gaussian elimination with partial
  * pivoting on copies; several right-hand sides in Y (n x nr). */
 static void gsolve(int n, const double *M, int nr, const double *Y, double *X) {
-  double A[NMAX * NMAX], B[NMAX * NMAX];
+  double A[NMAX * NMAX] = {0}, B[NMAX * (NMAX + 2)] = {0};
   memcpy(A, M, sizeof *A * (size_t)n * n), memcpy(B, Y, sizeof *B * (size_t)n * nr);
   for (int c = 0; c < n; c++) {
     int p = c;
@@ -113,8 +113,8 @@ typedef struct part {
  * dX = Ad^-1 ([dAi da0 dgamma] - dAd X). */
 static void part_closed(const part *P, double *dB, double *db0, double *dw) {
   int b = P->b, k = P->k, r = P->r, l = k - r, nc = l + 2;
-  double Ad[NMAX * NMAX], dAd[NMAX * NMAX], R[NMAX * (NMAX + 2)], X[NMAX * (NMAX + 2)];
-  double dR[NMAX * (NMAX + 2)], T[NMAX * (NMAX + 2)];
+  double Ad[NMAX * NMAX] = {0}, dAd[NMAX * NMAX] = {0}, R[NMAX * (NMAX + 2)] = {0};
+  double X[NMAX * (NMAX + 2)] = {0}, dR[NMAX * (NMAX + 2)] = {0}, T[NMAX * (NMAX + 2)] = {0};
   for (int i = 0; i < r; i++)
     for (int s = 0; s < b; s++)
       Ad[s + i * b] = P->A[s + P->perm[i] * b], dAd[s + i * b] = P->dA[s + P->perm[i] * b];
