@@ -7,14 +7,16 @@
  * where c are chart coordinates of the configuration about a reference point and u the speeds,
  * and _I marks the independent ones:
  *  - chart coordinates: a scalar joint coordinate is its offset from the reference; a unit
- *    quaternion is the heading-first rotation vector p = qz(rot_z) qexp(rot_x e_x + rot_y e_y)
- *    p_ref (parent joint frame axes), named <joint>.rot_x, .rot_y, .rot_z. A body model has one
- *    chart coordinate per speed; a math-level system's chart is q - q_ref.
+ *    quaternion gets Euler-like angles about the reference, R = Rz(heading) Rd(tilt) R_ref
+ *    Rn(spin) (heading about the parent z axis, tilt about the horizontal d = e_z x n0, spin
+ *    about a body axis n with image n0), named <body>.heading, .tilt, .spin: a turn about the
+ *    vertical or a spin about n changes one coordinate alone. A body model has one chart
+ *    coordinate per speed; a math-level system's chart is q - q_ref.
  *  - speeds: the model's speeds, except that the speeds of a joint with a heading (planar,
  *    ball, free, plane contact) are taken in its heading frame, turned about the parent z axis
- *    by the chart heading (rot_z, or the planar heading's offset). At the reference they equal
- *    the model's speeds; the rotation makes a turn about the vertical a steady motion and the
- *    heading a cyclic coordinate.
+ *    by the chart heading (<body>.heading, or the planar heading's offset). At the reference
+ *    they equal the model's speeds; the rotation makes a turn about the vertical a steady
+ *    motion and the heading a cyclic coordinate.
  *  - holonomic rows (loop closures, the model's phi) fix the dependent chart coordinates, by
  *    Newton inside every evaluation; the velocity constraints fix the dependent speeds. Both
  *    partitions are chosen once (pivoted QR at the first operating point, preferring the names
@@ -75,7 +77,9 @@ typedef struct ap_lin ap_lin;
 
 /* Create a linearizer for model m with the guess (t, q, v) (n and k entries; v may be NULL:
  * zero). The definition is copied (names too). AP_ERR_UNSUPPORTED for a math-level system with
- * a kinematic matrix N and n != k. */
+ * a kinematic matrix N and n != k, or a joint kind the chart does not know; AP_ERR_ARG for an
+ * input that is not a speed. On such a failure *out still holds the linearizer, so that
+ * ap_lin_message can say why: free it. (NULL arguments: AP_ERR_ARG and *out = NULL.) */
 AP_API int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, const double *q,
                          const double *v, ap_lin **out);
 AP_API void ap_lin_free(ap_lin *L);

@@ -35,7 +35,7 @@ typedef struct an_quat {
 } an_quat;
 
 typedef struct an_frame {
-  int h;                    /* chart index of the heading (rot_z or a planar heading) */
+  int h;                    /* chart index of the heading (a quaternion's or a planar one) */
   int npair;
   int pair[2][2];           /* speed index pairs (along x, along y) turned by the heading */
 } an_frame;
