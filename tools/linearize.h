@@ -29,6 +29,8 @@ void lin_opts_free(lin_opts *o);
 int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep *sw);
 /* Eigenvalues of one point as CSV: index, re, im, rcond, error. */
 int lin_write_point_csv(const char *file, const ap_lin_eig *e);
+/* Refuse an output target that is a directory or the scene itself (message; -1). */
+int lin_check_target(const char *opt, const char *file, const char *scene);
 /* Real and imaginary parts against the parameter, from the CSV file written before. */
 int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
              const char *title);

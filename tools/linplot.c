@@ -1,5 +1,6 @@
 /* appell linearize: CSV files and the eigenvalue figure.
  *
+ * CSV files are written to a temporary file and renamed over the target only when complete.
  * Sweep CSV: the parameter, then re_i and im_i of each tracked eigenvalue (row i of the sweep
  * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension)
  * draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
@@ -10,16 +11,56 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "linearize.h"
 
+/* Output files are written to FILE.appell-tmp.PID and renamed over FILE only when complete,
+ * so that no partial file is left as if it were whole. */
+typedef struct out_file {
+  const char *target;
+  char tmp[4200];
+  FILE *f;
+} out_file;
+
+int lin_check_target(const char *opt, const char *file, const char *scene) {
+  struct stat st, sc;
+  if (strlen(file) > 4000)
+    return fprintf(stderr, "appell linearize: %s %s: the path is too long\n", opt, file), -1;
+  if (stat(file, &st) == 0 && S_ISDIR(st.st_mode))
+    return fprintf(stderr, "appell linearize: %s %s: is a directory; name a file\n", opt,
+                   file), -1;
+  if (stat(file, &st) == 0 && stat(scene, &sc) == 0 && st.st_dev == sc.st_dev &&
+      st.st_ino == sc.st_ino)
+    return fprintf(stderr, "appell linearize: %s %s: is the scene file; refusing to overwrite "
+                   "it\n", opt, file), -1;
+  return 0;
+}
+
+static FILE *open_out(out_file *o, const char *file) {
+  o->target = file;
+  snprintf(o->tmp, sizeof o->tmp, "%s.appell-tmp.%ld", file, (long)getpid());
+  o->f = fopen(o->tmp, "w");
+  if (!o->f) fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
+  return o->f;
+}
+
+static int close_out(out_file *o) {
+  int bad = ferror(o->f) != 0;
+  bad |= fclose(o->f) != 0;
+  if (!bad && rename(o->tmp, o->target) == 0) return 0;
+  fprintf(stderr, "appell linearize: cannot write %s: %s\n", o->target, strerror(errno));
+  remove(o->tmp);
+  return -1;
+}
+
 int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep *sw) {
-  FILE *f = fopen(file, "w");
-  if (!f) return fprintf(stderr, "appell linearize: cannot write %s: %s\n", file,
-                         strerror(errno)), -1;
+  out_file o;
+  FILE *f = open_out(&o, file);
+  if (!f) return -1;
   fprintf(f, "%s", param);
   for (int i = 0; i < sw->n; i++) fprintf(f, ",re%d,im%d", i, i);
   fprintf(f, "\n");
@@ -29,20 +70,18 @@ int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep 
       fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
     fprintf(f, "\n");
   }
-  if (fclose(f) != 0) return fprintf(stderr, "appell linearize: cannot write %s\n", file), -1;
-  return 0;
+  return close_out(&o);
 }
 
 int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
-  FILE *f = fopen(file, "w");
-  if (!f) return fprintf(stderr, "appell linearize: cannot write %s: %s\n", file,
-                         strerror(errno)), -1;
+  out_file o;
+  FILE *f = open_out(&o, file);
+  if (!f) return -1;
   fprintf(f, "index,re,im,rcond,rcondv,error\n");
   for (int i = 0; i < e->n; i++)
     fprintf(f, "%d,%.17g,%.17g,%.6g,%.6g,%.6g\n", i, e->re[i], e->im[i], e->rcond[i],
             e->rcondv[i], e->err[i]);
-  if (fclose(f) != 0) return fprintf(stderr, "appell linearize: cannot write %s\n", file), -1;
-  return 0;
+  return close_out(&o);
 }
 
 static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }

@@ -320,6 +320,9 @@ static int sweep(run *r) {
 }
 
 int lin_run(lin_opts *o) {
+  if ((o->csv && lin_check_target("--csv", o->csv, o->scene)) ||
+      (o->plot && lin_check_target("--plot", o->plot, o->scene)))
+    return EXIT_INPUT;
   run r;
   memset(&r, 0, sizeof r);
   r.o = o;
@@ -327,7 +330,8 @@ int lin_run(lin_opts *o) {
   if (rc == AP_OK) rc = guess(&r);
   if (rc == AP_OK) rc = create(&r);
   if (rc == AP_OK) rc = o->count ? sweep(&r) : one_point(&r);
-  if (rc != AP_OK) fprintf(stderr, "appell linearize: %s\n", r.msg[0] ? r.msg : ap_strerror(rc));
+  if (rc != AP_OK && rc != AP_ERR_INTERNAL)
+    fprintf(stderr, "appell linearize: %s\n", r.msg[0] ? r.msg : ap_strerror(rc));
   int code = rc == AP_ERR_INTERNAL ? EXIT_INTERNAL : cli_exit_code(rc);
   ap_lin_free(r.L);
   ap_scene_free(r.sc);
