@@ -178,6 +178,11 @@ static void print_point(const run *r) {
 static void print_eigen(const ap_lin *L) {
   ap_lin_eig e;
   ap_lin_get_eigen(L, &e);
+  if (e.n == 0) {
+    printf("eigenvalues: none: every state is cyclic (the constraints prescribe the motion); "
+           "--keep-cyclic lists the cyclic states' own, zero, eigenvalues\n");
+    return;
+  }
   printf("eigenvalues of the subsystem of %d states:", e.n);
   for (int i = 0; i < e.n; i++) printf(" %s", ap_lin_state_name(L, e.states[i]));
   printf("\n  %25s %25s %11s %11s %11s\n", "real", "imaginary", "rcond", "rcond(vec)",

@@ -83,23 +83,23 @@ static size_t ridders_size(int nv) {
 
 static int alloc_all(ap_lin *L) {
   int n = L->n, k = L->k, b = L->b, np = L->nphi, nc = L->ch.nc;
-  int mk = k > nc ? k : nc, mb = b > np ? b : np, nv = nc + k;
-  size_t big = (size_t)mk * mk + (size_t)np * n + (size_t)b * k + 1;
-  L->nwork = ap_la_work_size(mb, mk);
-  size_t nd = (size_t)nv * (nv + 16) + (size_t)n * (nc + 4) + (size_t)np * (nc + 2) + 3 * big +
-              (size_t)mb * mk + L->nwork + ridders_size(nv) + 16;
+  size_t mk = (size_t)(k > nc ? k : nc), mb = (size_t)(b > np ? b : np), nv = (size_t)nc + k;
+  size_t big = mk * mk + (size_t)np * n + (size_t)b * k + 1;
+  L->nwork = ap_la_work_size((int)mb, (int)mk);
+  struct { double **p; size_t len; } part[] = {
+      {&L->q_ref, n}, {&L->v_ref, k}, {&L->q_guess, n}, {&L->v_guess, k}, {&L->delta, nc},
+      {&L->dq, (size_t)n * nc}, {&L->Jh, (size_t)np * nc}, {&L->phi, np + 1}, {&L->Au, big},
+      {&L->Bu, big}, {&L->dd, big}, {&L->b0u, mk + 1}, {&L->F, mb * mk + 1},
+      {&L->tau, mk + mb + 1}, {&L->u, k}, {&L->udot, k}, {&L->f1, 2 * nv}, {&L->f2, nv},
+      {&L->x0, nv}, {&L->A, nv * nv}, {&L->Aerr, nv * nv}, {&L->Bm, nv * k}, {&L->F0, nv},
+      {&L->noise, nv}, {&L->ridders, ridders_size((int)nv)}, {&L->work, L->nwork}};
+  size_t np_ = sizeof part / sizeof *part, nd = 0;
+  for (size_t i = 0; i < np_; i++) nd += part[i].len + 1;
   double *p = calloc(nd, sizeof *p);
-  L->iwork = calloc(ap_la_iwork_size(mb, mk) + (size_t)4 * nv + 8, sizeof *L->iwork);
+  L->iwork = calloc(ap_la_iwork_size((int)mb, (int)mk) + 4 * nv + 8, sizeof *L->iwork);
   if (!p || !L->iwork) return free(p), AP_ERR_NOMEM;
-  L->q_ref = p, p += n, L->v_ref = p, p += k, L->q_guess = p, p += n, L->v_guess = p, p += k;
-  L->delta = p, p += nc, L->dq = p, p += (size_t)n * nc, L->Jh = p, p += (size_t)np * nc;
-  L->phi = p, p += np + 1, L->Au = p, p += big, L->Bu = p, p += big, L->dd = p, p += big;
-  L->b0u = p, p += mk + 1, L->F = p, p += (size_t)mb * mk + 1, L->tau = p, p += mk + mb + 1;
-  L->u = p, p += k, L->udot = p, p += k, L->f1 = p, p += 2 * nv, L->f2 = p, p += nv;
-  L->x0 = p, p += nv, L->A = p, p += (size_t)nv * nv, L->Aerr = p, p += (size_t)nv * nv;
-  L->Bm = p, p += (size_t)nv * k, L->F0 = p, p += nv, L->noise = p, p += nv;
-  L->ridders = p, p += ridders_size(nv), L->work = p;
-  int *ip = L->iwork + ap_la_iwork_size(mb, mk);
+  for (size_t i = 0; i < np_; i++) *part[i].p = p, p += part[i].len + 1;
+  int *ip = L->iwork + ap_la_iwork_size((int)mb, (int)mk);
   L->cperm = ip, ip += nv + 1, L->uperm = ip, ip += nv + 1, L->xvar = ip, ip += nv + 1;
   L->cyclic = ip;
   L->inputs = calloc((size_t)k + 1, sizeof *L->inputs);

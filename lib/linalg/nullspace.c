@@ -299,9 +299,10 @@ int AP_SC(ap_la_orth_basis)(int b, int k, const ap_sc *A, const ap_sc *a0, doubl
                             int *rank, ap_sc *F, ap_sc *tau, int *jpvt, ap_sc *Qf, ap_sc *Z,
                             ap_sc *b0, double *resid, ap_sc *work, int *iwork) {
   (void)iwork;
+  int m = imin(k, b), r = 0, fixed = rtol < 0.0 ? *rank : -1;   /* rtol < 0: rank given */
+  if (fixed >= 0 && fixed <= m) rtol = 0.0;
   if (bad_args(b, k, rtol)) return AP_ERR_ARG;
   if (!all_finite((size_t)b * k, A)) return AP_ERR_ARG;
-  int m = imin(k, b), r = 0;
   ap_sc *y = work, *lw = work + b;
   if (small(b, k)) { /* A^T P = Q R in F (k x b), the full Q (k x k) in Qf */
     if (b > 0) {
@@ -320,6 +321,7 @@ int AP_SC(ap_la_orth_basis)(int b, int k, const ap_sc *A, const ap_sc *a0, doubl
       for (int j = 0; j < k; j++)
         for (int i = 0; i < k; i++) Qf[i + (size_t)j * k] = i == j ? 1.0 : 0.0;
   }
+  if (fixed >= 0) r = fixed;
   memcpy(Z, Qf + (size_t)r * k, sizeof(ap_sc) * (size_t)k * (k - r));
   *rank = r;
   *resid = 0.0;
