@@ -15,6 +15,7 @@
 
 #include <stddef.h>
 
+#include "appell/analyze.h"
 #include "appell/export.h"
 #include "appell/sim.h"
 #include "appell/status.h"
@@ -101,6 +102,30 @@ AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
 /* The scene's name (name: key, default the file name without directory and extension). */
 AP_API const char *ap_scene_name(const ap_scene *s);
+
+/* The scene's linearize: section (docs/linearize.md): how to find its operating point and what
+ * to report. The guess of the operating point is the scene's initial state with the overrides
+ * `sets` applied (reload the scene with them); the speed parameter s sets each initial rate
+ * speed_keys[i] to speed_coef[i] * s. Name lists are NULL-terminated (NULL when absent). */
+typedef struct ap_scene_lin {
+  int present;             /* the scene has a linearize: section */
+  ap_lin_about about;      /* default AP_LIN_STEADY */
+  int nsets;
+  char **sets;             /* "initial.<joint>.<key>=<value>" from linearize.initial */
+  int nspeed;
+  char **speed_keys;       /* "initial.<joint>.<key>" from linearize.speed */
+  double *speed_coef;      /* their coefficients */
+  char **free, **independent, **inputs, **states;
+  int drop_cyclic;         /* default 1 */
+  double sweep_from, sweep_to;
+  int sweep_count;         /* 0: no sweep given */
+} ap_scene_lin;
+
+/* Read the linearize: section (an absent section gives present = 0 and the defaults). The
+ * result owns its arrays: ap_scene_lin_free. */
+AP_API int ap_scene_get_linearize(const ap_scene *s, ap_scene_lin *out, char *msg,
+                                  size_t msg_len);
+AP_API void ap_scene_lin_free(ap_scene_lin *l);
 
 #ifdef __cplusplus
 }

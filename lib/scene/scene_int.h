@@ -262,6 +262,8 @@ int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
+/* The linearize: section (linearize.c): keys, types and joint names checked at load. */
+int sc_parse_linearize(sc_ctx *c, const sc_scene *s);
 void sc_scene_clear(sc_scene *s);
 int sc_find_body(const sc_scene *s, const char *name);   /* -1 if none */
 int sc_find_joint(const sc_scene *s, const char *name);  /* -1 if none */
@@ -293,6 +295,8 @@ int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
 /* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
  * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
 const ap_data *sc_scene_output_data(const ap_scene *sc);
+/* The parsed scene of a loaded ap_scene. */
+const sc_scene *sc_scene_parsed(const ap_scene *sc);
 
 /* ---- building and initial state (build.c, init.c) ------------------------------------- */
 
