@@ -447,8 +447,8 @@ static void measure(const wp_problem *pr, const ap_model *m, const wp_run *r, in
 /* ---- the sweep ------------------------------------------------------------------------------ */
 
 static const char *const adaptive_methods[] = {"bs3", "dopri5", "verner6", "fehlberg8",
-                                               "adams", "bdf"};
-#define NADAPT 6
+                                               "dop853", "adams", "bdf"};
+#define NADAPT 7
 #define NTOL 10     /* 1e-3 ... 1e-12 */
 #define NFIX 12     /* rk4: h = T / (NOUT m), m = 2 ... 4096 */
 
