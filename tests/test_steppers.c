@@ -297,6 +297,21 @@ static void check_fixed_orders(void) {
   }
 }
 
+/* dop853's local slopes over the half period, N = 12 ... 204 (for docs/steppers.md: the
+ * fitted order depends on the range; printed, not asserted). */
+static void report_dop853_slopes(void) {
+  const ap_step_method *m = ap_step_method_find("dop853");
+  double T = PERIOD / 2, prev = 0.0;
+  printf("dop853 at fixed steps over [0, T/2], local slopes between N and N + 8:\n ");
+  for (int n = 12; n <= 204; n += 8) {
+    double e = fixed_error(m, T, n);
+    if (n > 12) printf(" %d:%.1f", n - 8, log(prev / e) / log((double)n / (n - 8)));
+    if ((n - 12) % 96 == 88) printf("\n ");
+    prev = e;
+  }
+  printf("\n");
+}
+
 /* Dense output: one fixed step h from the exact state at t0 = 1 (past pericentre), then
  * ap_step_dky at t0 + h/2 against the exact solution; the local error of an interpolant of
  * order r is O(h^(r+1)). Fitted over h = 0.4 / sqrt2^j, j = 1 ... 5 (DOP853's errors 4e-9 ...
@@ -654,6 +669,7 @@ int main(void) {
   check_tables();
   check_dop853_tables();
   check_fixed_orders();
+  report_dop853_slopes();
   check_dense_order();
   check_cvode_sweep();
   report_raw_erkstep();
