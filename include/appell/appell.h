@@ -9,6 +9,7 @@
 #include "appell/sim.h"
 #include "appell/body.h"
 #include "appell/scene.h"
+#include "appell/batch.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

@@ -131,6 +131,7 @@ int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene
 
 const ap_model *ap_scene_model(const ap_scene *sc) { return sc ? sc->m : NULL; }
 const ap_data *sc_scene_output_data(const ap_scene *sc) { return sc ? sc->d : NULL; }
+const sc_scene *sc_scene_parsed(const ap_scene *sc) { return sc ? &sc->s : NULL; }
 const char *ap_scene_name(const ap_scene *sc) { return sc ? sc->s.name : NULL; }
 
 void ap_scene_get_run(const ap_scene *sc, ap_scene_run *run) {

@@ -1,0 +1,14 @@
+/* appell sweep (tools/sweep.c) and its --merge of shard files (tools/sweep_merge.c). */
+#ifndef APPELL_SWEEP_H
+#define APPELL_SWEEP_H
+
+#include <stdio.h>
+
+int cmd_sweep(int argc, char **argv);
+/* Join the shard files inputs (n) into out: same header, every run of the plan exactly once,
+ * rows in run order. Returns an exit code. */
+int sweep_merge(const char *out, const char *const *inputs, int n, int quiet);
+/* Write text as one CSV field in double quotes (quotes doubled, line breaks as spaces). */
+void sweep_csv_quote(FILE *f, const char *text);
+
+#endif
