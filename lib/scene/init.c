@@ -214,7 +214,7 @@ static int consistent_state(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_
   int rc = ap_body_project_q(m, d, q, &change);
   if (rc != AP_OK) return refuse(c, s, d, "the coordinates cannot be put on their manifold");
   if (change > 1e-12)
-    append(rep, rlen, "%scoordinates corrected by %.3g (unit quaternions, loop closures)%s\n",
+    append(rep, rlen, "%scoordinates corrected by %.3g (unit quaternions, loop closures)\n",
            "", change, 0.0);
   memcpy(d->q, q, sizeof(double) * (size_t)n);
   d->basis = AP_BASIS_ORTHONORMAL;
