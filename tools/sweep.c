@@ -255,19 +255,7 @@ static int build_batch(sweep_state *s) {
   def.channels = o->channels, def.nchannels = o->nchannels;
   def.final_state = o->final;
   def.progress = on_progress, def.user = s;
-  ap_scene_run run;
-  ap_scene *sc = NULL;   /* default sample time: the scene's t_end */
-  double t_end[1];
-  if (o->nchannels && !o->ntimes) {
-    int rc = ap_scene_load(o->scene, o->sets, o->nsets, &sc, msg, sizeof msg);
-    if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
-    ap_scene_get_run(sc, &run);
-    ap_scene_free(sc);
-    t_end[0] = run.t_end;
-    def.times = t_end, def.ntimes = 1;
-  } else {
-    def.times = o->times, def.ntimes = o->ntimes;
-  }
+  def.times = o->times, def.ntimes = o->ntimes;   /* none: t_end */
   int rc = ap_batch_load(o->scene, o->sets, o->nsets, &def, &s->batch, msg, sizeof msg);
   if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
   rc = ap_batch_check_plan(s->batch, s->plan, msg, sizeof msg);

@@ -76,7 +76,8 @@ typedef struct ap_batch_def {
   int nchannels;
   const double *times;            /* times (s) at which the channels are sampled; a time that
                                      is not an output time adds a stop; NaN in a run that does
-                                     not reach it */
+                                     not reach it. None (ntimes = 0) with channels: t_end of
+                                     the scene as loaded by ap_batch_create */
   int ntimes;
   int final_state;                /* 1 (default): q and v where each run ends */
   /* Called about every 0.2 s and once at the end, from the thread that called ap_batch_run,

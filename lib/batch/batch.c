@@ -159,6 +159,11 @@ int ap_batch_create(const char *text, size_t len, const char *name, const char *
   }
   if (rc == AP_OK) {
     b->n = ap_model_n(ap_scene_model(sc)), b->k = ap_model_k(ap_scene_model(sc));
+    if (b->def.nchannels > 0 && b->def.ntimes == 0) {   /* channels at t_end */
+      ap_scene_run run;
+      ap_scene_get_run(sc, &run);
+      b->times[0] = run.t_end, b->order[0] = 0, b->def.ntimes = 1;
+    }
     rc = make_cols(b, sc, msg, msg_len);
   }
   ap_scene_free(sc);
