@@ -160,8 +160,10 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
         first = runs // n * (i - 1) + runs % n * (i - 1) // n
         count = runs // n * i + runs % n * i // n - first
     args = dict(text=text, name=name, sets=sets, grids=grids, randoms=randoms,
-                samples=n_samples, seed=int(seed), channels=tuple(channels),
-                times=tuple(float(t) for t in (times or ())), final_state=bool(final_state))
+                samples=n_samples, seed=int(seed),
+                channels=(channels,) if isinstance(channels, str) else tuple(channels),
+                times=() if times is None else tuple(float(t) for t in np.ravel(times)),
+                final_state=bool(final_state))
     if client is None:
         part = _appell.run_plan(first=first, count=count, jobs=int(jobs),
                                 progress=progress, **args)
