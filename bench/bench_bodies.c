@@ -2,8 +2,8 @@
  * math-level twin (tests/refsys.h), in the same run (issue 3 "Benchmark": the generic body
  * layer within 3x of the hand-derived system's evaluation for the same problem).
  *
- * Pairs (the body models are those of tests/test_body_rebuild.c; the same state on both
- * sides, up to the order and kind of the coordinates):
+ * Pairs (the body models of tests/bodysys.h, as tests/test_body_rebuild.c uses them; the same
+ * state on both sides, up to the order and kind of the coordinates):
  *   knife_edge      planar joint on an inclined frame + knife edge + gravity   | refsys skate
  *   sleigh          planar joint, centre of mass ahead of the blade + knife edge| refsys sleigh
  *                                                                      (explicit bias h)
@@ -30,7 +30,7 @@
 #include <time.h>
 
 #include "appell/appell.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 static volatile double sink;   /* keeps the compiler from dropping the timed work */
 
@@ -52,136 +52,8 @@ static void die(const char *what, const char *msg) {
   exit(1);
 }
 
-/* ---- body models (as tests/test_body_rebuild.c) ------------------------------------------- */
-
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  if (ap_builder_compile(b, &m) != AP_OK) die("compile", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
-}
-
-static ap_builder *builder(const char *name) {
-  ap_builder *b = NULL;
-  if (ap_builder_create(name, &b) != AP_OK) die(name, "cannot create a builder");
-  return b;
-}
-
 static void check(int rc, const char *what) {
   if (rc != AP_OK) die(what, ap_strerror(rc));
-}
-
-static int add_body(ap_builder *b, const char *name, double mass, const double *com,
-                    const double *Idiag) {
-  ap_body_def d = ap_body_def_default();
-  int id = -1;
-  d.name = name, d.mass = mass;
-  if (com) memcpy(d.com, com, sizeof d.com);
-  for (int i = 0; i < 3; i++) d.inertia[4 * i] = Idiag[i];
-  check(ap_builder_add_body(b, &d, &id), name);
-  return id;
-}
-
-static ap_model *skate_model(const rs_knife *p) {
-  ap_builder *b = builder("skate");
-  double I[3] = {0.5 * p->J + 0.1, 0.5 * p->J + 0.05, p->J}, ey[3] = {0, 1, 0};
-  add_body(b, "skate", p->m, NULL, I);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = 0;
-  ap_quat_from_axis_angle(ey, p->alpha, j.parent_frame.quat);   /* x down the slope */
-  check(ap_builder_add_joint(b, &j, NULL), "skate joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0, c.direction[1] = -1.0;
-  check(ap_builder_add_constraint(b, &c, NULL), "skate blade");
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  check(ap_builder_add_effect(b, &e, NULL), "skate gravity");
-  return compile(b);
-}
-
-static ap_model *sleigh_model(const rs_sleigh *p) {
-  ap_builder *b = builder("sleigh");
-  double com[3] = {p->a, 0, 0}, I[3] = {0.6 * p->I, 0.6 * p->I, p->I};
-  add_body(b, "sleigh", p->m, com, I);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = 0;
-  check(ap_builder_add_joint(b, &j, NULL), "sleigh joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;
-  check(ap_builder_add_constraint(b, &c, NULL), "sleigh blade");
-  return compile(b);
-}
-
-static int table_rate(double t, double f[3], void *user) {
-  const rs_turntable *p = user;
-  f[0] = rs_turntable_omega(p, t);
-  f[1] = p->dOmega;
-  return 0;
-}
-
-static ap_model *turntable_model(rs_turntable *p) {
-  ap_builder *b = builder("ball on turntable");
-  ap_body_def d = ap_body_def_default();
-  d.name = "ball", d.shape.kind = AP_SHAPE_SPHERE, d.shape.radius = p->R;
-  check(ap_body_def_uniform(&d, p->m), "ball");   /* kI = 2/5 */
-  check(ap_builder_add_body(b, &d, NULL), "ball");
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  check(ap_builder_add_joint(b, &j, NULL), "ball joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
-  c.ground.kind = AP_GROUND_TURNTABLE, c.ground.omega_fn = table_rate, c.ground.user = p;
-  check(ap_builder_add_constraint(b, &c, NULL), "roll");
-  ap_effect_def e = ap_effect_def_default();
-  check(ap_builder_add_effect(b, &e, NULL), "ball gravity");
-  return compile(b);
-}
-
-static int rod(ap_builder *b, const char *name, double mass, double comz, double I) {
-  double com[3] = {0, 0, comz}, Id[3] = {I, I, 1e-3 * I};
-  return add_body(b, name, mass, com, Id);
-}
-
-static void hoffmann_effects(ap_builder *b, const rs_hoffmann *p, int lower) {
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  check(ap_builder_add_effect(b, &e, NULL), "gravity");
-  e = ap_effect_def_default();
-  e.name = "F", e.kind = AP_EFFECT_APPLIED, e.body = lower, e.force[1] = p->F;
-  check(ap_builder_add_effect(b, &e, NULL), "F");
-}
-
-static ap_model *hoffmann_tree(const rs_hoffmann *p) {
-  ap_builder *b = builder("Hoffmann tree");
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  check(ap_builder_add_joint(b, &j, NULL), "upper joint");
-  j.name = "hinge", j.parent = up, j.child = lo;
-  j.parent_frame.pos[2] = -2 * p->a1, j.child_frame.pos[2] = p->a2;
-  check(ap_builder_add_joint(b, &j, NULL), "hinge");
-  hoffmann_effects(b, p, lo);
-  return compile(b);
-}
-
-static ap_model *hoffmann_primitive(const rs_hoffmann *p) {
-  ap_builder *b = builder("Hoffmann primitive");
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  check(ap_builder_add_joint(b, &j, NULL), "upper joint");
-  const double Ryzx[9] = {0, 1, 0, 0, 0, 1, 1, 0, 0};   /* planar x, y, normal -> y, z, x */
-  j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = lo;
-  ap_quat_from_matrix(Ryzx, j.parent_frame.quat);
-  ap_quat_from_matrix(Ryzx, j.child_frame.quat);
-  check(ap_builder_add_joint(b, &j, NULL), "lower joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "hinge", c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
-  c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
-  check(ap_builder_add_constraint(b, &c, NULL), "hinge");
-  hoffmann_effects(b, p, lo);
-  return compile(b);
 }
 
 /* ---- timing ------------------------------------------------------------------------------ */
@@ -274,8 +146,7 @@ int main(int argc, char **argv) {
   rs_knife kp = {2.0, 0.3, 9.81, 0.4};
   rs_sleigh sp = {1.0, 1.0, 1.0};
   rs_turntable tp = {1.0, 0.5, 0.4, 2.0, 0.0}, tv = {1.0, 0.5, 0.4, 0.5, 0.1};
-  rs_hoffmann hp = {1.0, 0.8, 0.5, 0.4, 0, 0, 9.81, 2.0};
-  hp.I1 = hp.m1 * hp.a1 * hp.a1 / 3, hp.I2 = hp.m2 * hp.a2 * hp.a2 / 3;
+  rs_hoffmann hp = bs_hoffmann_params();
   ap_system_def def[6];
   rs_knife_system(&kp, &def[0]);
   rs_sleigh_system(&sp, 1, &def[1]);
@@ -283,9 +154,10 @@ int main(int argc, char **argv) {
   rs_turntable_system(&tv, &def[3]);
   rs_hoffmann_reduced_system(&hp, &def[4]);
   rs_hoffmann_primitive_system(&hp, &def[5]);
-  ap_model *hand[6], *body[6] = {skate_model(&kp), sleigh_model(&sp), turntable_model(&tp),
-                                 turntable_model(&tv), hoffmann_tree(&hp),
-                                 hoffmann_primitive(&hp)};
+  ap_model *hand[6], *body[6] = {bs_skate_model(&kp), bs_sleigh_model(&sp),
+                                 bs_turntable_model(&tp), bs_turntable_model(&tv),
+                                 bs_hoffmann_tree(&hp, 0, 0.0), bs_hoffmann_primitive(&hp)};
+  if (bs_failures() > 0) die("body models", "cannot build (see above)");
   for (int i = 0; i < 6; i++) {
     char msg[256];
     if (ap_model_from_system(&def[i], &hand[i], msg, sizeof msg) != AP_OK) die("refsys", msg);

@@ -23,85 +23,12 @@
 #include <string.h>
 
 #include "check.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 #define RTOL 1e-11
 #define ATOL 1e-13
 
-typedef struct disk {
-  double m, r, grav, A, C;
-  int torus;        /* a torus of the same radius (tube 0.02 m) instead of the thin disk */
-} disk;
-
-static ap_model *disk_model(const disk *p, int spin_row) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create(p->torus ? "rolling torus" : "rolling disk", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = p->torus ? "wheel" : "disk";
-  d.shape.kind = p->torus ? AP_SHAPE_TORUS : AP_SHAPE_DISK;
-  d.shape.radius = p->r, d.shape.tube = p->torus ? 0.02 : 0.0;
-  d.mass = p->m;
-  d.inertia[0] = d.inertia[4] = p->A, d.inertia[8] = p->C;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0, c.no_spin = spin_row;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  ap_model *m = NULL;
-  int rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) fprintf(stderr, "%s\n", ap_builder_message(b));
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  ap_builder_free(b);
-  return m;
-}
-
-/* Body state from heading psi, lean theta, spin phase phi, theta', w_a, w_n and the centre's
- * (x, y); the centre velocity follows from rolling: v = w x (r_eff b_up) for a disk (for the
- * torus the contact is (r + tube) below... handled by ap_body_complete_speeds). */
-static void disk_state(const ap_model *m, ap_data *d, double psi, double th, double phi,
-                       double thd, double wa, double wn, double *q, double *v) {
-  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3];
-  for (int i = 0; i < 3; i++) {
-    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
-    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
-  }
-  double R0[9], R[9], c = cos(phi), s = sin(phi);
-  for (int i = 0; i < 3; i++) R0[i] = e1[i], R0[3 + i] = -bu[i], R0[6 + i] = a[i];
-  for (int i = 0; i < 3; i++) {   /* R = R0 Rz(phi) */
-    R[i] = c * R0[i] + s * R0[3 + i];
-    R[3 + i] = -s * R0[i] + c * R0[3 + i];
-    R[6 + i] = R0[6 + i];
-  }
-  q[0] = 0.1, q[1] = -0.2;
-  ap_quat_from_matrix(R, q + 2);
-  for (int i = 0; i < 3; i++) v[2 + i] = -thd * e1[i] + wa * bu[i] + wn * a[i];
-  int given[5] = {0, 0, 1, 1, 1};
-  d->t = 0.0;
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q, given, v), AP_OK);
-}
-
-/* REFERENCES' variables from the body state. */
-static void disk_read(const double *q, const double *v, double *th, double *thd, double *wa,
-                      double *wn) {
-  double R[9], a[3], bu[3], w[3] = {v[2], v[3], v[4]};
-  ap_quat_to_matrix(q + 2, R);
-  for (int i = 0; i < 3; i++) a[i] = R[6 + i];
-  double ah = hypot(a[0], a[1]);
-  *th = atan2(-a[2], ah);
-  for (int i = 0; i < 3; i++) bu[i] = (i == 2) - a[2] * a[i];
-  double nb = sqrt(bu[0] * bu[0] + bu[1] * bu[1] + bu[2] * bu[2]);
-  *wa = *wn = 0.0;
-  for (int i = 0; i < 3; i++) *wa += w[i] * bu[i] / nb, *wn += w[i] * a[i];
-  double azd = w[0] * a[1] - w[1] * a[0];   /* (w x a)_z */
-  *thd = -azd / cos(*th);
-}
-
-static double ref_energy(const disk *p, double th, double thd, double wa, double wn) {
+static double ref_energy(const bs_disk *p, double th, double thd, double wa, double wn) {
   double mr2 = p->m * p->r * p->r;
   return 0.5 * mr2 * (wn * wn + thd * thd) +
          0.5 * (p->A * thd * thd + p->A * wa * wa + p->C * wn * wn) +
@@ -114,13 +41,13 @@ static double ref_energy(const disk *p, double th, double thd, double wa, double
  * h = ((C + m r^2) w_a w_n + A w_a^2 tan(theta), -theta' (C w_n + A w_a tan(theta)),
  * -m r^2 theta' w_a), Q = (m g r sin(theta), 0, 0). */
 static int ref_metric(double t, const double *q, double *g, void *user) {
-  const disk *p = user;
+  const bs_disk *p = user;
   (void)t, (void)q;
   g[0] = p->A + p->m * p->r * p->r, g[4] = p->A, g[8] = p->C + p->m * p->r * p->r;
   return 0;
 }
 static int ref_bias(double t, const double *q, const double *v, double *h, void *user) {
-  const disk *p = user;
+  const bs_disk *p = user;
   double tn = tan(q[0]), mr2 = p->m * p->r * p->r;
   (void)t;
   h[0] = (p->C + mr2) * v[1] * v[2] + p->A * v[1] * v[1] * tn;
@@ -129,7 +56,7 @@ static int ref_bias(double t, const double *q, const double *v, double *h, void 
   return 0;
 }
 static int ref_force(double t, const double *q, const double *v, double *Q, void *user) {
-  const disk *p = user;
+  const bs_disk *p = user;
   (void)t, (void)v;
   Q[0] = p->m * p->grav * p->r * sin(q[0]);
   return 0;
@@ -137,36 +64,20 @@ static int ref_force(double t, const double *q, const double *v, double *Q, void
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const double *q0,
                      const double *v0) {
-  ap_sim_def sd = ap_sim_def_default();
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  sd.mode = mode, sd.method = method, sd.rtol = RTOL, sd.atol = ATOL;
-  int rc = ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg);
-  if (rc != AP_OK) fprintf(stderr, "ap_sim_create: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, method, RTOL, ATOL, q0, v0);
 }
-
-static double energy(const ap_model *m, ap_data *d, const double *q, const double *v) {
-  double T = 0.0, V = 0.0;
-  memcpy(d->q, q, 6 * sizeof *q), memcpy(d->v, v, 5 * sizeof *v);
-  AP_CHECK_EQ_INT(ap_body_energy(m, d, &T, &V), AP_OK);
-  return T + V;
-}
-
-static const disk D0 = {1.5, 0.3, 9.81, 1.5 * 0.09 / 4, 1.5 * 0.09 / 2, 0};
 
 /* ---- energy over 10 s, and REFERENCES' equations --------------------------------------------- */
 
 static void test_energy_and_equations(void) {
-  disk p = D0;
-  ap_model *m = disk_model(&p, 0);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double q0[6], v0[5], th, thd, wa, wn;
-  disk_state(m, d, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q0, v0);
-  disk_read(q0, v0, &th, &thd, &wa, &wn);
-  double E0 = energy(m, d, q0, v0), Er = ref_energy(&p, th, thd, wa, wn);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q0, v0), AP_OK);
+  bs_disk_read(q0, v0, &th, &thd, &wa, &wn);
+  double E0 = bs_energy(m, d, q0, v0), Er = ref_energy(&p, th, thd, wa, wn);
   printf("rolling disk: theta %.3f theta' %.3f w_a %.3f w_n %.3f; energy %.15f (REFERENCES: "
          "%.15f)\n", th, thd, wa, wn, E0, Er);
   AP_CHECK_NEAR(E0, Er, 1e-14 * fabs(Er));
@@ -198,8 +109,8 @@ static void test_energy_and_equations(void) {
         AP_CHECK(0);
         break;
       }
-      dE = fmax(dE, fabs(energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / fabs(E0));
-      disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
+      dE = fmax(dE, fabs(bs_energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / fabs(E0));
+      bs_disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
       double got[4] = {th, thd, wa, wn}, *ref = refs[i];
       for (int c = 0; c < 4; c++) dref = fmax(dref, fabs(got[c] - ref[c]) / fmax(1, fabs(ref[c])));
     }
@@ -235,22 +146,20 @@ static void test_energy_and_equations(void) {
 /* ---- steady circular rolling ----------------------------------------------------------------- */
 
 static void test_steady(void) {
-  disk p = D0;
-  ap_model *m = disk_model(&p, 0);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   const double cases[3][2] = {{0.3, 2.0}, {-0.5, -3.0}, {1.2, 6.0}};   /* theta, Omega */
   for (int c = 0; c < 3; c++) {
-    double th0 = cases[c][0], Om = cases[c][1], mr2 = p.m * p.r * p.r;
-    double wa0 = Om * cos(th0);
-    double wn0 = (p.m * p.grav * p.r * sin(th0) / (Om * cos(th0)) - p.A * Om * sin(th0)) /
-                 (p.C + mr2);
+    double th0 = cases[c][0], Om = cases[c][1], wa0, wn0;
+    bs_disk_steady_rates(&p, th0, Om, &wa0, &wn0);
     double q0[6], v0[5], th, thd, wa, wn, dev = 0.0;
-    disk_state(m, d, 0.4, th0, 0.0, 0.0, wa0, wn0, q0, v0);
+    AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.4, th0, 0.0, 0.0, wa0, wn0, q0, v0), AP_OK);
     ap_sim *s = start(m, AP_MODE_MINIMAL, "verner6", q0, v0);
     for (int i = 1; s && i <= 10; i++) {
       AP_CHECK_EQ_INT(ap_sim_advance(s, 0.5 * i), AP_OK);
-      disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
+      bs_disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
       dev = fmax(dev, fmax(fabs(th - th0), fmax(fabs(wa - wa0), fabs(wn - wn0))));
     }
     printf("steady rolling theta %.2f Omega %.1f (w_n %.4f): max deviation over 5 s %.1e\n",
@@ -265,13 +174,13 @@ static void test_steady(void) {
 /* ---- the critical speed of upright rolling --------------------------------------------------- */
 
 static double max_tilt(const ap_model *m, ap_data *d, double speed) {
-  const disk p = D0;
+  const bs_disk p = bs_disk_default();
   double q0[6], v0[5], th, thd, wa, wn, mx = 0.0;
-  disk_state(m, d, 0.0, 0.0, 0.0, 1e-3, 0.0, speed / p.r, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, 0.0, 0.0, 1e-3, 0.0, speed / p.r, q0, v0), AP_OK);
   ap_sim *s = start(m, AP_MODE_MINIMAL, "dopri5", q0, v0);
   for (int i = 1; s && i <= 100; i++) {
     AP_CHECK_EQ_INT(ap_sim_advance(s, 0.05 * i), AP_OK);
-    disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
+    bs_disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
     mx = fmax(mx, fabs(th));
     if (mx > 0.3) break;
   }
@@ -280,8 +189,8 @@ static double max_tilt(const ap_model *m, ap_data *d, double speed) {
 }
 
 static void test_critical(void) {
-  disk p = D0;
-  ap_model *m = disk_model(&p, 0);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double vc = sqrt(p.grav * p.r / 3);
@@ -300,28 +209,28 @@ static void test_critical(void) {
  * centre at rest and the contact point running round the rim at Omega. flip turns the body
  * upside down (axis 0.1 degree beyond flat, the same motion). */
 static void euler_disk(int flip) {
-  disk p = D0;
-  ap_model *m = disk_model(&p, 0);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double th0 = (90.0 - 0.1) * RS_PI / 180, Om = sqrt(p.m * p.grav * p.r / (p.A * cos(th0)));
   double q0[6], v0[5], th, thd, wa, wn, dth = 0.0, dE = 0.0;
-  disk_state(m, d, 0.0, th0, 0.0, 0.0, Om * cos(th0), 0.0, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, th0, 0.0, 0.0, Om * cos(th0), 0.0, q0, v0), AP_OK);
   if (flip) {
     double qf[4] = {0, 1, 0, 0}, qn[4];
     ap_quat_mul(q0 + 2, qf, qn);
     memcpy(q0 + 2, qn, sizeof qn);
   }
-  double E0 = energy(m, d, q0, v0);
+  double E0 = bs_energy(m, d, q0, v0);
   ap_sim *s = start(m, AP_MODE_MINIMAL, "verner6", q0, v0);
   for (int i = 1; s && i <= 20; i++) {
     int rc = ap_sim_advance(s, 0.01 * i);
     if (rc != AP_OK) fprintf(stderr, "%s\n", ap_sim_message(s));
     AP_CHECK_EQ_INT(rc, AP_OK);
     if (rc != AP_OK) break;
-    disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
+    bs_disk_read(ap_sim_q(s), ap_sim_v(s), &th, &thd, &wa, &wn);
     dth = fmax(dth, fabs(fabs(th) - th0));
-    dE = fmax(dE, fabs(energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
+    dE = fmax(dE, fabs(bs_energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
   }
   ap_sim_stats st;
   ap_sim_get_stats(s, &st);
@@ -338,13 +247,13 @@ static void euler_disk(int flip) {
 /* Released at rest at a 0.5 rad lean, a disk (or torus) falls flat: the simulation must stop
  * with an error naming the body, with a finite state. */
 static void falls_flat(int torus) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   p.torus = torus;
-  ap_model *m = disk_model(&p, 0);
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double q0[6], v0[5];
-  disk_state(m, d, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, q0, v0), AP_OK);
   ap_sim *s = start(m, AP_MODE_MINIMAL, "dopri5", q0, v0);
   int rc = s ? ap_sim_advance(s, 3.0) : AP_OK;
   const char *msg = s ? ap_sim_message(s) : "";
@@ -367,5 +276,6 @@ int main(void) {
   euler_disk(1);
   falls_flat(0);
   falls_flat(1);
+  AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_body_disk");
 }

@@ -1,13 +1,14 @@
 /* The hand-derived reference systems (tests/refsys.c) rebuilt from bodies.
  *
- * Each problem is described with bodies, joints, constraints and effects only, compiled, and
- * compared with its math-level twin at matching coordinates (random states, same speeds up to a
- * permutation): g, h, Q, A, a0 and gamma must agree to round-off (ROUND = 1e-13 relative to
- * max(1, |entry|): both sides evaluate the same closed expressions through different sums of a
- * few O(1) products, so differences are a few ulps). Then the body models are integrated at
- * rtol 1e-11 and compared with the closed forms of REFERENCES.md (POS_TOL = 1e-8, the target
- * REFERENCES.md gives for rtol 1e-11 over these times) or, for Hoffmann's pendulum, with the
- * hand-derived reduced system integrated the same way:
+ * Each problem is described with bodies, joints, constraints and effects only (the models of
+ * tests/bodysys.c), compiled, and compared with its math-level twin at matching coordinates
+ * (random states, same speeds up to a permutation): g, h, Q, A, a0 and gamma must agree to
+ * round-off (ROUND = 1e-13 relative to max(1, |entry|): both sides evaluate the same closed
+ * expressions through different sums of a few O(1) products, so differences are a few ulps).
+ * Then the body models are integrated at rtol 1e-11 and compared with the closed forms of
+ * REFERENCES.md (POS_TOL = 1e-8, the target REFERENCES.md gives for rtol 1e-11 over these
+ * times) or, for Hoffmann's pendulum, with the hand-derived reduced system integrated the same
+ * way:
  *   skate on an incline     planar joint on an inclined frame + knife edge + gravity
  *   Chaplygin sleigh        planar joint, centre of mass ahead of the blade + knife edge
  *   ball on a turntable     sphere on the plane-contact joint + rolling on a turntable
@@ -21,7 +22,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 #define ROUND 1e-13
 #define RTOL 1e-11
@@ -36,31 +37,11 @@ static double urand(void) {
 }
 static double srand1(void) { return 2.0 * urand() - 1.0; }
 
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  int rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) fprintf(stderr, "compile: %s\n", ap_builder_message(b));
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  ap_builder_free(b);
-  return m;
-}
-
 static ap_model *from_system(ap_system_def *def) {
   ap_model *m = NULL;
   char msg[256];
   AP_CHECK_EQ_INT(ap_model_from_system(def, &m, msg, sizeof msg), AP_OK);
   return m;
-}
-
-static int add(ap_builder *b, const char *name, double mass, const double *com,
-               const double *Idiag) {
-  ap_body_def d = ap_body_def_default();
-  int id = -1;
-  d.name = name, d.mass = mass;
-  if (com) memcpy(d.com, com, sizeof d.com);
-  for (int i = 0; i < 3; i++) d.inertia[4 * i] = Idiag[i];
-  AP_CHECK(ap_builder_add_body(b, &d, &id) == AP_OK);
-  return id;
 }
 
 /* ---- comparing a body model with its math-level twin -------------------------------------- */
@@ -124,14 +105,7 @@ static double compare(const ap_model *mb, ap_data *db, const ap_model *mr, ap_da
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const double *q0,
                      const double *v0) {
-  ap_sim_def sd = ap_sim_def_default();
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  sd.mode = mode, sd.method = method, sd.rtol = RTOL, sd.atol = ATOL;
-  int rc = ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg);
-  if (rc != AP_OK) fprintf(stderr, "ap_sim_create (%s): %s\n", ap_model_name(m), msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, method, RTOL, ATOL, q0, v0);
 }
 
 static int advance(ap_sim *s, double t) {
@@ -146,30 +120,11 @@ static const char *const mode_names[2] = {"minimal", "projected"};
 
 /* ---- 1. skate on an inclined plane ----------------------------------------------------------- */
 
-static ap_model *skate_model(const rs_knife *p) {
-  ap_builder *b = NULL;
-  double I[3] = {0.5 * p->J + 0.1, 0.5 * p->J + 0.05, p->J}, ey[3] = {0, 1, 0};
-  AP_CHECK(ap_builder_create("skate", &b) == AP_OK);
-  add(b, "skate", p->m, NULL, I);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = 0;
-  ap_quat_from_axis_angle(ey, p->alpha, j.parent_frame.quat);   /* x down the slope */
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;
-  c.direction[1] = -1.0;   /* refsys row: [sin phi, -cos phi, 0] */
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
 static void test_skate(void) {
   rs_knife p = {2.0, 0.3, 9.81, 0.3};
   ap_system_def def;
   rs_knife_system(&p, &def);
-  ap_model *mb = skate_model(&p), *mr = from_system(&def);
+  ap_model *mb = bs_skate_model(&p), *mr = from_system(&def);
   ap_data *db = NULL, *dr = NULL;
   ap_data_create(mb, &db), ap_data_create(mr, &dr);
   double e = 0.0;
@@ -200,25 +155,11 @@ static void test_skate(void) {
 
 /* ---- 2. Chaplygin sleigh --------------------------------------------------------------------- */
 
-static ap_model *sleigh_model(const rs_sleigh *p) {
-  ap_builder *b = NULL;
-  double com[3] = {p->a, 0, 0}, I[3] = {0.6 * p->I, 0.6 * p->I, p->I};
-  AP_CHECK(ap_builder_create("sleigh", &b) == AP_OK);
-  add(b, "sleigh", p->m, com, I);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;   /* direction (0, 1, 0) */
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  return compile(b);
-}
-
 static void test_sleigh(void) {
   rs_sleigh p = {1.0, 1.0, 1.0};
   ap_system_def def;
   rs_sleigh_system(&p, 1, &def);
-  ap_model *mb = sleigh_model(&p), *mr = from_system(&def);
+  ap_model *mb = bs_sleigh_model(&p), *mr = from_system(&def);
   ap_data *db = NULL, *dr = NULL;
   ap_data_create(mb, &db), ap_data_create(mr, &dr);
   double e = 0.0;
@@ -251,37 +192,11 @@ static void test_sleigh(void) {
 
 /* ---- 3. ball on a turntable ------------------------------------------------------------------ */
 
-static int table_rate(double t, double f[3], void *user) {
-  const rs_turntable *p = user;
-  f[0] = rs_turntable_omega(p, t);
-  f[1] = p->dOmega;
-  return 0;
-}
-
-static ap_model *turntable_model(rs_turntable *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("ball on turntable", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "ball", d.shape.kind = AP_SHAPE_SPHERE, d.shape.radius = p->R;
-  AP_CHECK(ap_body_def_uniform(&d, p->m) == AP_OK);   /* kI = 2/5 */
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
-  c.ground.kind = AP_GROUND_TURNTABLE, c.ground.omega_fn = table_rate, c.ground.user = p;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();   /* gravity: no generalized force on a sphere */
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
 static void test_turntable(double dOmega) {
   rs_turntable p = {1.2, 0.3, 0.4, 1.1, dOmega};
   ap_system_def def;
   rs_turntable_system(&p, &def);
-  ap_model *mb = turntable_model(&p), *mr = from_system(&def);
+  ap_model *mb = bs_turntable_model(&p), *mr = from_system(&def);
   ap_data *db = NULL, *dr = NULL;
   ap_data_create(mb, &db), ap_data_create(mr, &dr);
   double e = 0.0;
@@ -317,74 +232,12 @@ static void test_turntable(double dOmega) {
 
 /* ---- 4. Hoffmann's two-rod pendulum ---------------------------------------------------------- */
 
-/* Rod `name` with its centre of mass at com, inertia I about the hinge axis x (a thin rod:
- * the axial inertia is a small positive number that never enters the planar motion). */
-static int rod(ap_builder *b, const char *name, double mass, double comz, double I) {
-  double com[3] = {0, 0, comz}, Id[3] = {I, I, 1e-3 * I};
-  return add(b, name, mass, com, Id);
-}
-
-static void hoffmann_effects(ap_builder *b, const rs_hoffmann *p, int lower) {
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  e = ap_effect_def_default();
-  e.name = "F", e.kind = AP_EFFECT_APPLIED, e.body = lower, e.force[1] = p->F;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-}
-
-/* Primitive: the upper rod on a revolute (theta), the lower on a planar joint in the world
- * y-z plane (y, z, phi), the hinge as coincident points along y and z. */
-static ap_model *hoffmann_primitive(const rs_hoffmann *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("Hoffmann primitive", &b) == AP_OK);
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  const double Ryzx[9] = {0, 1, 0, 0, 0, 1, 1, 0, 0};   /* planar x, y, normal -> y, z, x */
-  j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = lo;
-  ap_quat_from_matrix(Ryzx, j.parent_frame.quat);
-  ap_quat_from_matrix(Ryzx, j.child_frame.quat);
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "hinge", c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
-  c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  hoffmann_effects(b, p, lo);
-  return compile(b);
-}
-
-/* Tree: two revolutes about x; the lower rod's angle psi is relative (phi = theta + psi).
- * With a point-on-plane loop the lower rod's end slides on the vertical line y = y_line. */
-static ap_model *hoffmann_tree(const rs_hoffmann *p, int slide, double y_line) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create(slide ? "Hoffmann sliding" : "Hoffmann tree", &b) == AP_OK);
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  j.name = "hinge", j.parent = up, j.child = lo;
-  j.parent_frame.pos[2] = -2 * p->a1, j.child_frame.pos[2] = p->a2;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  if (slide) {
-    ap_constraint_def c = ap_constraint_def_default();
-    c.name = "slider", c.kind = AP_CON_POINT_ON_PLANE, c.body = lo, c.body2 = AP_GROUND;
-    c.point[2] = -p->a2, c.point2[1] = y_line;   /* normal (0, 1, 0): the default */
-    AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  }
-  hoffmann_effects(b, p, lo);
-  return compile(b);
-}
-
 static void test_hoffmann(void) {
-  rs_hoffmann p = {1.0, 0.8, 0.5, 0.4, 0, 0, 9.81, 2.0};
-  p.I1 = p.m1 * p.a1 * p.a1 / 3, p.I2 = p.m2 * p.a2 * p.a2 / 3;
+  rs_hoffmann p = bs_hoffmann_params();
   ap_system_def dprim, dred;
   rs_hoffmann_primitive_system(&p, &dprim);
   rs_hoffmann_reduced_system(&p, &dred);
-  ap_model *mp = hoffmann_primitive(&p), *mt = hoffmann_tree(&p, 0, 0.0);
+  ap_model *mp = bs_hoffmann_primitive(&p), *mt = bs_hoffmann_tree(&p, 0, 0.0);
   ap_model *rp = from_system(&dprim), *rr = from_system(&dred);
   ap_data *dp = NULL, *dt = NULL, *ep = NULL, *er = NULL;
   ap_data_create(mp, &dp), ap_data_create(mt, &dt), ap_data_create(rp, &ep),
@@ -446,17 +299,13 @@ static double hoff_energy(const rs_hoffmann *p, const ap_model *m, ap_data *d, c
 }
 
 static void test_hoffmann_sliding(void) {
-  rs_hoffmann p = {1.0, 0.8, 0.5, 0.4, 0, 0, 9.81, 2.0};
-  p.I1 = p.m1 * p.a1 * p.a1 / 3, p.I2 = p.m2 * p.a2 * p.a2 / 3;
+  rs_hoffmann p = bs_hoffmann_params();
   double y_line = 0.3;
-  ap_model *m = hoffmann_tree(&p, 1, y_line);
+  ap_model *m = bs_hoffmann_tree(&p, 1, y_line);
   ap_data *d = NULL;
   ap_data_create(m, &d);
-  double q0[2] = {0.5, -0.5}, v0[2] = {1.0, 0.0}, change = 0.0, qe[2];
-  int given[2] = {1, 0};
-  d->t = 0.0;
-  AP_CHECK(ap_body_project_q(m, d, q0, &change) == AP_OK);   /* assemble from a rough guess */
-  AP_CHECK(ap_body_complete_speeds(m, d, q0, given, v0) == AP_OK);
+  double q0[2], v0[2], change = 0.0, qe[2];
+  AP_CHECK_EQ_INT(bs_hoffmann_sliding_state(m, q0, v0, &change), AP_OK);
   double y_end = 2 * p.a1 * sin(q0[0]) + 2 * p.a2 * sin(q0[0] + q0[1]);
   printf("Hoffmann 2nd example: assembled psi = %.12f (moved %.2g), lower end y = %.15f\n",
          q0[1], change, y_end);
@@ -493,5 +342,6 @@ int main(void) {
   test_turntable(0.25);
   test_hoffmann();
   test_hoffmann_sliding();
+  AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_body_rebuild");
 }

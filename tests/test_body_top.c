@@ -18,30 +18,14 @@
 #include <string.h>
 
 #include "check.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 #define RTOL 1e-11
 #define INV_TOL 1e-9
 
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  int rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) fprintf(stderr, "%s\n", ap_builder_message(b));
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  ap_builder_free(b);
-  return m;
-}
-
 static ap_sim *start_tol(const ap_model *m, ap_mode mode, const char *method, const double *q0,
                          const double *v0, double rtol) {
-  ap_sim_def sd = ap_sim_def_default();
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  sd.mode = mode, sd.method = method, sd.rtol = rtol, sd.atol = 1e-2 * rtol;
-  int rc = ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg);
-  if (rc != AP_OK) fprintf(stderr, "ap_sim_create: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, method, rtol, 1e-2 * rtol, q0, v0);
 }
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const double *q0,
@@ -51,26 +35,8 @@ static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const 
 
 /* ---- heavy symmetric top --------------------------------------------------------------------- */
 
-typedef struct top { double m, l, A0, C, grav; } top;
-
-static ap_model *top_model(const top *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("heavy top", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "top", d.mass = p->m, d.com[2] = p->l;
-  d.inertia[0] = d.inertia[4] = p->A0, d.inertia[8] = p->C;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_BALL, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
 /* Energy, L_z about the pivot and the spin w . a from the state (q = quaternion, v = w). */
-static void top_invariants(const top *p, const double *q, const double *w, double inv[3]) {
+static void top_invariants(const bs_top *p, const double *q, const double *w, double inv[3]) {
   double R[9], a[3], c[3], Iw[3], L[3];
   ap_quat_to_matrix(q, R);
   for (int i = 0; i < 3; i++) a[i] = R[6 + i], c[i] = p->l * a[i];
@@ -89,13 +55,11 @@ static void top_invariants(const top *p, const double *q, const double *w, doubl
 }
 
 static void test_top(void) {
-  top p = {0.5, 0.1, 2e-3, 3e-3, 9.81};
-  ap_model *m = top_model(&p);
-  double ex[3] = {1, 0, 0}, q0[4], v0[3], inv0[3];
-  ap_quat_from_axis_angle(ex, 0.5, q0);
-  double R[9];
-  ap_quat_to_matrix(q0, R);
-  for (int i = 0; i < 3; i++) v0[i] = 50.0 * R[6 + i] + (i == 2 ? 1.0 : 0.0) + (i == 0 ? 0.3 : 0);
+  bs_top p = bs_top_default();
+  ap_model *m = bs_top_model(&p);
+  double q0[4], v0[3], inv0[3];
+  if (!m) return;
+  bs_top_initial(q0, v0);
   top_invariants(&p, q0, v0, inv0);
   ap_data *d = NULL;
   ap_data_create(m, &d);
@@ -128,40 +92,15 @@ static void test_top(void) {
 
 /* ---- rattleback ------------------------------------------------------------------------------ */
 
-static ap_model *rattleback_model(void) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("rattleback", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "rattleback", d.shape.kind = AP_SHAPE_ELLIPSOID;
-  d.shape.semi_axes[0] = 0.2, d.shape.semi_axes[1] = 0.03, d.shape.semi_axes[2] = 0.02;
-  AP_CHECK(ap_body_def_uniform(&d, 1.0) == AP_OK);
-  /* principal axes turned by 0.1 rad about z against the shape's: a product term I_xy */
-  double c = cos(0.1), s = sin(0.1), I1 = d.inertia[0], I2 = d.inertia[4];
-  d.inertia[0] = c * c * I1 + s * s * I2, d.inertia[4] = s * s * I1 + c * c * I2;
-  d.inertia[1] = d.inertia[3] = c * s * (I1 - I2);
-  d.com[2] = -0.01;   /* centre of mass below the centre: stable on its bottom */
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def con = ap_constraint_def_default();
-  con.name = "roll", con.body = 0;
-  AP_CHECK(ap_builder_add_constraint(b, &con, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
 static void test_rattleback(void) {
-  ap_model *m = rattleback_model();
+  ap_model *m = bs_rattleback_model(0.1);
   ap_data *d = NULL;
   double t_first[2] = {0, 0};
+  if (!m) return;
   ap_data_create(m, &d);
   for (int dir = -1; dir <= 1; dir += 2) {
-    double q0[6] = {0, 0, 1, 0, 0, 0}, v0[5] = {0, 0, 0.0, 0.02, 5.0 * dir}, E0, T, V;
-    int given[5] = {0, 0, 1, 1, 1};
-    d->t = 0.0;
-    AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q0, given, v0), AP_OK);
+    double q0[6], v0[5], E0, T, V;
+    AP_CHECK_EQ_INT(bs_rattleback_state(m, d, 0.02, 5.0 * dir, q0, v0), AP_OK);
     memcpy(d->q, q0, sizeof q0), memcpy(d->v, v0, sizeof v0);
     AP_CHECK(ap_body_energy(m, d, &T, &V) == AP_OK);
     E0 = T + V;
@@ -196,5 +135,6 @@ static void test_rattleback(void) {
 int main(void) {
   test_top();
   test_rattleback();
+  AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_body_top");
 }

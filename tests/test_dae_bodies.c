@@ -31,22 +31,13 @@
 
 #include "check.h"
 #include "core/core.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 static const double RTOL = 1e-9, ATOL = 1e-11;
 static const double DAE_LAMBDA_FACTOR = 1e4;
 
 static double bound(double xmax) { return 10.0 * (RTOL * xmax + ATOL); }
 static double bound_dae_lambda(double lmax) { return DAE_LAMBDA_FACTOR * RTOL * (1 + lmax); }
-
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  int rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) fprintf(stderr, "compile: %s\n", ap_builder_message(b));
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  ap_builder_free(b);
-  return m;
-}
 
 static ap_sim_def sim_def(ap_mode mode) {
   ap_sim_def sd = ap_sim_def_default();
@@ -55,228 +46,30 @@ static ap_sim_def sim_def(ap_mode mode) {
 }
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const double *q0, const double *v0) {
-  ap_sim_def sd = sim_def(mode);
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  int rc = ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg);
-  if (rc != AP_OK) fprintf(stderr, "ap_sim_create: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, "verner6", RTOL, ATOL, q0, v0);
 }
 
 /* ---- models ---------------------------------------------------------------------------------- */
 
-typedef struct disk { double m, r, grav, A, C; } disk;
-static const disk D0 = {1.5, 0.3, 9.81, 1.5 * 0.09 / 4, 1.5 * 0.09 / 2};
-
-/* A thin uniform disk rolling on the plane; with lift > 0 an applied force (0, 0, lift) at its
- * centre. */
-static ap_model *disk_model(const disk *p, double lift) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("rolling disk", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "disk", d.shape.kind = AP_SHAPE_DISK, d.shape.radius = p->r, d.mass = p->m;
-  d.inertia[0] = d.inertia[4] = p->A, d.inertia[8] = p->C;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  if (lift > 0) {
-    e = ap_effect_def_default();
-    e.name = "lift", e.kind = AP_EFFECT_APPLIED, e.body = 0, e.force[2] = lift;
-    AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  }
-  return compile(b);
+/* A rolling disk (bodysys.h); with lift > 0 an applied force (0, 0, lift) at its centre. */
+static ap_model *disk_model(const bs_disk *p, double lift) {
+  bs_disk c = *p;
+  c.lift = lift;
+  return bs_disk_model(&c);
 }
 
-/* Disk state from heading psi, lean theta, spin phase phi, theta', w_a = w . b_up and
- * w_n = w . axis (tests/test_body_disk.c); the centre velocity completes the rolling rows. */
+/* Disk state (bodysys.h), checked. */
 static void disk_state(const ap_model *m, double psi, double th, double phi, double thd,
                        double wa, double wn, double *q, double *v) {
-  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3];
-  for (int i = 0; i < 3; i++) {
-    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
-    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
-  }
-  double R0[9], R[9], c = cos(phi), s = sin(phi);
-  for (int i = 0; i < 3; i++) R0[i] = e1[i], R0[3 + i] = -bu[i], R0[6 + i] = a[i];
-  for (int i = 0; i < 3; i++) {
-    R[i] = c * R0[i] + s * R0[3 + i];
-    R[3 + i] = -s * R0[i] + c * R0[3 + i];
-    R[6 + i] = R0[6 + i];
-  }
-  q[0] = 0.1, q[1] = -0.2;
-  ap_quat_from_matrix(R, q + 2);
-  for (int i = 0; i < 3; i++) v[2 + i] = -thd * e1[i] + wa * bu[i] + wn * a[i];
-  int given[5] = {0, 0, 1, 1, 1};
-  ap_data *d = NULL;
-  AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
-  d->t = 0.0;
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q, given, v), AP_OK);
-  ap_data_free(d);
+  AP_CHECK_EQ_INT(bs_disk_state(m, NULL, psi, th, phi, thd, wa, wn, q, v), AP_OK);
 }
 
-/* Steady circular rolling at lean theta and precession Omega (REFERENCES.md §4). */
-static void disk_steady(const ap_model *m, const disk *p, double th, double Om, double *q,
+/* Steady circular rolling at lean theta and precession Omega (docs/bodies.md, rolling disk). */
+static void disk_steady(const ap_model *m, const bs_disk *p, double th, double Om, double *q,
                         double *v) {
-  double mr2 = p->m * p->r * p->r, wa = Om * cos(th);
-  double wn = (p->m * p->grav * p->r * sin(th) / (Om * cos(th)) - p->A * Om * sin(th)) /
-              (p->C + mr2);
+  double wa, wn;
+  bs_disk_steady_rates(p, th, Om, &wa, &wn);
   disk_state(m, 0.4, th, 0.0, 0.0, wa, wn, q, v);
-}
-
-typedef struct top { double m, l, A0, C, grav; } top;
-
-static ap_model *top_model(const top *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("heavy top", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "top", d.mass = p->m, d.com[2] = p->l;
-  d.inertia[0] = d.inertia[4] = p->A0, d.inertia[8] = p->C;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_BALL, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
-static ap_model *rattleback_model(void) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("rattleback", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "rattleback", d.shape.kind = AP_SHAPE_ELLIPSOID;
-  d.shape.semi_axes[0] = 0.2, d.shape.semi_axes[1] = 0.03, d.shape.semi_axes[2] = 0.02;
-  AP_CHECK(ap_body_def_uniform(&d, 1.0) == AP_OK);
-  double c = cos(0.1), s = sin(0.1), I1 = d.inertia[0], I2 = d.inertia[4];
-  d.inertia[0] = c * c * I1 + s * s * I2, d.inertia[4] = s * s * I1 + c * c * I2;
-  d.inertia[1] = d.inertia[3] = c * s * (I1 - I2);
-  d.com[2] = -0.01;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def con = ap_constraint_def_default();
-  con.name = "roll", con.body = 0;
-  AP_CHECK(ap_builder_add_constraint(b, &con, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
-static int table_rate(double t, double f[3], void *user) {
-  const rs_turntable *p = user;
-  f[0] = rs_turntable_omega(p, t);
-  f[1] = p->dOmega;
-  return 0;
-}
-
-static ap_model *turntable_model(rs_turntable *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("ball on turntable", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "ball", d.shape.kind = AP_SHAPE_SPHERE, d.shape.radius = p->R;
-  AP_CHECK(ap_body_def_uniform(&d, p->m) == AP_OK);
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
-  c.ground.kind = AP_GROUND_TURNTABLE, c.ground.omega_fn = table_rate, c.ground.user = p;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
-/* Hoffmann's rods (tests/test_body_rebuild.c): thin rods with inertia I about the hinge axis. */
-static int rod(ap_builder *b, const char *name, double mass, double comz, double I) {
-  ap_body_def d = ap_body_def_default();
-  int id = -1;
-  d.name = name, d.mass = mass, d.com[2] = comz;
-  d.inertia[0] = d.inertia[4] = I, d.inertia[8] = 1e-3 * I;
-  AP_CHECK(ap_builder_add_body(b, &d, &id) == AP_OK);
-  return id;
-}
-
-static void hoffmann_effects(ap_builder *b, const rs_hoffmann *p, int lower) {
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[2] = -p->grav;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  e = ap_effect_def_default();
-  e.name = "F", e.kind = AP_EFFECT_APPLIED, e.body = lower, e.force[1] = p->F;
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-}
-
-/* Two revolutes; the lower rod's end slides on the vertical line y = y_line (in the rods' y-z
- * plane: a point-on-plane loop with normal e_y). */
-static ap_model *hoffmann_sliding(const rs_hoffmann *p, double y_line) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("Hoffmann sliding", &b) == AP_OK);
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  j.name = "hinge", j.parent = up, j.child = lo;
-  j.parent_frame.pos[2] = -2 * p->a1, j.child_frame.pos[2] = p->a2;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "slider", c.kind = AP_CON_POINT_ON_PLANE, c.body = lo, c.body2 = AP_GROUND;
-  c.point[2] = -p->a2, c.point2[1] = y_line;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  hoffmann_effects(b, p, lo);
-  return compile(b);
-}
-
-/* Upper rod on a revolute (theta), lower rod on a planar joint in the y-z plane (y, z, phi),
- * the hinge as coincident points along y and z: two loop rows. */
-static ap_model *hoffmann_hinge(const rs_hoffmann *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("Hoffmann hinge", &b) == AP_OK);
-  int up = rod(b, "upper", p->m1, -p->a1, p->I1), lo = rod(b, "lower", p->m2, 0.0, p->I2);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  const double Ryzx[9] = {0, 1, 0, 0, 0, 1, 1, 0, 0};
-  j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANAR, j.child = lo;
-  ap_quat_from_matrix(Ryzx, j.parent_frame.quat);
-  ap_quat_from_matrix(Ryzx, j.child_frame.quat);
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "hinge", c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
-  c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  hoffmann_effects(b, p, lo);
-  return compile(b);
-}
-
-static rs_hoffmann hoffmann_params(void) {
-  rs_hoffmann p = {1.0, 0.8, 0.5, 0.4, 0, 0, 9.81, 2.0};
-  p.I1 = p.m1 * p.a1 * p.a1 / 3, p.I2 = p.m2 * p.a2 * p.a2 / 3;
-  return p;
-}
-
-/* The sliding example assembled from a rough guess (ap_body_project_q, complete speeds). */
-static void hoffmann_sliding_state(const ap_model *m, double *q0, double *v0) {
-  ap_data *d = NULL;
-  AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
-  double change = 0.0;
-  int given[2] = {1, 0};
-  q0[0] = 0.5, q0[1] = -0.5, v0[0] = 1.0, v0[1] = 0.0;
-  d->t = 0.0;
-  AP_CHECK_EQ_INT(ap_body_project_q(m, d, q0, &change), AP_OK);
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q0, given, v0), AP_OK);
-  ap_data_free(d);
 }
 
 /* The hinge example from the tree state (theta, psi) and rates: the lower rod's planar
@@ -333,17 +126,6 @@ static cc_result crosscheck(const char *name, const ap_model *m, const double *q
   return out;
 }
 
-static void rattleback_state(const ap_model *m, double spin, double *q, double *v) {
-  const double q0[6] = {0, 0, 1, 0, 0, 0}, v0[5] = {0, 0, 0.0, 0.02, 0.0};
-  int given[5] = {0, 0, 1, 1, 1};
-  memcpy(q, q0, sizeof q0), memcpy(v, v0, sizeof v0);
-  v[4] = spin;
-  ap_data *d = NULL;
-  AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q, given, v), AP_OK);
-  ap_data_free(d);
-}
-
 /* Horizons. The disk, the turntable and Hoffmann's sliding rod: 2 s. The hinged rods (the
  * loaded double pendulum of tests/test_dae.c, same parameters and state, chaotic): 1 s; at
  * 2 s the DAE's dv reaches the bound (measured 1.02 of it). The heavy top spins at 50 rad/s
@@ -355,7 +137,7 @@ static void rattleback_state(const ap_model *m, double spin, double *q, double *
  * rtol 1e-13 run grows from 1.6e-10 at 0.2 s to 1.2e-7 at 1 s) and the modes part within
  * 0.1 s (starred line: 0.5 s). Starred lines are printed, not checked. */
 static void test_crosscheck_all(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   ap_model *m = disk_model(&p, 0.0);
   double q[7], v[6];
   disk_state(m, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q, v);
@@ -363,41 +145,38 @@ static void test_crosscheck_all(void) {
   AP_CHECK_LE(r.phi, bound(1.0));   /* |p|^2 - 1 held by the GGL row */
   ap_model_free(m);
 
-  top tp = {0.5, 0.1, 2e-3, 3e-3, 9.81};
-  m = top_model(&tp);
-  double ex[3] = {1, 0, 0}, R[9];
-  ap_quat_from_axis_angle(ex, 0.5, q);
-  ap_quat_to_matrix(q, R);
-  for (int i = 0; i < 3; i++) v[i] = 50.0 * R[6 + i] + (i == 2) + 0.3 * (i == 0);
+  bs_top tp = bs_top_default();
+  m = bs_top_model(&tp);
+  bs_top_initial(q, v);
   r = crosscheck("heavy_top", m, q, v, 0.25, 1);
   AP_CHECK_LE(r.phi, bound(1.0));
   crosscheck("heavy_top", m, q, v, 2.0, 0);
   ap_model_free(m);
 
-  m = rattleback_model();
-  rattleback_state(m, 5.0, q, v);
+  m = bs_rattleback_model(0.1);
+  AP_CHECK_EQ_INT(bs_rattleback_state(m, NULL, 0.02, 5.0, q, v), AP_OK);
   crosscheck("rattleback", m, q, v, 0.5, 1);
-  rattleback_state(m, -5.0, q, v);
+  AP_CHECK_EQ_INT(bs_rattleback_state(m, NULL, 0.02, -5.0, q, v), AP_OK);
   crosscheck("rattleback_wrong_way", m, q, v, 0.5, 0);
   ap_model_free(m);
 
   rs_turntable tp2 = {1.2, 0.3, 0.4, 1.1, 0.25};
-  m = turntable_model(&tp2);
+  m = bs_turntable_model(&tp2);
   double t5[5], tq[6] = {0, 0, 1, 0, 0, 0};
   rs_turntable_initial(&tp2, 0.5, -0.2, 1.0, 2.0, 3.0, t5, v);
   tq[0] = t5[0], tq[1] = t5[1];
   crosscheck("ball_on_turntable", m, tq, v, 2.0, 1);
   ap_model_free(m);
 
-  rs_hoffmann hp = hoffmann_params();
-  m = hoffmann_sliding(&hp, 0.3);
-  hoffmann_sliding_state(m, q, v);
+  rs_hoffmann hp = bs_hoffmann_params();
+  m = bs_hoffmann_tree(&hp, 1, 0.3);
+  AP_CHECK_EQ_INT(bs_hoffmann_sliding_state(m, q, v, NULL), AP_OK);
   r = crosscheck("hoffmann_sliding", m, q, v, 2.0, 1);
   AP_CHECK_LE(r.phi, bound(1.6));
   ap_model_free(m);
 
   rs_hoffmann hp2 = {1.0, 1.5, 0.5, 0.4, 0.1, 0.08, 9.81, 2.0};   /* tests/test_dae.c */
-  m = hoffmann_hinge(&hp2);
+  m = bs_hoffmann_primitive(&hp2);
   hoffmann_hinge_state(&hp2, 0.3, -0.5, 0.5, 0.6, q, v);
   r = crosscheck("hoffmann_hinge", m, q, v, 1.0, 1);
   AP_CHECK_LE(r.phi, bound(1.6));
@@ -441,18 +220,18 @@ static double initial_residual(const char *name, const ap_model *m, const double
 }
 
 static void test_consistent_initialization(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   ap_model *m = disk_model(&p, 0.0);
   double q[7], v[6];
   disk_state(m, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q, v);
   AP_CHECK_LE(initial_residual("rolling_disk", m, q, v), 1e-13);
   ap_model_free(m);
-  rs_hoffmann hp = hoffmann_params();
-  m = hoffmann_sliding(&hp, 0.3);
-  hoffmann_sliding_state(m, q, v);
+  rs_hoffmann hp = bs_hoffmann_params();
+  m = bs_hoffmann_tree(&hp, 1, 0.3);
+  AP_CHECK_EQ_INT(bs_hoffmann_sliding_state(m, q, v, NULL), AP_OK);
   AP_CHECK_LE(initial_residual("hoffmann_sliding", m, q, v), 1e-13);
   ap_model_free(m);
-  m = hoffmann_hinge(&hp);
+  m = bs_hoffmann_primitive(&hp);
   hoffmann_hinge_state(&hp, 0.3, -0.5, 0.5, 0.6, q, v);
   AP_CHECK_LE(initial_residual("hoffmann_hinge", m, q, v), 1e-13);
   ap_model_free(m);
@@ -463,10 +242,10 @@ static void test_consistent_initialization(void) {
 /* The sliding example's closure 2 a1 sin(theta) + 2 a2 sin(theta + psi) - y_line over 10 s in
  * DAE mode, computed from q (independent of the model's phi). */
 static void test_loop_closure(void) {
-  rs_hoffmann hp = hoffmann_params();
+  rs_hoffmann hp = bs_hoffmann_params();
   double y_line = 0.3, q0[2], v0[2], dy = 0.0;
-  ap_model *m = hoffmann_sliding(&hp, y_line);
-  hoffmann_sliding_state(m, q0, v0);
+  ap_model *m = bs_hoffmann_tree(&hp, 1, y_line);
+  AP_CHECK_EQ_INT(bs_hoffmann_sliding_state(m, q0, v0, NULL), AP_OK);
   ap_sim *s = start(m, AP_MODE_DAE, q0, v0);
   for (int i = 1; s && i <= 40; i++) {
     AP_CHECK_EQ_INT(ap_sim_advance(s, 0.25 * i), AP_OK);
@@ -497,7 +276,7 @@ static int contact(ap_sim *s, const ap_model *m, ap_contact_force *cf) {
  * so F_n = m g exactly; the computed one sees the state's error, growing like that of the
  * integration: the tolerance is 100 rtol m g (measured below 1e-7 relative, see printout). */
 static void steady_normal(const char *what, const double *q0, const double *v0,
-                          const ap_model *m, const disk *p, double *worst_rel) {
+                          const ap_model *m, const bs_disk *p, double *worst_rel) {
   double mg = p->m * p->grav;
   for (int mode = 0; mode < 3; mode++) {
     ap_sim *s = start(m, (ap_mode)mode, q0, v0);
@@ -519,7 +298,7 @@ static void steady_normal(const char *what, const double *q0, const double *v0,
 }
 
 static void test_normal_force(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   ap_model *m = disk_model(&p, 0.0);
   double q[7], v[6], worst = 0.0;
   const double cases[3][2] = {{0.3, 2.0}, {-0.5, -3.0}, {1.2, 6.0}};
@@ -539,7 +318,7 @@ static void test_normal_force(void) {
  * the data's v' (ap_body_point_jacobian: Jv v' + av at the centre), F_t from the multipliers
  * (IDA's in DAE mode). */
 static void test_tangential_force(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   ap_model *m = disk_model(&p, 0.0);
   double q0[7], v0[6], zero[3] = {0, 0, 0};
   disk_state(m, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q0, v0);
@@ -578,7 +357,7 @@ static void test_tangential_force(void) {
 /* An applied upward force of 2 m g at the centre of an upright disk rolling straight: the
  * plane-contact joint keeps it on the ground, which would have to pull with m g. */
 static void test_lift_off(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   double mg = p.m * p.grav, q[7], v[6];
   ap_model *m = disk_model(&p, 2 * mg);
   disk_state(m, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0 / p.r, q, v);
@@ -649,7 +428,7 @@ static void test_scene_channel(void) {
 /* ---- lying flat in DAE mode ---------------------------------------------------------------------- */
 
 static void test_flat_stop(void) {
-  disk p = D0;
+  bs_disk p = bs_disk_default();
   ap_model *m = disk_model(&p, 0.0);
   double q[7], v[6];
   disk_state(m, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, q, v);
@@ -675,5 +454,6 @@ int main(void) {
   test_flat_stop();
   test_scene_channel();
   test_crosscheck_all();
+  AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("dae_bodies");
 }

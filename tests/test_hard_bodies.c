@@ -46,39 +46,15 @@
 #include <string.h>
 
 #include "check.h"
-#include "refsys.h"
+#include "bodysys.h"
 
 #define DEG (180.0 / RS_PI)
 
 static const char *const mode_names[4] = {"minimal", "projected", "dae", "plain"};
 
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  int rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) fprintf(stderr, "%s\n", ap_builder_message(b));
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  ap_builder_free(b);
-  return m;
-}
-
 static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, double rtol,
                      const double *q0, const double *v0) {
-  ap_sim_def sd = ap_sim_def_default();
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  sd.mode = mode, sd.method = method, sd.rtol = rtol, sd.atol = 1e-2 * rtol;
-  int rc = ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg);
-  if (rc != AP_OK) fprintf(stderr, "ap_sim_create (%s): %s\n", mode_names[mode], msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
-}
-
-static double energy(const ap_model *m, ap_data *d, const double *q, const double *v) {
-  double T = 0.0, V = 0.0;
-  memcpy(d->q, q, sizeof(double) * (size_t)ap_model_n(m));
-  memcpy(d->v, v, sizeof(double) * (size_t)ap_model_k(m));
-  AP_CHECK_EQ_INT(ap_body_energy(m, d, &T, &V), AP_OK);
-  return T + V;
+  return bs_start(m, mode, method, rtol, 1e-2 * rtol, q0, v0);
 }
 
 static int all_finite(const double *x, int n) {
@@ -87,85 +63,24 @@ static int all_finite(const double *x, int n) {
   return 1;
 }
 
-/* ---- the rolling disk (REFERENCES.md §4) and a torus ---------------------------------------- */
-
-typedef struct disk {
-  double m, r, A, C;
-  int torus;   /* a torus (tube 0.02 m) instead of the thin disk */
-} disk;
-
-static const disk D0 = {1.5, 0.3, 1.5 * 0.09 / 4, 1.5 * 0.09 / 2, 0};
-
-static ap_model *disk_model(const disk *p) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create(p->torus ? "rolling torus" : "rolling disk", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = p->torus ? "wheel" : "disk";
-  d.shape.kind = p->torus ? AP_SHAPE_TORUS : AP_SHAPE_DISK;
-  d.shape.radius = p->r, d.shape.tube = p->torus ? 0.02 : 0.0;
-  d.mass = p->m;
-  d.inertia[0] = d.inertia[4] = p->A, d.inertia[8] = p->C;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
-/* State from heading psi, lean th (from upright), spin phase phi, lean rate thd, w_a (about the
- * upward in-plane direction) and w_n (about the axis); the centre velocity from rolling. */
-static void disk_state(const ap_model *m, ap_data *d, double psi, double th, double phi,
-                       double thd, double wa, double wn, double *q, double *v) {
-  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3];
-  for (int i = 0; i < 3; i++) {
-    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
-    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
-  }
-  double R0[9], R[9], c = cos(phi), s = sin(phi);
-  for (int i = 0; i < 3; i++) R0[i] = e1[i], R0[3 + i] = -bu[i], R0[6 + i] = a[i];
-  for (int i = 0; i < 3; i++) {   /* R = R0 Rz(phi) */
-    R[i] = c * R0[i] + s * R0[3 + i];
-    R[3 + i] = -s * R0[i] + c * R0[3 + i];
-    R[6 + i] = R0[6 + i];
-  }
-  q[0] = 0.1, q[1] = -0.2;
-  ap_quat_from_matrix(R, q + 2);
-  for (int i = 0; i < 3; i++) v[2 + i] = -thd * e1[i] + wa * bu[i] + wn * a[i];
-  int given[5] = {0, 0, 1, 1, 1};
-  d->t = 0.0;
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q, given, v), AP_OK);
-}
-
-/* The lean from upright (rad): the axis a = R e_z has a_z = -sin(lean). */
-static double lean(const double *q) {
-  double R[9];
-  ap_quat_to_matrix(q + 2, R);
-  return atan2(-R[8], hypot(R[6], R[7]));
-}
-
 /* ---- 5. near lying flat ------------------------------------------------------------------- */
 
 /* The Euler-disk steady motion (w_n = 0, Omega^2 A cos(th) = m g r, centre at rest). */
 static void euler_disk(double th0, double *steps) {
-  disk p = D0;
-  ap_model *m = disk_model(&p);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double Om = sqrt(p.m * 9.81 * p.r / (p.A * cos(th0))), q0[6], v0[5], dth = 0.0, dE = 0.0;
-  disk_state(m, d, 0.0, th0, 0.0, 0.0, Om * cos(th0), 0.0, q0, v0);
-  double E0 = energy(m, d, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, th0, 0.0, 0.0, Om * cos(th0), 0.0, q0, v0), AP_OK);
+  double E0 = bs_energy(m, d, q0, v0);
   ap_sim *s = start(m, AP_MODE_MINIMAL, "verner6", 1e-11, q0, v0);
   for (int i = 1; s && i <= 20; i++) {
     int rc = ap_sim_advance(s, 0.01 * i);
     AP_CHECK_EQ_INT(rc, AP_OK);
     if (rc != AP_OK) break;
-    dth = fmax(dth, fabs(lean(ap_sim_q(s)) - th0));
-    dE = fmax(dE, fabs(energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
+    dth = fmax(dth, fabs(bs_disk_lean(ap_sim_q(s)) - th0));
+    dE = fmax(dE, fabs(bs_energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
   }
   ap_sim_stats st = {0};
   if (s) ap_sim_get_stats(s, &st);
@@ -181,14 +96,14 @@ static void euler_disk(double th0, double *steps) {
 
 /* Released at lean th0 with spin wn: run to t_end; returns the status, the time reached, the
  * largest lean seen at outputs and the energy error of the last (good) state. */
-static int release(const disk *p, ap_mode mode, double th0, double wn, double t_end,
+static int release(const bs_disk *p, ap_mode mode, double th0, double wn, double t_end,
                    double *t_stop, double *max_lean, double *dE, char *msg, size_t len) {
-  ap_model *m = disk_model(p);
+  ap_model *m = bs_disk_model(p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double q0[6], v0[5];
-  disk_state(m, d, 0.0, th0, 0.0, 0.0, 0.0, wn, q0, v0);
-  double E0 = energy(m, d, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, th0, 0.0, 0.0, 0.0, wn, q0, v0), AP_OK);
+  double E0 = bs_energy(m, d, q0, v0);
   ap_sim *s = start(m, mode, "dopri5", 1e-10, q0, v0);
   int rc = s ? AP_OK : AP_ERR_ARG, n = (int)(t_end / 1e-3 + 0.5);
   *max_lean = 0.0, *dE = 0.0, *t_stop = 0.0, msg[0] = '\0';
@@ -196,8 +111,8 @@ static int release(const disk *p, ap_mode mode, double th0, double wn, double t_
     rc = ap_sim_advance(s, 1e-3 * i);
     const double *q = ap_sim_q(s), *v = ap_sim_v(s);
     AP_CHECK(all_finite(q, 6) && all_finite(v, 5));   /* the last good state, even on error */
-    *max_lean = fmax(*max_lean, fabs(lean(q)));
-    *dE = fabs(energy(m, d, q, v) - E0) / E0;
+    *max_lean = fmax(*max_lean, fabs(bs_disk_lean(q)));
+    *dE = fabs(bs_energy(m, d, q, v) - E0) / E0;
   }
   if (s) *t_stop = ap_sim_time(s), snprintf(msg, len, "%s", ap_sim_message(s));
   ap_sim_free(s);
@@ -215,7 +130,7 @@ static void test_near_flat(void) {
   /* released at rest at 89.95 degrees: falls flat in every mode */
   for (int torus = 0; torus < 2; torus++)
     for (int mode = 0; mode < 4; mode++) {
-      disk p = D0;
+      bs_disk p = bs_disk_default();
       p.torus = torus;
       double t, mx, dE;
       char msg[512];
@@ -234,14 +149,15 @@ static void test_near_flat(void) {
   /* a rolling disk that falls: 0.01 rad from upright, no spin; and one that rolls slowly */
   double t, mx, dE;
   char msg[512];
-  int rc = release(&D0, AP_MODE_MINIMAL, 0.01, 0.0, 3.0, &t, &mx, &dE, msg, sizeof msg);
+  const bs_disk d0 = bs_disk_default();
+  int rc = release(&d0, AP_MODE_MINIMAL, 0.01, 0.0, 3.0, &t, &mx, &dE, msg, sizeof msg);
   printf("5. disk released 0.01 rad from upright: status %d at t = %.4f s, lean %.4f deg, "
          "energy %.1e\n   %s\n", rc, t, mx * DEG, dE, msg);
   AP_CHECK_EQ_INT(rc, AP_ERR_SINGULAR);
   AP_CHECK(strstr(msg, "body 'disk'") && strstr(msg, "flat"));
   AP_CHECK(t > 1.0 && t < 1.3);
   AP_CHECK_LE(dE, 1e-9);
-  rc = release(&D0, AP_MODE_MINIMAL, 0.01, 0.1, 3.0, &t, &mx, &dE, msg, sizeof msg);
+  rc = release(&d0, AP_MODE_MINIMAL, 0.01, 0.1, 3.0, &t, &mx, &dE, msg, sizeof msg);
   printf("5. the same disk rolling at w_n = 0.1 rad/s: status %d, 3 s, lean up to %.3f deg, "
          "energy %.1e\n", rc, mx * DEG, dE);
   AP_CHECK_EQ_INT(rc, AP_OK);
@@ -257,14 +173,14 @@ typedef struct spin_result {
 } spin_result;
 
 static spin_result spinning(double wn, ap_mode mode, const char *method, double rtol) {
-  disk p = D0;
-  ap_model *m = disk_model(&p);
+  bs_disk p = bs_disk_default();
+  ap_model *m = bs_disk_model(&p);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double q0[6], v0[5];
   spin_result r = {0, 0.0, 0.0, 0.0};
-  disk_state(m, d, 0.0, 0.3, 0.0, 0.5, 0.0, wn, q0, v0);
-  double E0 = energy(m, d, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, 0.3, 0.0, 0.5, 0.0, wn, q0, v0), AP_OK);
+  double E0 = bs_energy(m, d, q0, v0);
   ap_sim *s = start(m, mode, method, rtol, q0, v0);
   for (int i = 1; s && i <= 100; i++) {
     int rc = ap_sim_advance(s, 0.01 * i);
@@ -273,8 +189,8 @@ static spin_result spinning(double wn, ap_mode mode, const char *method, double 
       fprintf(stderr, "%s\n", ap_sim_message(s));
       break;
     }
-    r.dE = fmax(r.dE, fabs(energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
-    r.wobble = fmax(r.wobble, fabs(lean(ap_sim_q(s)) - 0.3));
+    r.dE = fmax(r.dE, fabs(bs_energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
+    r.wobble = fmax(r.wobble, fabs(bs_disk_lean(ap_sim_q(s)) - 0.3));
   }
   ap_sim_stats st = {0};
   if (s) ap_sim_get_stats(s, &st);
@@ -304,50 +220,24 @@ static void test_gyroscopic(void) {
 
 /* ---- 7. rattleback -------------------------------------------------------------------------- */
 
-/* Ellipsoid 0.2 x 0.03 x 0.02 m, 1 kg, centre of mass 1 cm below the centre, principal axes of
- * inertia turned by `skew` about z against the shape's (tests/test_body_top.c). */
-static ap_model *rattleback_model(double skew) {
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("rattleback", &b) == AP_OK);
-  ap_body_def d = ap_body_def_default();
-  d.name = "rattleback", d.shape.kind = AP_SHAPE_ELLIPSOID;
-  d.shape.semi_axes[0] = 0.2, d.shape.semi_axes[1] = 0.03, d.shape.semi_axes[2] = 0.02;
-  AP_CHECK(ap_body_def_uniform(&d, 1.0) == AP_OK);
-  double c = cos(skew), s = sin(skew), I1 = d.inertia[0], I2 = d.inertia[4];
-  d.inertia[0] = c * c * I1 + s * s * I2, d.inertia[4] = s * s * I1 + c * c * I2;
-  d.inertia[1] = d.inertia[3] = c * s * (I1 - I2);
-  d.com[2] = -0.01;
-  AP_CHECK(ap_builder_add_body(b, &d, NULL) == AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_PLANE_CONTACT, j.child = 0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def con = ap_constraint_def_default();
-  con.name = "roll", con.body = 0;
-  AP_CHECK(ap_builder_add_constraint(b, &con, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
-}
-
 /* Spun at wz0 with a rocking kick wy0 for T seconds: the first time w_z changes sign (0 when
  * it never does, at 1 ms outputs) and the largest relative energy error. */
 static double rattle(double skew, double wz0, double wy0, double T, double *dE) {
-  ap_model *m = rattleback_model(skew);
+  ap_model *m = bs_rattleback_model(skew);
   ap_data *d = NULL;
-  ap_data_create(m, &d);
-  double q0[6] = {0, 0, 1, 0, 0, 0}, v0[5] = {0, 0, 0.0, wy0, wz0}, t_rev = 0.0;
-  int given[5] = {0, 0, 1, 1, 1};
-  d->t = 0.0;
-  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q0, given, v0), AP_OK);
-  double E0 = energy(m, d, q0, v0);
-  ap_sim *s = start(m, AP_MODE_MINIMAL, "fehlberg8", 1e-11, q0, v0);
   *dE = 0.0;
+  if (!m) return 0.0;
+  ap_data_create(m, &d);
+  double q0[6], v0[5], t_rev = 0.0;
+  AP_CHECK_EQ_INT(bs_rattleback_state(m, d, wy0, wz0, q0, v0), AP_OK);
+  double E0 = bs_energy(m, d, q0, v0);
+  ap_sim *s = start(m, AP_MODE_MINIMAL, "fehlberg8", 1e-11, q0, v0);
   for (int i = 1; s && i <= (int)(T * 1000 + 0.5); i++) {
     int rc = ap_sim_advance(s, 1e-3 * i);
     AP_CHECK_EQ_INT(rc, AP_OK);
     if (rc != AP_OK) break;
     if (t_rev == 0.0 && ap_sim_v(s)[4] * wz0 < 0) t_rev = 1e-3 * i;
-    *dE = fmax(*dE, fabs(energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
+    *dE = fmax(*dE, fabs(bs_energy(m, d, ap_sim_q(s), ap_sim_v(s)) - E0) / E0);
   }
   ap_sim_free(s);
   ap_data_free(d);
@@ -405,7 +295,7 @@ static ap_model *pushed_ball(void) {
   AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
   ap_effect_def e = ap_effect_def_default();
   AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
+  return bs_compile(b);
 }
 
 static void test_impossible_driver(void) {
@@ -451,33 +341,11 @@ static void test_impossible_driver(void) {
 /* ---- 9. initial states far off the constraints ------------------------------------------- */
 
 /* Hoffmann's second example (tests/test_body_rebuild.c): the lower rod's end slides on the
- * vertical line y = y_line (a point-on-plane loop closure). */
+ * vertical line y = y_line (a point-on-plane loop closure); gravity only. */
 static ap_model *hoffmann_model(double y_line) {
-  const double m1 = 1.0, m2 = 0.8, a1 = 0.5, a2 = 0.4;
-  ap_builder *b = NULL;
-  AP_CHECK(ap_builder_create("Hoffmann sliding", &b) == AP_OK);
-  int id[2];
-  const char *names[2] = {"upper", "lower"};
-  const double mass[2] = {m1, m2}, comz[2] = {-a1, 0.0}, I[2] = {m1 * a1 * a1 / 3, m2 * a2 * a2 / 3};
-  for (int i = 0; i < 2; i++) {
-    ap_body_def d = ap_body_def_default();
-    d.name = names[i], d.mass = mass[i], d.com[2] = comz[i];
-    d.inertia[0] = d.inertia[4] = I[i], d.inertia[8] = 1e-3 * I[i];
-    AP_CHECK(ap_builder_add_body(b, &d, &id[i]) == AP_OK);
-  }
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_REVOLUTE, j.child = id[0], j.axis[0] = 1.0, j.axis[2] = 0.0;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  j.name = "hinge", j.parent = id[0], j.child = id[1];
-  j.parent_frame.pos[2] = -2 * a1, j.child_frame.pos[2] = a2;
-  AP_CHECK(ap_builder_add_joint(b, &j, NULL) == AP_OK);
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "slider", c.kind = AP_CON_POINT_ON_PLANE, c.body = id[1], c.body2 = AP_GROUND;
-  c.point[2] = -a2, c.point2[1] = y_line;
-  AP_CHECK(ap_builder_add_constraint(b, &c, NULL) == AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK(ap_builder_add_effect(b, &e, NULL) == AP_OK);
-  return compile(b);
+  rs_hoffmann p = bs_hoffmann_params();
+  p.F = 0.0;
+  return bs_hoffmann_tree(&p, 1, y_line);
 }
 
 static int create(const ap_model *m, ap_mode mode, const double *q0, const double *v0,
@@ -489,12 +357,13 @@ static int create(const ap_model *m, ap_mode mode, const double *q0, const doubl
 }
 
 static void test_bad_disk_speeds(void) {
-  ap_model *m = disk_model(&D0);
+  const bs_disk d0 = bs_disk_default();
+  ap_model *m = bs_disk_model(&d0);
   ap_data *d = NULL;
   ap_data_create(m, &d);
   double q0[6], v0[5], vbad[5], msg_resid = 0.0;
   char msg[512];
-  disk_state(m, d, 0.0, 0.3, 0.0, 0.0, 1.0, 5.0, q0, v0);
+  AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.0, 0.3, 0.0, 0.0, 1.0, 5.0, q0, v0), AP_OK);
   memcpy(vbad, v0, sizeof v0);
   vbad[0] += 2.0;   /* the centre 2 m/s off rolling */
   for (int mode = 0; mode < 4; mode++) {
@@ -607,5 +476,6 @@ int main(void) {
   test_impossible_driver();
   test_bad_disk_speeds();
   test_open_loop();
+  AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("hard_bodies");
 }

@@ -6,9 +6,10 @@
  * Shared: the ap_scene (its model, parsed tree and settings) of the rolling disk and of
  * Hoffmann's loop; each thread makes its own initial state from it, its own simulation (mode
  * and method differ per thread: minimal, projected, plain and DAE; ARKODE, CVODE and IDA) and
- * its own output evaluator (ap_scene_out), and records every output row. The scenes use no
- * expression of t (their evaluation would go through the expression layer: see the second
- * part). Then ap_batch_run of 24 variants, including failing ones, with 8 threads and with 1. */
+ * its own output evaluator (ap_scene_out), and records every output row. Then the same with
+ * functions of time evaluated by all threads at once (the turntable's Omega(t), Hoffmann's
+ * push f(t)). Then ap_batch_run of 24 variants, including failing ones, with 8 threads and
+ * with 1: the workers load their scenes in parallel (YAML, --set paths, expressions). */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -110,8 +111,8 @@ static void setup_jobs(job *jobs, ap_scene *sc) {
 }
 
 /* Serial runs, then the same jobs in NT threads at once: every recorded number equal. */
-static void shared_model(const char *scene) {
-  ap_scene *sc = load(scene, NULL, 0);
+static void shared_model(const char *scene, const char *set) {
+  ap_scene *sc = load(scene, &set, set ? 1 : 0);
   AP_CHECK(sc != NULL);
   if (!sc) return;
   job serial[NT], par[NT];
@@ -133,8 +134,8 @@ static void shared_model(const char *scene) {
     free(serial[i].rows);
     free(par[i].rows);
   }
-  printf("%s: %d threads sharing one model, rows equal to the serial runs bit for bit\n", scene,
-         NT);
+  printf("%s%s%s: %d threads sharing one model, rows equal to the serial runs bit for bit\n",
+         scene, set ? " --set " : "", set ? set : "", NT);
   ap_scene_free(sc);
 }
 
@@ -142,61 +143,78 @@ static void shared_model(const char *scene) {
 
 #define NV 24
 
-static void batch_threads(void) {
-  char path[1200], msg[1024], set[NV][2][64];
-  snprintf(path, sizeof path, "%s/examples/scenes/rolling_disk.yaml", srcdir);
-  const char *base[] = {"simulation.t_end=1", "simulation.rtol=1e-8"};
-  const char *channels[] = {"disk.tilt", "energy_error"};
+/* The batch of scene with NV variants of (a, b); returns the number that failed. */
+static int batch_threads(const char *scene, const char *const *base, int nbase,
+                         const char *const *channels, int nch, void (*variant)(int, char *, char *)) {
+  char path[1200], msg[1024], set[NV][2][96];
+  snprintf(path, sizeof path, "%s/examples/scenes/%s", srcdir, scene);
   const double times[] = {0.5, 0.25, 1.0, 0.333};
   const char *sets[NV * 2];
   for (int i = 0; i < NV; i++) {
-    snprintf(set[i][0], sizeof set[i][0], "initial.disk.tilt=%.17g", 0.9 + 0.02 * i);
-    snprintf(set[i][1], sizeof set[i][1], "%s", i % 7 == 3 ? "simulation.method=bogus"
-                                                : i % 7 == 5 ? "bodies.disk.mass=-1"
-                                                : i % 2 ? "simulation.mode=dae" : "simulation.mode=minimal");
+    variant(i, set[i][0], set[i][1]);
     sets[2 * i] = set[i][0], sets[2 * i + 1] = set[i][1];
   }
   double *values[2];
-  int status[2][NV];
+  int status[2][NV], nc = 0, bad = 0;
   char *messages[2][NV];
-  int nc = 0;
   for (int pass = 0; pass < 2; pass++) {
     ap_batch_def def = ap_batch_def_default();
     def.threads = pass == 0 ? 1 : NT;
-    def.channels = channels, def.nchannels = 2, def.times = times, def.ntimes = 4;
+    def.channels = channels, def.nchannels = nch, def.times = times, def.ntimes = 4;
     ap_batch *b = NULL;
-    int rc = ap_batch_load(path, base, 2, &def, &b, msg, sizeof msg);
+    int rc = ap_batch_load(path, base, nbase, &def, &b, msg, sizeof msg);
     AP_CHECK_EQ_INT(rc, AP_OK);
-    if (rc != AP_OK) return;
+    if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), -1;
     nc = ap_batch_ncols(b);
     values[pass] = calloc((size_t)NV * (size_t)nc, sizeof(double));
     AP_CHECK_EQ_INT(ap_batch_run(b, NV, 2, sets, values[pass], status[pass], messages[pass]),
                     AP_OK);
     ap_batch_free(b);
   }
-  int ok = 0;
   for (int i = 0; i < NV; i++) {
     AP_CHECK_EQ_INT(status[1][i], status[0][i]);
     AP_CHECK(!messages[0][i] == !messages[1][i]);
     if (messages[0][i] && messages[1][i]) AP_CHECK(strcmp(messages[0][i], messages[1][i]) == 0);
-    int bad = i % 7 == 3 || i % 7 == 5;
-    AP_CHECK_EQ_INT(status[0][i] != AP_OK, bad);
-    if (bad) AP_CHECK(messages[0][i] && strstr(messages[0][i], "rolling_disk.yaml:"));
-    ok += status[0][i] == AP_OK;
+    if (status[0][i] != AP_OK) AP_CHECK(messages[0][i] && strstr(messages[0][i], scene));
+    bad += status[0][i] != AP_OK;
   }
   AP_CHECK(memcmp(values[0], values[1], sizeof(double) * (size_t)NV * (size_t)nc) == 0);
-  printf("batch: %d variants (%d failing) with %d threads and with 1: equal rows\n", NV, NV - ok,
-         NT);
+  printf("batch of %s: %d variants (%d failing) with %d threads and with 1: equal rows\n", scene,
+         NV, bad, NT);
   for (int p = 0; p < 2; p++) {
     ap_batch_messages_free(NV, messages[p]);
     free(values[p]);
   }
+  return bad;
+}
+
+/* Rolling disk: tilts, modes, and failures (an unknown method, a negative mass). */
+static void disk_variant(int i, char *a, char *b) {
+  snprintf(a, 96, "initial.disk.tilt=%.17g", 0.9 + 0.02 * i);
+  snprintf(b, 96, "%s", i % 7 == 3 ? "simulation.method=bogus"
+                        : i % 7 == 5 ? "bodies.disk.mass=-1"
+                        : i % 2 ? "simulation.mode=dae" : "simulation.mode=minimal");
+}
+
+/* Turntable: Omega(t) differs per run (each load parses it); one unknown name. */
+static void table_variant(int i, char *a, char *b) {
+  snprintf(a, 96, i == 7 ? "ground.omega=%d*tanh(w)" : "ground.omega=%d*tanh(t)+0.1*sin(3*t)",
+           1 + i % 5);
+  snprintf(b, 96, "initial.ball.vy=%.17g", 0.05 + 0.01 * i);
 }
 
 int main(void) {
   find_srcdir();
-  shared_model("rolling_disk.yaml");
-  shared_model("hoffmann.yaml");
-  batch_threads();
+  shared_model("rolling_disk.yaml", NULL);
+  shared_model("hoffmann.yaml", NULL);
+  shared_model("turntable_ball.yaml", "ground.omega=2*tanh(t)+0.3*sin(5*t)");
+  shared_model("hoffmann.yaml", "effects.push.force.1=2*cos(3*t)");
+  const char *disk_base[] = {"simulation.t_end=1", "simulation.rtol=1e-8"};
+  const char *disk_ch[] = {"disk.tilt", "energy_error"};
+  AP_CHECK_EQ_INT(batch_threads("rolling_disk.yaml", disk_base, 2, disk_ch, 2, disk_variant), 6);
+  const char *table_base[] = {"simulation.t_end=1", "simulation.rtol=1e-8"};
+  const char *table_ch[] = {"ball.x", "ball.wz"};
+  AP_CHECK_EQ_INT(batch_threads("turntable_ball.yaml", table_base, 2, table_ch, 2, table_variant),
+                  1);
   return ap_check_finish("test_threads");
 }

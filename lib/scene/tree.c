@@ -304,7 +304,8 @@ static int split_path(char *path, char **segs, int max) {
   int ns = 0;
   for (char *p = path; *p; p++)
     if (*p == '[' || *p == ']') *p = '.';
-  for (char *tok = strtok(path, "."); tok; tok = strtok(NULL, "."))
+  char *save = NULL;   /* strtok_r: loads run in parallel threads (lib/batch) */
+  for (char *tok = strtok_r(path, ".", &save); tok; tok = strtok_r(NULL, ".", &save))
     if (ns < max) segs[ns++] = tok;
     else return -1;
   return ns;

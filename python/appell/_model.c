@@ -15,9 +15,11 @@ static PyObject *make_model(PyObject *text, PyObject *name, PyObject *sets) {
   if (!s || !nm) return PyMem_Free(s), NULL;
   char msg[1024];
   ap_scene *sc = NULL;
-  /* Loading is not released from the GIL: the expression parser is not reentrant. */
-  int rc = ap_scene_load_string(PyBytes_AS_STRING(text), (size_t)PyBytes_GET_SIZE(text), nm, s,
-                                (int)nsets, &sc, msg, sizeof msg);
+  int rc;
+  Py_BEGIN_ALLOW_THREADS   /* the text and the strings stay alive: their owners are held */
+  rc = ap_scene_load_string(PyBytes_AS_STRING(text), (size_t)PyBytes_GET_SIZE(text), nm, s,
+                            (int)nsets, &sc, msg, sizeof msg);
+  Py_END_ALLOW_THREADS
   PyMem_Free(s);
   if (rc != AP_OK) return apx_raise_input(rc, msg);
   apx_model *m = PyObject_New(apx_model, &apx_model_type);

@@ -187,7 +187,7 @@ def test_gil_is_released_while_integrating(disk):
 
     def work():
         span["start"] = time.perf_counter()
-        sim.run(t_end=15, dt=1.0)
+        sim.run(t_end=150, dt=1.0)
         span["end"] = time.perf_counter()
 
     th = threading.Thread(target=work)

@@ -1,0 +1,387 @@
+/* Body models shared by the tests and the benchmarks (bodysys.h): builders through the public
+ * API and state setters. Every builder call is checked; a failure is printed with the
+ * builder's message and counted, and the model comes back NULL. */
+#include "bodysys.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static int failures = 0;
+
+int bs_failures(void) { return failures; }
+
+static void fail(const char *what, const char *msg) {
+  failures++;
+  fprintf(stderr, "bodysys: %s: %s\n", what, msg ? msg : "");
+}
+
+/* Counts a failed status of a builder call; returns 1 when rc is AP_OK. */
+static int ok(ap_builder *b, int rc, const char *what) {
+  if (rc == AP_OK) return 1;
+  fail(what, b ? ap_builder_message(b) : ap_strerror(rc));
+  return 0;
+}
+
+static ap_builder *builder(const char *name) {
+  ap_builder *b = NULL;
+  if (ap_builder_create(name, &b) != AP_OK) fail(name, "cannot create a builder");
+  return b;
+}
+
+ap_model *bs_compile(ap_builder *b) {
+  ap_model *m = NULL;
+  if (!b) return NULL;
+  if (ap_builder_compile(b, &m) != AP_OK) fail("compile", ap_builder_message(b)), m = NULL;
+  ap_builder_free(b);
+  return m;
+}
+
+/* Compiles b when every step that built it succeeded (good); frees it either way. */
+static ap_model *finish(ap_builder *b, int good) {
+  if (good) return bs_compile(b);
+  ap_builder_free(b);
+  return NULL;
+}
+
+/* Body d (id 0) on a joint of the given kind to the ground. */
+static int root_body(ap_builder *b, const ap_body_def *d, ap_joint_kind kind) {
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = kind, j.child = 0;
+  return ok(b, ap_builder_add_body(b, d, NULL), d->name) &&
+         ok(b, ap_builder_add_joint(b, &j, NULL), "joint");
+}
+
+/* Uniform gravity (0, 0, -grav). */
+static int gravity(ap_builder *b, double grav) {
+  ap_effect_def e = ap_effect_def_default();
+  e.gravity[2] = -grav;
+  return ok(b, ap_builder_add_effect(b, &e, NULL), "gravity");
+}
+
+int bs_add_body(ap_builder *b, const char *name, double mass, const double *com,
+                const double *Idiag) {
+  ap_body_def d = ap_body_def_default();
+  int id = -1;
+  d.name = name, d.mass = mass;
+  if (com) memcpy(d.com, com, sizeof d.com);
+  for (int i = 0; i < 3; i++) d.inertia[4 * i] = Idiag[i];
+  return ok(b, ap_builder_add_body(b, &d, &id), name) ? id : -1;
+}
+
+ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rtol,
+                 double atol, const double *q0, const double *v0) {
+  ap_sim_def sd = ap_sim_def_default();
+  ap_sim *s = NULL;
+  char msg[512] = "";
+  sd.mode = mode, sd.method = method, sd.rtol = rtol, sd.atol = atol;
+  if (ap_sim_create(m, &sd, 0.0, q0, v0, &s, msg, sizeof msg) != AP_OK) {
+    fail(m ? ap_model_name(m) : "ap_sim_create", msg);
+    return NULL;
+  }
+  return s;
+}
+
+double bs_energy(const ap_model *m, ap_data *d, const double *q, const double *v) {
+  double T = 0.0, V = 0.0;
+  memcpy(d->q, q, sizeof(double) * (size_t)ap_model_n(m));
+  memcpy(d->v, v, sizeof(double) * (size_t)ap_model_k(m));
+  int rc = ap_body_energy(m, d, &T, &V);
+  if (rc != AP_OK) {
+    fail("ap_body_energy", d->msg);
+    return NAN;
+  }
+  return T + V;
+}
+
+/* Completes the speeds not marked in given from the constraints at t = 0; d may be NULL. */
+static int complete(const ap_model *m, ap_data *d, double *q, const int *given, double *v) {
+  ap_data *own = NULL;
+  if (!d && ap_data_create(m, &own) != AP_OK) {
+    fail("ap_data_create", "cannot create a data struct");
+    return AP_ERR_NOMEM;
+  }
+  ap_data *dd = d ? d : own;
+  dd->t = 0.0;
+  int rc = ap_body_complete_speeds(m, dd, q, given, v);
+  if (rc != AP_OK) fail("ap_body_complete_speeds", dd->msg);
+  ap_data_free(own);
+  return rc;
+}
+
+/* ---- rolling disk ------------------------------------------------------------------------ */
+
+bs_disk bs_disk_default(void) {
+  bs_disk p = {1.5, 0.3, 9.81, 1.5 * 0.09 / 4, 1.5 * 0.09 / 2, 0, 0, 0.0};
+  return p;
+}
+
+ap_model *bs_disk_model(const bs_disk *p) {
+  ap_builder *b = builder(p->torus ? "rolling torus" : "rolling disk");
+  if (!b) return NULL;
+  ap_body_def d = ap_body_def_default();
+  d.name = p->torus ? "wheel" : "disk";
+  d.shape.kind = p->torus ? AP_SHAPE_TORUS : AP_SHAPE_DISK;
+  d.shape.radius = p->r, d.shape.tube = p->torus ? 0.02 : 0.0;
+  d.mass = p->m;
+  d.inertia[0] = d.inertia[4] = p->A, d.inertia[8] = p->C;
+  int good = root_body(b, &d, AP_JOINT_PLANE_CONTACT);
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "roll", c.body = 0, c.no_spin = p->no_spin;
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "roll");
+  good = good && gravity(b, p->grav);
+  if (p->lift > 0) {
+    ap_effect_def e = ap_effect_def_default();
+    e.name = "lift", e.kind = AP_EFFECT_APPLIED, e.body = 0, e.force[2] = p->lift;
+    good = good && ok(b, ap_builder_add_effect(b, &e, NULL), "lift");
+  }
+  return finish(b, good);
+}
+
+int bs_disk_state(const ap_model *m, ap_data *d, double psi, double th, double phi,
+                  double thd, double wa, double wn, double *q, double *v) {
+  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3];
+  for (int i = 0; i < 3; i++) {
+    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
+    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
+  }
+  double R0[9], R[9], c = cos(phi), s = sin(phi);
+  for (int i = 0; i < 3; i++) R0[i] = e1[i], R0[3 + i] = -bu[i], R0[6 + i] = a[i];
+  for (int i = 0; i < 3; i++) {   /* R = R0 Rz(phi) */
+    R[i] = c * R0[i] + s * R0[3 + i];
+    R[3 + i] = -s * R0[i] + c * R0[3 + i];
+    R[6 + i] = R0[6 + i];
+  }
+  q[0] = 0.1, q[1] = -0.2;
+  ap_quat_from_matrix(R, q + 2);
+  for (int i = 0; i < 3; i++) v[2 + i] = -thd * e1[i] + wa * bu[i] + wn * a[i];
+  const int given[5] = {0, 0, 1, 1, 1};
+  return complete(m, d, q, given, v);
+}
+
+void bs_disk_steady_rates(const bs_disk *p, double th, double Om, double *wa, double *wn) {
+  double mr2 = p->m * p->r * p->r;
+  *wa = Om * cos(th);
+  *wn = (p->m * p->grav * p->r * sin(th) / (Om * cos(th)) - p->A * Om * sin(th)) /
+        (p->C + mr2);
+}
+
+double bs_disk_lean(const double *q) {
+  double R[9];
+  ap_quat_to_matrix(q + 2, R);
+  return atan2(-R[8], hypot(R[6], R[7]));
+}
+
+void bs_disk_read(const double *q, const double *v, double *th, double *thd, double *wa,
+                  double *wn) {
+  double R[9], a[3], bu[3], w[3] = {v[2], v[3], v[4]};
+  ap_quat_to_matrix(q + 2, R);
+  for (int i = 0; i < 3; i++) a[i] = R[6 + i];
+  *th = atan2(-a[2], hypot(a[0], a[1]));
+  for (int i = 0; i < 3; i++) bu[i] = (i == 2) - a[2] * a[i];
+  double nb = sqrt(bu[0] * bu[0] + bu[1] * bu[1] + bu[2] * bu[2]);
+  *wa = *wn = 0.0;
+  for (int i = 0; i < 3; i++) *wa += w[i] * bu[i] / nb, *wn += w[i] * a[i];
+  double azd = w[0] * a[1] - w[1] * a[0];   /* (w x a)_z */
+  *thd = -azd / cos(*th);
+}
+
+/* ---- heavy symmetric top ----------------------------------------------------------------- */
+
+bs_top bs_top_default(void) {
+  bs_top p = {0.5, 0.1, 2e-3, 3e-3, 9.81};
+  return p;
+}
+
+ap_model *bs_top_model(const bs_top *p) {
+  ap_builder *b = builder("heavy top");
+  if (!b) return NULL;
+  ap_body_def d = ap_body_def_default();
+  d.name = "top", d.mass = p->m, d.com[2] = p->l;
+  d.inertia[0] = d.inertia[4] = p->A0, d.inertia[8] = p->C;
+  int good = root_body(b, &d, AP_JOINT_BALL) && gravity(b, p->grav);
+  return finish(b, good);
+}
+
+void bs_top_initial(double q[4], double w[3]) {
+  double ex[3] = {1, 0, 0}, R[9];
+  ap_quat_from_axis_angle(ex, 0.5, q);
+  ap_quat_to_matrix(q, R);
+  for (int i = 0; i < 3; i++) w[i] = 50.0 * R[6 + i] + (i == 2 ? 1.0 : 0.0) + (i == 0 ? 0.3 : 0);
+}
+
+/* ---- rattleback ------------------------------------------------------------------------- */
+
+ap_model *bs_rattleback_model(double skew) {
+  ap_builder *b = builder("rattleback");
+  if (!b) return NULL;
+  ap_body_def d = ap_body_def_default();
+  d.name = "rattleback", d.shape.kind = AP_SHAPE_ELLIPSOID;
+  d.shape.semi_axes[0] = 0.2, d.shape.semi_axes[1] = 0.03, d.shape.semi_axes[2] = 0.02;
+  int good = ok(b, ap_body_def_uniform(&d, 1.0), "rattleback inertia");
+  /* principal axes turned by skew about z against the shape's: a product term I_xy */
+  double c = cos(skew), s = sin(skew), I1 = d.inertia[0], I2 = d.inertia[4];
+  d.inertia[0] = c * c * I1 + s * s * I2, d.inertia[4] = s * s * I1 + c * c * I2;
+  d.inertia[1] = d.inertia[3] = c * s * (I1 - I2);
+  d.com[2] = -0.01;   /* centre of mass below the centre: stable on its bottom */
+  good = good && root_body(b, &d, AP_JOINT_PLANE_CONTACT);
+  ap_constraint_def con = ap_constraint_def_default();
+  con.name = "roll", con.body = 0;
+  good = good && ok(b, ap_builder_add_constraint(b, &con, NULL), "roll");
+  good = good && gravity(b, 9.81);
+  return finish(b, good);
+}
+
+int bs_rattleback_state(const ap_model *m, ap_data *d, double rock, double spin, double q[6],
+                        double v[5]) {
+  const double q0[6] = {0, 0, 1, 0, 0, 0}, v0[5] = {0, 0, 0, rock, spin};
+  const int given[5] = {0, 0, 1, 1, 1};
+  memcpy(q, q0, sizeof q0), memcpy(v, v0, sizeof v0);
+  return complete(m, d, q, given, v);
+}
+
+/* ---- twins of the reference systems ------------------------------------------------------- */
+
+static int table_rate(double t, double f[3], void *user) {
+  const rs_turntable *p = user;
+  f[0] = rs_turntable_omega(p, t);
+  f[1] = p->dOmega;
+  return 0;
+}
+
+ap_model *bs_turntable_model(rs_turntable *p) {
+  ap_builder *b = builder("ball on turntable");
+  if (!b) return NULL;
+  ap_body_def d = ap_body_def_default();
+  d.name = "ball", d.shape.kind = AP_SHAPE_SPHERE, d.shape.radius = p->R;
+  int good = ok(b, ap_body_def_uniform(&d, p->m), "ball inertia");   /* kI = 2/5 */
+  good = good && root_body(b, &d, AP_JOINT_PLANE_CONTACT);
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "roll", c.body = 0;
+  c.ground.kind = AP_GROUND_TURNTABLE, c.ground.omega_fn = table_rate, c.ground.user = p;
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "roll");
+  good = good && gravity(b, 9.81);   /* no generalized force on a sphere */
+  return finish(b, good);
+}
+
+ap_model *bs_skate_model(const rs_knife *p) {
+  ap_builder *b = builder("skate");
+  if (!b) return NULL;
+  double I[3] = {0.5 * p->J + 0.1, 0.5 * p->J + 0.05, p->J}, ey[3] = {0, 1, 0};
+  int good = bs_add_body(b, "skate", p->m, NULL, I) == 0;
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_PLANAR, j.child = 0;
+  ap_quat_from_axis_angle(ey, p->alpha, j.parent_frame.quat);   /* x down the slope */
+  good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "skate joint");
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;
+  c.direction[1] = -1.0;   /* refsys row: [sin phi, -cos phi, 0] */
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "blade");
+  good = good && gravity(b, p->grav);
+  return finish(b, good);
+}
+
+ap_model *bs_sleigh_model(const rs_sleigh *p) {
+  ap_builder *b = builder("sleigh");
+  if (!b) return NULL;
+  double com[3] = {p->a, 0, 0}, I[3] = {0.6 * p->I, 0.6 * p->I, p->I};
+  int good = bs_add_body(b, "sleigh", p->m, com, I) == 0;
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_PLANAR, j.child = 0;
+  good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "sleigh joint");
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;   /* direction (0, 1, 0) */
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "blade");
+  return finish(b, good);
+}
+
+/* ---- Hoffmann's pendulum ------------------------------------------------------------------ */
+
+rs_hoffmann bs_hoffmann_params(void) {
+  rs_hoffmann p = {1.0, 0.8, 0.5, 0.4, 0, 0, 9.81, 2.0};
+  p.I1 = p.m1 * p.a1 * p.a1 / 3, p.I2 = p.m2 * p.a2 * p.a2 / 3;
+  return p;
+}
+
+/* A thin rod with its centre of mass at (0, 0, comz) and inertia I about the hinge axis x (the
+ * axial inertia is a small positive number that never enters the planar motion). */
+static int rod(ap_builder *b, const char *name, double mass, double comz, double I) {
+  double com[3] = {0, 0, comz}, Id[3] = {I, I, 1e-3 * I};
+  return bs_add_body(b, name, mass, com, Id);
+}
+
+static int hoffmann_effects(ap_builder *b, const rs_hoffmann *p, int lower) {
+  if (!gravity(b, p->grav)) return 0;
+  if (p->F == 0.0) return 1;
+  ap_effect_def e = ap_effect_def_default();
+  e.name = "F", e.kind = AP_EFFECT_APPLIED, e.body = lower, e.force[1] = p->F;
+  return ok(b, ap_builder_add_effect(b, &e, NULL), "F");
+}
+
+/* The upper rod's revolute about x at the origin. */
+static ap_joint_def upper_joint(int up) {
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_REVOLUTE, j.child = up, j.axis[0] = 1.0, j.axis[2] = 0.0;
+  return j;
+}
+
+/* Both rods (ids *up, *lo) and the upper one's revolute. */
+static int upper_rod(ap_builder *b, const rs_hoffmann *p, int *up, int *lo) {
+  *up = rod(b, "upper", p->m1, -p->a1, p->I1), *lo = rod(b, "lower", p->m2, 0.0, p->I2);
+  ap_joint_def j = upper_joint(*up);
+  return *up >= 0 && *lo >= 0 && ok(b, ap_builder_add_joint(b, &j, NULL), "upper joint");
+}
+
+ap_model *bs_hoffmann_tree(const rs_hoffmann *p, int slide, double y_line) {
+  ap_builder *b = builder(slide ? "Hoffmann sliding" : "Hoffmann tree");
+  if (!b) return NULL;
+  int up, lo, good = upper_rod(b, p, &up, &lo);
+  ap_joint_def j = upper_joint(up);
+  j.name = "hinge", j.parent = up, j.child = lo;
+  j.parent_frame.pos[2] = -2 * p->a1, j.child_frame.pos[2] = p->a2;
+  good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "hinge");
+  if (slide) {
+    ap_constraint_def c = ap_constraint_def_default();
+    c.name = "slider", c.kind = AP_CON_POINT_ON_PLANE, c.body = lo, c.body2 = AP_GROUND;
+    c.point[2] = -p->a2, c.point2[1] = y_line;   /* normal (0, 1, 0): the default */
+    good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "slider");
+  }
+  good = good && hoffmann_effects(b, p, lo);
+  return finish(b, good);
+}
+
+ap_model *bs_hoffmann_primitive(const rs_hoffmann *p) {
+  ap_builder *b = builder("Hoffmann primitive");
+  if (!b) return NULL;
+  int up, lo, good = upper_rod(b, p, &up, &lo);
+  ap_joint_def j = upper_joint(up);
+  const double Ryzx[9] = {0, 1, 0, 0, 0, 1, 1, 0, 0};   /* planar x, y, normal -> y, z, x */
+  j = ap_joint_def_default();
+  j.kind = AP_JOINT_PLANAR, j.child = lo;
+  ap_quat_from_matrix(Ryzx, j.parent_frame.quat);
+  ap_quat_from_matrix(Ryzx, j.child_frame.quat);
+  good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "lower joint");
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "hinge", c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
+  c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "hinge");
+  good = good && hoffmann_effects(b, p, lo);
+  return finish(b, good);
+}
+
+int bs_hoffmann_sliding_state(const ap_model *m, double q[2], double v[2], double *change) {
+  ap_data *d = NULL;
+  if (ap_data_create(m, &d) != AP_OK) {
+    fail("ap_data_create", "cannot create a data struct");
+    return AP_ERR_NOMEM;
+  }
+  double moved = 0.0;
+  const int given[2] = {1, 0};
+  q[0] = 0.5, q[1] = -0.5, v[0] = 1.0, v[1] = 0.0;
+  d->t = 0.0;
+  int rc = ap_body_project_q(m, d, q, &moved);   /* assemble from a rough guess */
+  if (rc != AP_OK) fail("ap_body_project_q", d->msg);
+  ap_data_free(d);
+  if (change) *change = moved;
+  return rc == AP_OK ? complete(m, NULL, q, given, v) : rc;
+}
