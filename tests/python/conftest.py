@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-SOURCE = Path(os.environ.get("APPELL_SOURCE_DIR", Path(__file__).resolve().parents[2]))
+SOURCE = Path(os.environ["APPELL_SOURCE_DIR"] if "APPELL_SOURCE_DIR" in os.environ
+              else Path(__file__).resolve().parents[2])
 SCENES = SOURCE / "examples" / "scenes"
 BAD = SOURCE / "tests" / "scenes"
 EXE = os.environ.get("APPELL_EXE", str(SOURCE / "build" / "tools" / "appell"))
