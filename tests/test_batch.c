@@ -6,7 +6,8 @@
  * refused with a message. Batches: bad input refused once at creation (scene, override,
  * channel, time); each row equals `appell run`'s state for the same overrides (ap_scene + ap_sim
  * by hand here); failures are rows; a progress callback that cancels leaves the runs never
- * started as AP_BATCH_NOT_RUN rows; NULL arguments are refused. */
+ * started as AP_BATCH_NOT_RUN rows and the one under way interrupted; NULL arguments are
+ * refused. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -273,13 +274,15 @@ static void batch_cancel(void) {
   AP_CHECK_EQ_INT(ap_batch_check_plan(b, p, msg, sizeof msg), AP_OK);
   AP_CHECK_EQ_INT(ap_batch_run_plan(b, p, 0, count + 1, values, status, NULL), AP_ERR_ARG);
   AP_CHECK_EQ_INT(ap_batch_run_plan(b, p, 0, count, values, status, NULL), AP_BATCH_CANCELLED);
-  long ok = 0, not_run = 0;
+  long ok = 0, not_run = 0, stopped = 0;
   for (long i = 0; i < count; i++) {
     ok += status[i] == AP_OK, not_run += status[i] == AP_BATCH_NOT_RUN;
+    stopped += status[i] == AP_ERR_INTERRUPTED;
     if (status[i] == AP_BATCH_NOT_RUN) AP_CHECK(isnan(values[i * nc]));
+    if (status[i] == AP_ERR_INTERRUPTED) AP_CHECK(values[i * nc] < 2.0);   /* stopped on the way */
   }
-  AP_CHECK(calls >= 1 && ok >= 1 && not_run >= 1 && ok + not_run == count);
-  printf("cancelled after %ld of %ld runs\n", ok, count);
+  AP_CHECK(calls >= 1 && ok >= 1 && not_run >= 1 && ok + not_run + stopped == count);
+  printf("cancelled after %ld of %ld runs (%ld interrupted)\n", ok, count, stopped);
   free(status);
   free(values);
   ap_batch_free(b);

@@ -4,7 +4,7 @@
  * Flow: options -> a plan (include/appell/batch.h: --grid, --random, --samples, --seed) and a
  * batch (the scene with --set and the shorthands, the channels and times) -> one check of the
  * overrides with typical values -> this shard's runs on --jobs threads -> the CSV, written
- * atomically (tools/outfile.c). Columns: run, runs (the plan's size, so that --merge can tell
+ * atomically (tools/output.c, as appell run writes). Columns: run, runs (the plan's size, so that --merge can tell
  * a complete set of shards), each parameter's path, status, the batch's columns, message.
  * Numbers are written with 17 significant digits, which read back to the same double.
  * Invariant: a file at --out holds every run of its shard; an interrupted or failed sweep
@@ -20,7 +20,6 @@
 #include <appell/appell.h>
 
 #include "cli.h"
-#include "outfile.h"
 #include "sweep.h"
 
 #define MAX_ARGS 256
@@ -59,10 +58,7 @@ static const char help[] =
     "\n"
     "A failed run is a row with its status (the library's code, 0 = success) and message.\n"
     "Exit codes: 0 the table was written, 2 bad input, 3 every run failed numerically,\n"
-    "1 internal error, 130 interrupted.\n";
-
-static volatile sig_atomic_t interrupted = 0;
-static void on_signal(int sig) { interrupted = sig; }
+    "1 internal error or failed write, 128 + N stopped by signal N (no table then).\n";
 
 typedef struct sweep_opts {
   const char *scene, *out;
@@ -225,7 +221,7 @@ static int on_progress(long done, long total, void *user) {
     if (done > 0 && done < total) fprintf(stderr, ", %.0f s left ", el / (double)done * (double)(total - done));
     if (done == total) fputs("\r\033[K", stderr);
   }
-  return interrupted != 0;
+  return cli_interrupted() != 0;
 }
 
 static int build_plan(sweep_state *s) {
@@ -310,34 +306,30 @@ static int summary(const sweep_state *s, double wall) {
   return EXIT_OK;
 }
 
-static int run_sweep(sweep_state *s) {
+static int run_sweep(sweep_state *s, cli_out *out) {
   long nc = ap_batch_ncols(s->batch), n = s->count > 0 ? s->count : 1;
   s->values = malloc(sizeof *s->values * (size_t)(n * nc));
   s->status = malloc(sizeof *s->status * (size_t)n);
   s->messages = calloc((size_t)n, sizeof *s->messages);
   if (!s->values || !s->status || !s->messages)
     return fprintf(stderr, "appell sweep: out of memory for %ld rows\n", s->count), EXIT_INTERNAL;
-  cli_outfile of;
-  int code = cli_outfile_open(&of, "sweep", s->o->out);
-  if (code != EXIT_OK) return code;
-  signal(SIGINT, on_signal);
-  signal(SIGTERM, on_signal);
   s->bar = !s->o->quiet && isatty(STDERR_FILENO);
   s->t_start = now();
   int rc = ap_batch_run_plan(s->batch, s->plan, s->first, s->count, s->values, s->status,
                              s->messages);
   double wall = now() - s->t_start;
-  if (rc == AP_BATCH_CANCELLED || interrupted) {
-    fprintf(stderr, "%sappell sweep: interrupted; no table written\n", s->bar ? "\r\033[K" : "");
-    code = EXIT_INTERRUPT;
-  } else if (rc != AP_OK) {
-    fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc));
-    code = cli_exit_code(rc);
-  } else {
-    write_header(s, of.f);
-    for (long i = 0; i < s->count; i++) write_row(s, of.f, i);
+  int sig = cli_interrupted();
+  if (rc == AP_BATCH_CANCELLED || sig) {
+    fprintf(stderr, "%sappell sweep: interrupted by %s; no table written\n",
+            s->bar ? "\r\033[K" : "", cli_signal_name(sig));
+    return EXIT_SIGNAL(sig ? sig : SIGINT);
   }
-  code = cli_outfile_close(&of, "sweep", code);
+  if (rc != AP_OK) return fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc);
+  int code = cli_out_open(out);
+  if (code != EXIT_OK) return code;
+  write_header(s, out->f);
+  for (long i = 0; i < s->count; i++) write_row(s, out->f, i);
+  code = cli_out_close(out, EXIT_OK);
   return code == EXIT_OK ? summary(s, wall) : code;
 }
 
@@ -347,13 +339,18 @@ int cmd_sweep(int argc, char **argv) {
   o.final = 1, o.jobs = 1, o.seed = 1, o.shard_i = 1, o.shard_n = 1;
   int rc = parse_args(argc, argv, &o);
   if (rc != 0) return rc > 0 ? (fputs(help, stdout), EXIT_OK) : EXIT_INPUT;
-  if (o.merge) return sweep_merge(o.out, o.inputs, o.ninputs, o.quiet);
+  cli_out_command("sweep");
+  cli_out out;
+  int code = cli_out_check(&out, o.out, o.merge ? NULL : o.inputs[0]);
+  if (code != EXIT_OK) return code;
+  cli_signals_install();
+  if (o.merge) return sweep_merge(&out, o.inputs, o.ninputs, o.quiet);
   sweep_state s;
   memset(&s, 0, sizeof s);
   s.o = &o;
-  int code = build_plan(&s);
+  code = build_plan(&s);
   if (code == EXIT_OK) code = build_batch(&s);
-  if (code == EXIT_OK) code = run_sweep(&s);
+  if (code == EXIT_OK) code = run_sweep(&s, &out);
   if (s.messages) ap_batch_messages_free(s.count, s.messages);
   free(s.messages);
   free(s.values);

@@ -11,7 +11,6 @@
 #include <string.h>
 
 #include "cli.h"
-#include "outfile.h"
 #include "sweep.h"
 
 typedef struct shard_file {
@@ -122,16 +121,15 @@ static int check_complete(const merge_state *m) {
   return -1;
 }
 
-static int write_merged(const merge_state *m, const char *out) {
-  cli_outfile of;
-  int code = cli_outfile_open(&of, "sweep", out);
+static int write_merged(const merge_state *m, cli_out *out) {
+  int code = cli_out_open(out);
   if (code != EXIT_OK) return code;
-  fwrite(m->files[0].text, 1, line_len(m->files[0].text) + 1, of.f);
-  for (long r = 0; r < m->runs; r++) fwrite(m->rows[r], 1, line_len(m->rows[r]) + 1, of.f);
-  return cli_outfile_close(&of, "sweep", code);
+  fwrite(m->files[0].text, 1, line_len(m->files[0].text) + 1, out->f);
+  for (long r = 0; r < m->runs; r++) fwrite(m->rows[r], 1, line_len(m->rows[r]) + 1, out->f);
+  return cli_out_close(out, code);
 }
 
-int sweep_merge(const char *out, const char *const *inputs, int n, int quiet) {
+int sweep_merge(cli_out *out, const char *const *inputs, int n, int quiet) {
   merge_state m;
   memset(&m, 0, sizeof m);
   m.files = calloc((size_t)n, sizeof *m.files);
@@ -147,7 +145,8 @@ int sweep_merge(const char *out, const char *const *inputs, int n, int quiet) {
   if (code == EXIT_OK && check_complete(&m) != 0) code = EXIT_INPUT;
   if (code == EXIT_OK) code = write_merged(&m, out);
   if (code == EXIT_OK && !quiet)
-    fprintf(stderr, "appell sweep: merged %d files, %ld runs -> %s\n", n, m.runs, out);
+    fprintf(stderr, "appell sweep: merged %d files, %ld runs -> %s\n", n, m.runs,
+            cli_out_name(out));
   for (int i = 0; i < m.nfiles; i++) free(m.files[i].text);
   free(m.files);
   free(m.rows);

@@ -82,7 +82,8 @@ typedef struct ap_batch_def {
   int final_state;                /* 1 (default): q and v where each run ends */
   /* Called about every 0.2 s and once at the end, from the thread that called ap_batch_run,
    * with the number of runs finished. A non-zero return cancels the batch: no further run
-   * starts (those running finish). May be NULL. */
+   * starts, and those running stop at their next internal step (status AP_ERR_INTERRUPTED).
+   * May be NULL. */
   int (*progress)(long done, long total, void *user);
   void *user;
 } ap_batch_def;

@@ -10,6 +10,8 @@
 #ifndef AP_BATCH_INT_H
 #define AP_BATCH_INT_H
 
+#include <stdatomic.h>
+
 #include "appell/batch.h"
 #include "appell/scene.h"
 
@@ -31,9 +33,11 @@ struct ap_batch {
 };
 
 /* One run with the overrides vsets (nv) after the batch's own: row (ncols values, NaN where
- * nothing was reached) and the status; msg gets the failure's message or the run's warning. */
+ * nothing was reached) and the status; msg gets the failure's message or the run's warning.
+ * The simulation stops (AP_ERR_INTERRUPTED) at its next internal step once *stop is non-zero
+ * (stop may be NULL). */
 int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *row, char *msg,
-                   size_t msg_len);
+                   size_t msg_len, const atomic_int *stop);
 
 /* Load the batch's scene with its overrides and vsets (nv). */
 int ap_bat_load(const ap_batch *b, const char *const *vsets, int nv, ap_scene **out, char *msg,

@@ -138,8 +138,14 @@ static void summarize(one_run *r) {
   memcpy(row + AP_BAT_FIXED_COLS + b->n, ap_sim_v(r->sim), sizeof(double) * (size_t)b->k);
 }
 
+/* ap_sim_poll_fn: stop once the batch is cancelled. */
+static int poll_stop(double t, void *user) {
+  (void)t;
+  return atomic_load_explicit((const atomic_int *)user, memory_order_relaxed) != 0;
+}
+
 int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *row, char *msg,
-                   size_t msg_len) {
+                   size_t msg_len, const atomic_int *stop) {
   one_run r;
   memset(&r, 0, sizeof r);
   r.b = b, r.row = row, r.msg = msg, r.msg_len = msg_len;
@@ -148,6 +154,7 @@ int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *
   int rc = ap_bat_load(b, vsets, nv, &r.sc, msg, msg_len);
   if (rc == AP_OK) rc = prepare(&r);
   if (rc == AP_OK) rc = start(&r);
+  if (rc == AP_OK && stop) ap_sim_set_poll(r.sim, poll_stop, (void *)stop);
   if (rc == AP_OK) rc = loop(&r);
   if (r.sim) summarize(&r);
   if (rc == AP_OK && r.sim && ap_sim_warning(r.sim)[0] && msg && msg_len)

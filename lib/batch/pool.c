@@ -2,8 +2,9 @@
  * increasing order, run them (batch_run.c) and write row i, status[i] and messages[i] only;
  * the calling thread waits, reporting progress about every 0.2 s. Rows are therefore the same
  * whatever the number of threads and the order in which runs finish.
- * Cancelling (the progress callback returns non-zero) stops the handing out of indices; runs
- * under way finish; rows never started keep status AP_BATCH_NOT_RUN and NaN values.
+ * Cancelling (the progress callback returns non-zero) stops the handing out of indices and
+ * interrupts the runs under way at their next internal step (ap_sim_set_poll; their rows say
+ * AP_ERR_INTERRUPTED); rows never started keep status AP_BATCH_NOT_RUN and NaN values.
  * When no thread can be created the calling thread runs everything itself. */
 #include <math.h>
 #include <pthread.h>
@@ -30,6 +31,7 @@ typedef struct pool {
   pthread_cond_t cv;
   long next, done;         /* next index to hand out; runs finished */
   int cancel;
+  atomic_int stop;         /* = cancel, read by the simulations' poll without the mutex */
   int active;              /* workers still running */
 } pool;
 
@@ -59,7 +61,7 @@ static void *worker(void *arg) {
     if (i >= p->count) break;
     const char *const *vs = run_sets(p, i, buf, sets);
     int rc = ap_bat_run_one(p->b, vs, nper, p->values + (size_t)i * (size_t)p->b->ncols, msg,
-                            sizeof msg);
+                            sizeof msg, &p->stop);
     p->status[i] = rc;
     if (p->messages) p->messages[i] = msg[0] ? strdup(msg) : NULL;
     pthread_mutex_lock(&p->mu);
@@ -103,7 +105,7 @@ static void wait_done(pool *p) {
     int stop = progress(p, done);
     last = now();
     pthread_mutex_lock(&p->mu);
-    if (stop) p->cancel = 1;
+    if (stop) p->cancel = 1, atomic_store(&p->stop, 1);
   }
   pthread_mutex_unlock(&p->mu);
 }
@@ -118,7 +120,8 @@ static int thread_count(const ap_batch *b, long count) {
 int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
                 char **messages) {
   pool p = {b, src, count, values, status, messages, PTHREAD_MUTEX_INITIALIZER,
-            PTHREAD_COND_INITIALIZER, 0, 0, 0, 0};
+            PTHREAD_COND_INITIALIZER, 0, 0, 0, 0, 0};
+  atomic_init(&p.stop, 0);
   for (long i = 0; i < count; i++) {
     status[i] = AP_BATCH_NOT_RUN;
     if (messages) messages[i] = NULL;

@@ -248,6 +248,12 @@ int ap_sim_advance(ap_sim *s, double tout) {
     return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
                          s->t);
   for (long steps = 0; s->t < tout; steps++) {
+    int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
+    if (stop) {
+      int rc = ap_drv_evaluate_current(s);
+      return rc != AP_OK ? rc : ap_drv_fail(s, AP_ERR_INTERRUPTED, "interrupted at t = %.17g "
+                                            "(the poll function returned %d)", s->t, stop);
+    }
     if (steps >= s->def.max_steps)
       return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
                            "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
@@ -285,6 +291,11 @@ const double *ap_sim_v(const ap_sim *s) { return s->v; }
 const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
 const char *ap_sim_message(const ap_sim *s) { return s->msg; }
 const char *ap_sim_warning(const ap_sim *s) { return s->warning; }
+
+void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user) {
+  if (!s) return;
+  s->poll = poll, s->poll_user = user;
+}
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
   if (s->dae) {   /* IDA's own multipliers: the cross-check compares them with Appell's */

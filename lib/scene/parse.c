@@ -218,9 +218,9 @@ static int parse_body(sc_ctx *c, const sc_node *key, const sc_node *n, sc_body *
   if (!in) b->uniform = 1;
   int solid = b->def.shape.kind != AP_SHAPE_NONE && b->def.shape.kind != AP_SHAPE_POINT;
   if (b->uniform && !solid)
-    return sc_err(c, in ? in : n, "%s: a uniform inertia needs a solid shape (sphere, "
+    return sc_err(c, in ? in : n, "%sa uniform inertia needs a solid shape (sphere, "
                   "ellipsoid, disk or torus); give the inertia tensor instead",
-                  in ? "inertia" : "no inertia given");
+                  in ? "" : "no inertia given, and ");
   if (b->uniform && sc_map_get(n, "com"))
     return sc_err(c, sc_map_get(n, "com"), "a uniform body has its centre of mass at the shape "
                   "centre; remove com or give the inertia tensor");
@@ -277,7 +277,7 @@ static int parse_drive(sc_ctx *c, const sc_node *n, sc_joint *j) {
                       sc_joint_kind_name(j->def.kind));
       return sc_check_keys(c, n, names);
     }
-    if (sc_expr_read(c, n->kids[i], &j->drive[idx])) return AP_ERR_ARG;
+    if (sc_expr_node(c, n->kids[i], &j->drive[idx])) return AP_ERR_ARG;
     j->def.drive[idx] = sc_expr_time_fn;
     j->def.drive_user[idx] = &j->drive[idx];
   }

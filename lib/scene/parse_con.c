@@ -48,14 +48,14 @@ int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g) {
   if (sc_map_get(n, "center") && kind != AP_GROUND_TURNTABLE)
     return sc_err(c, sc_map_get(n, "center"), "center belongs to a turntable ground");
   if (om) {
-    if (sc_expr_read(c, om, &g->omega)) return AP_ERR_ARG;
+    if (sc_expr_node(c, om, &g->omega)) return AP_ERR_ARG;
     g->def.omega = g->omega.value;
   }
   if (!ve) return AP_OK;
   if (ve->kind != SC_SEQ || ve->n != 2)
     return sc_err(c, ve, "expected [vx, vy]: two numbers or expressions of t");
   for (int i = 0; i < 2; i++)
-    if (sc_expr_read(c, ve->kids[i], &g->vel[i])) return AP_ERR_ARG;
+    if (sc_expr_node(c, ve->kids[i], &g->vel[i])) return AP_ERR_ARG;
   g->def.velocity[0] = g->vel[0].value, g->def.velocity[1] = g->vel[1].value;
   return AP_OK;
 }
@@ -102,7 +102,7 @@ static int parse_speed_ref(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) 
   k->def.joint = j, k->def.speed = i;
   const sc_node *v = sc_map_get(n, "value");
   if (!v) return sc_err(c, n, "a prescribed_speed constraint needs value (a number or f(t))");
-  if (sc_expr_read(c, v, &k->value)) return AP_ERR_ARG;
+  if (sc_expr_node(c, v, &k->value)) return AP_ERR_ARG;
   k->def.speed_value = k->value.value;
   if (k->value.timed) k->def.speed_fn = sc_expr_time_fn, k->def.user = &k->value;
   return AP_OK;
@@ -177,7 +177,7 @@ static int parse_wrench(sc_ctx *c, const sc_node *n, const char *key, sc_expr *e
   if (v->kind != SC_SEQ || v->n != 3)
     return sc_err(c, v, "expected three numbers or expressions of t, e.g. [0, 0, \"sin(t)\"]");
   for (int i = 0; i < 3; i++) {
-    if (sc_expr_read(c, v->kids[i], &e[i])) return AP_ERR_ARG;
+    if (sc_expr_node(c, v->kids[i], &e[i])) return AP_ERR_ARG;
     out[i] = e[i].value;
     *timed |= e[i].timed;
   }

@@ -4,7 +4,8 @@
  * _run(t_end, dt) records rows at t, t + dt, ..., t_end (the last exactly t_end) from the
  * current time, as `appell run` writes them: the output columns (table), q and v. The arrays
  * are allocated first; the integration then runs with the GIL released, taking it back about
- * every 0.2 s to let Python handle signals (Ctrl-C stops the run where it is). A failure
+ * every 0.2 s (between internal steps, through ap_sim_set_poll) to let Python handle signals:
+ * Ctrl-C stops the run where it is, even inside one long output interval. A failure
  * raises appell.Error with .partial = (columns, table, q, v) up to the last time reached.
  * Invariant: at most one thread works on a Simulation at a time (busy), and the Simulation
  * holds a reference to its Model, so the scene outlives the simulation. */
@@ -154,24 +155,44 @@ static int record(apx_sim *s, rec *r) {
   return AP_OK;
 }
 
+/* ap_sim_poll_fn: stop an advance when the next look at Python's signals is due. */
+static int poll_due(double t, void *user) {
+  (void)t;
+  return now() > *(const double *)user;
+}
+
+/* Advance to t with the GIL released; about every 0.2 s (between internal steps, through the
+ * poll) take the GIL back to let Python run its signal handlers. Returns the status; sets
+ * *interrupted when a handler raised (KeyboardInterrupt). Called without the GIL. */
+static int advance_released(apx_sim *s, double t, double *due, int *interrupted,
+                            PyThreadState **ts) {
+  int rc;
+  ap_sim_set_poll(s->sim, poll_due, due);
+  do {
+    rc = ap_sim_advance(s->sim, t);
+    if (rc == AP_ERR_INTERRUPTED || now() > *due) {
+      PyEval_RestoreThread(*ts);
+      *interrupted = PyErr_CheckSignals() != 0;
+      *ts = PyEval_SaveThread();
+      *due = now() + 0.2;
+    }
+  } while (rc == AP_ERR_INTERRUPTED && !*interrupted);
+  ap_sim_set_poll(s->sim, NULL, NULL);
+  return rc;
+}
+
 /* Rows at t0 + i dt (the last at t_end), with the GIL released. */
 static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) {
-  double last = now();
-  Py_BEGIN_ALLOW_THREADS
+  double due = now() + 0.2;
+  PyThreadState *ts = PyEval_SaveThread();
   r->rc = record(s, r);
-  for (long i = 1; r->rc == AP_OK && i < r->rows; i++) {
+  for (long i = 1; r->rc == AP_OK && !r->interrupted && i < r->rows; i++) {
     double t = i == r->rows - 1 ? t_end : t0 + (double)i * dt;
-    r->rc = ap_sim_advance(s->sim, t);
+    r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
     if (r->rc == AP_OK) r->rc = record(s, r);
-    if (now() - last > 0.2) {
-      Py_BLOCK_THREADS
-      r->interrupted = PyErr_CheckSignals() != 0;
-      Py_UNBLOCK_THREADS
-      last = now();
-      if (r->interrupted) break;
-    }
   }
-  Py_END_ALLOW_THREADS
+  PyEval_RestoreThread(ts);
+  if (r->interrupted && r->rc == AP_ERR_INTERRUPTED) r->rc = AP_OK;   /* the signal wins */
 }
 
 /* (columns, table, q, v) with the first `done` rows. */
@@ -249,11 +270,13 @@ static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
     return PyErr_Format(PyExc_ValueError, "advance(t): t must be >= the current time %.17g",
                         ap_sim_time(s->sim));
   if (claim(s)) return NULL;
-  int rc;
-  Py_BEGIN_ALLOW_THREADS
-  rc = ap_sim_advance(s->sim, t);
-  Py_END_ALLOW_THREADS
+  double due = now() + 0.2;
+  int interrupted = 0;
+  PyThreadState *ts = PyEval_SaveThread();
+  int rc = advance_released(s, t, &due, &interrupted, &ts);
+  PyEval_RestoreThread(ts);
   s->busy = 0;
+  if (interrupted) return NULL;   /* the handler's exception (KeyboardInterrupt) is set */
   if (rc == AP_OK) Py_RETURN_NONE;
   char msg[1400];
   snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),

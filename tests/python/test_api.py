@@ -5,6 +5,7 @@ checks in C), the command-line tool's own output (appell check, the CSV header),
 invariant of the rolling disk (REFERENCES.md's section on the rolling disk: rolling without
 slip does no work), and serial runs for the threaded ones."""
 
+import signal
 import threading
 import time
 
@@ -187,7 +188,7 @@ def test_gil_is_released_while_integrating(disk):
 
     def work():
         span["start"] = time.perf_counter()
-        sim.run(t_end=150, dt=1.0)
+        sim.run(t_end=80, dt=1.0)
         span["end"] = time.perf_counter()
 
     th = threading.Thread(target=work)
@@ -199,3 +200,29 @@ def test_gil_is_released_while_integrating(disk):
     inside = [s for s in stamps if span["start"] + 0.02 < s < span["end"] - 0.02]
     assert span["end"] - span["start"] > 0.1   # the run is long enough to tell
     assert len(inside) > 1000                  # held GIL: none at all
+
+
+def test_a_signal_stops_a_long_output_interval(disk):
+    """Python's signal handlers run while C integrates one long interval (Ctrl-C works)."""
+    sim = appell.Simulation(appell.load(disk), rtol=1e-12, atol=1e-14)
+
+    class Stop(Exception):
+        pass
+
+    def handler(sig, frame):
+        raise Stop
+
+    old = signal.signal(signal.SIGALRM, handler)
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    start = time.perf_counter()
+    try:
+        with pytest.raises(Stop):
+            sim.run(t_end=1e6, dt=1e6)   # one interval: minutes of integration
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert time.perf_counter() - start < 5
+    t = sim.t
+    assert 0 < t < 1e6                   # stopped where it was, and goes on from there
+    sim.advance(t + 0.1)
+    assert sim.t == t + 0.1
