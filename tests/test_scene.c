@@ -69,7 +69,6 @@ static const bad_case bad[] = {
     {"t_end_before_t0.yaml", "t_end_before_t0.yaml:11:28: simulation.t_end:", "must be after"},
     {"inconsistent_constraints.yaml",
      "inconsistent_constraints.yaml:8:15: constraints.turn_again:", "contradict each other"},
-    {"no_free_speed.yaml", "no_free_speed.yaml:6:3: constraints:", "no free speed"},
     {"driven_initial.yaml", "driven_initial.yaml:6:16: initial.arm.angle:", "is driven"},
     {"uniform_point.yaml", "uniform_point.yaml:2:47: bodies.p.inertia:", "needs a solid shape"},
     {"special_float.yaml", "special_float.yaml:4:11: bodies.disk.mass:",

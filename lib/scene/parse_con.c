@@ -19,7 +19,7 @@ static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_spe
                                         "coincident", "point_on_line", "point_on_plane", NULL};
 static const char *const con_keys[][8] = {
     {"kind", "body", "no_spin", "ground", NULL},
-    {"kind", "body", "point", "direction", "ground", NULL},
+    {"kind", "body", "point", "direction", "wheel", "ground", NULL},
     {"kind", "joint", "speed", "value", NULL},
     {"kind", NULL},
     {"kind", "body", "point", "body2", "point2", "axes", NULL},
@@ -108,6 +108,26 @@ static int parse_speed_ref(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) 
   return AP_OK;
 }
 
+/* A knife edge is a wheel's (at the contact point of a disk or torus, across the wheel plane)
+ * when `wheel: true`, or when the body is a disk or torus and neither point nor direction is
+ * given; otherwise it is the body point's (docs/scenes.md "constraints"). */
+static int parse_knife_wheel(sc_ctx *c, sc_scene *s, const sc_node *n, ap_constraint_def *d) {
+  const sc_node *w = sc_map_get(n, "wheel");
+  ap_shape_kind sk = s->bodies[d->body].def.shape.kind;
+  int disk = sk == AP_SHAPE_DISK || sk == AP_SHAPE_TORUS;
+  int pt = sc_map_get(n, "point") || sc_map_get(n, "direction");
+  d->wheel = disk && !pt;
+  if (!w) return AP_OK;
+  if (sc_get_bool(c, n, "wheel", &d->wheel)) return AP_ERR_ARG;
+  if (d->wheel && pt)
+    return sc_err(c, w, "a wheel knife edge acts at the contact point across the wheel plane: "
+                  "drop point and direction, or set wheel: false");
+  if (d->wheel && !disk)
+    return sc_err(c, w, "a wheel knife edge needs a body shaped as a disk or torus; '%s' is "
+                  "not", s->bodies[d->body].name);
+  return AP_OK;
+}
+
 static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   ap_constraint_def *d = &k->def;
   if (!sc_map_get(n, "body")) return sc_err(c, n, "the constraint needs body");
@@ -120,14 +140,7 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   if (sc_map_get(n, "direction") && !(fabs(d->direction[0]) + fabs(d->direction[1]) +
                                           fabs(d->direction[2]) > 0))
     return sc_err(c, sc_map_get(n, "direction"), "the direction must not be zero");
-  if (d->kind == AP_CON_ROLLING) {
-    int j = 0;
-    while (j < s->nj && s->joints[j].def.child != d->body) j++;
-    if (j < s->nj && s->joints[j].def.kind != AP_JOINT_PLANE_CONTACT)
-      return sc_err(c, sc_map_get(n, "body"), "rolling needs a body on a plane_contact joint; "
-                    "'%s' is on the %s joint '%s'", s->bodies[d->body].name,
-                    sc_joint_kind_name(s->joints[j].def.kind), s->joints[j].name);
-  }
+  if (d->kind == AP_CON_KNIFE_EDGE && parse_knife_wheel(c, s, n, d)) return AP_ERR_ARG;
   const sc_node *g = sc_map_get(n, "ground");
   if (d->kind != AP_CON_ROLLING && d->kind != AP_CON_KNIFE_EDGE) return AP_OK;
   k->ground = s->ground;
