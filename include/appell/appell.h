@@ -10,6 +10,7 @@
 #include "appell/body.h"
 #include "appell/analyze.h"
 #include "appell/scene.h"
+#include "appell/batch.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

@@ -88,6 +88,27 @@ AP_API int ap_scene_residual(ap_scene *s, double t, const double *q, const doubl
  * prescribed non-zero speeds or moving ground; the energy drift then measures the error. */
 AP_API int ap_scene_conserves_energy(const ap_scene *s);
 
+/* Outputs of one run, for many runs of one scene at once. ap_scene_output_row, ap_scene_energy
+ * and ap_scene_residual evaluate in the scene's own data and remember the previous row (angle
+ * unwrapping, E(t0)), so they serve one simulation at a time and their memory carries over to
+ * the next run. An ap_scene_out keeps that state for one run: any number of them may evaluate
+ * rows of one scene from different threads at once (the scene and its model are only read;
+ * ap_scene_initial_state and ap_sim_create only read them too). The scene must outlive them. */
+typedef struct ap_scene_out ap_scene_out;
+
+AP_API int ap_scene_out_create(const ap_scene *s, ap_scene_out **out);
+/* The row of ap_scene_output_row (ap_scene_output_count values, column 0 = t) at the
+ * simulation's current state; the first row after creation sets E(t0) and the angles. */
+AP_API int ap_scene_out_row(ap_scene_out *o, ap_sim *sim, double *row);
+/* ap_scene_energy in the run's own data. */
+AP_API int ap_scene_out_energy(ap_scene_out *o, double t, const double *q, const double *v,
+                               double *E);
+AP_API void ap_scene_out_free(ap_scene_out *o);
+
+/* The value of a constant expression of the scene grammar ("70*deg", "pi/2", "1e-3"); on
+ * failure AP_ERR_ARG and msg says what is wrong with the text. */
+AP_API int ap_scene_constant(const char *text, double *x, char *msg, size_t msg_len);
+
 /* The scene's elements, for listings (appell check). */
 typedef enum ap_scene_section {
   AP_SCENE_BODIES = 0,

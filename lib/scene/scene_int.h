@@ -295,7 +295,7 @@ int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
 /* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
  * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
 const ap_data *sc_scene_output_data(const ap_scene *sc);
-/* The parsed scene of a loaded ap_scene. */
+/* The parsed scene behind an ap_scene (scene_run.c evaluates rows of it per run). */
 const sc_scene *sc_scene_parsed(const ap_scene *sc);
 
 /* ---- building and initial state (build.c, init.c) ------------------------------------- */
