@@ -245,7 +245,7 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
   rec r = {NULL, NULL, NULL, ap_scene_output_count(s->model->sc), ap_model_n(m), ap_model_k(m),
            0, 0, AP_OK, 0};
   r.rows = (long)ceil((t_end - t0) / dt - 1e-9) + 1;
-  if (r.rows < 1) r.rows = 1;
+  if (r.rows < (t_end > t0 ? 2 : 1)) r.rows = t_end > t0 ? 2 : 1;   /* dt past t_end: t0, t_end */
   npy_intp d0[2] = {r.rows, r.nc}, d1[2] = {r.rows, r.n}, d2[2] = {r.rows, r.k};
   PyArrayObject *arr[3] = {(PyArrayObject *)PyArray_ZEROS(2, d0, NPY_DOUBLE, 0),
                            (PyArrayObject *)PyArray_ZEROS(2, d1, NPY_DOUBLE, 0),

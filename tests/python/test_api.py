@@ -147,6 +147,16 @@ def test_bad_arguments(disk):
     assert {"dopri5", "verner6", "bdf"} <= {x["name"] for x in appell.methods()}
 
 
+def test_an_interval_past_t_end_ends_at_t_end(disk):
+    # dt more than 1e9 times t_end - t0 once gave the row at t0 only, without integrating.
+    m = appell.load(disk)
+    sim = appell.Simulation(m)
+    res = sim.run(t_end=0.5, dt=1e9)
+    assert list(res.t) == [0.0, 0.5] and sim.t == 0.5
+    one = appell.Simulation(m).run(t_end=0.5, dt=0.5)   # the same single advance to 0.5
+    assert np.array_equal(res.table, one.table)
+
+
 def test_inconsistent_initial_speeds_are_refused(disk):
     m = appell.load(disk)
     q0, v0, _ = m.initial_state()
