@@ -147,6 +147,19 @@ def test_bad_arguments(disk):
     assert {"dopri5", "verner6", "bdf"} <= {x["name"] for x in appell.methods()}
 
 
+def test_argument_errors_name_the_numbers(disk):
+    # PyErr_Format has no %g: the messages once read "the current time %.17g".
+    sim = appell.Simulation(appell.load(disk))
+    sim.advance(0.25)
+    with pytest.raises(ValueError) as info:
+        sim.run(t_end=0.125, dt=0.5)
+    assert "%" not in str(info.value)
+    assert "time 0.25 " in str(info.value) and "t_end = 0.125," in str(info.value)
+    with pytest.raises(ValueError) as info:
+        sim.advance(float("nan"))
+    assert "%" not in str(info.value) and "time 0.25 " in str(info.value)
+
+
 def test_an_interval_past_t_end_ends_at_t_end(disk):
     # dt more than 1e9 times t_end - t0 once gave the row at t0 only, without integrating.
     m = appell.load(disk)
