@@ -61,6 +61,10 @@ static int apply_settings(apx_sim *s, PyObject *mode, PyObject *method, PyObject
       PyErr_Format(PyExc_ValueError, "%s must be a finite number > 0, got %R", names[i], num[i]);
       return -1;
     }
+    if (!field[i] && !(x >= 1 && x == floor(x) && x < 0x1p62)) {   /* (long)x must be exact */
+      PyErr_Format(PyExc_ValueError, "max_steps must be a whole number >= 1, got %R", num[i]);
+      return -1;
+    }
     if (field[i]) *field[i] = x;
     else d->max_steps = (long)x;
   }

@@ -160,6 +160,16 @@ def test_argument_errors_name_the_numbers(disk):
     assert "%" not in str(info.value) and "time 0.25 " in str(info.value)
 
 
+def test_max_steps_must_be_a_whole_number(disk):
+    # 2.5 was truncated to 2, and 1e30 cast to long (undefined; LONG_MIN here), which the
+    # library then refused with a message about switch_growth.
+    m = appell.load(disk)
+    for bad in (2.5, 1e30, 0):
+        with pytest.raises(ValueError, match="max_steps must be a whole number"):
+            appell.Simulation(m, max_steps=bad)
+    assert appell.Simulation(m, max_steps=1e6).settings["max_steps"] == 1000000
+
+
 def test_an_interval_past_t_end_ends_at_t_end(disk):
     # dt more than 1e9 times t_end - t0 once gave the row at t0 only, without integrating.
     m = appell.load(disk)
