@@ -187,6 +187,19 @@ static void test_plot(const char *csv) {
   AP_CHECK(ct_log_has("did you mean 'disk.contact.x'?") || ct_log_has("did you mean 'disk.contact.y'?"));
   const char *ext[] = {ct_bin, "plot", csv, "--y", "energy", "-o", "fig.jpg", NULL};
   AP_CHECK_EQ_INT(ct_run(ext), 2);
+  /* A figure in a missing directory, or a directory: refused before gnuplot runs (gnuplot
+   * could not open it and wrote the PNG to standard output, onto the terminal, exit 1). */
+  char nodir[1200], isdir[1200];
+  snprintf(nodir, sizeof nodir, "%s/no/such/dir/x.png", ct_tmp);
+  snprintf(isdir, sizeof isdir, "%s/d.png", ct_tmp);
+  const char *missing[] = {ct_bin, "plot", csv, "--y", "energy", "-o", nodir, NULL};
+  AP_CHECK_EQ_INT(ct_run(missing), 2);
+  AP_CHECK(ct_log_has("no such directory") && !ct_log_has("PNG"));
+  AP_CHECK(mkdir(isdir, 0700) == 0);
+  const char *dir[] = {ct_bin, "plot", csv, "--y", "energy", "-o", isdir, NULL};
+  AP_CHECK_EQ_INT(ct_run(dir), 2);
+  AP_CHECK(ct_log_has("is a directory"));
+  rmdir(isdir);
   if (system("command -v gnuplot >/dev/null 2>&1") != 0) {
     printf("gnuplot not installed: plot drawing not tested\n");
     return;
