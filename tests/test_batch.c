@@ -105,6 +105,14 @@ static void plan_errors(void) {
   AP_CHECK_EQ_INT(ap_plan_add_grid(p, "a=1:2:100000", msg, sizeof msg), AP_OK);
   AP_CHECK_EQ_INT(ap_plan_add_grid(p, "b=1:2:100000", msg, sizeof msg), AP_OK);
   AP_CHECK_EQ_INT(ap_plan_add_grid(p, "c=1:2:1000000", msg, sizeof msg), AP_ERR_ARG);   /* > 2^53 */
+  /* A path varied twice: the later value won in the runs while the table listed both. */
+  msg[0] = '\0';
+  AP_CHECK_EQ_INT(ap_plan_add_grid(p, "a=3,4", msg, sizeof msg), AP_ERR_ARG);
+  AP_CHECK(strstr(msg, "'a' is varied twice") != NULL);
+  msg[0] = '\0';
+  AP_CHECK_EQ_INT(ap_plan_add_random(p, "b=uniform(1,2)", msg, sizeof msg), AP_ERR_ARG);
+  AP_CHECK(strstr(msg, "'b' is varied twice") != NULL);
+  AP_CHECK_EQ_INT(ap_plan_nparams(p), 2);
   AP_CHECK_EQ_INT(ap_plan_add_grid(NULL, "a=1", msg, sizeof msg), AP_ERR_ARG);
   AP_CHECK_EQ_INT(ap_plan_add_random(p, NULL, msg, sizeof msg), AP_ERR_ARG);
   AP_CHECK_EQ_INT(ap_plan_set_samples(p, 0, 1), AP_ERR_ARG);
