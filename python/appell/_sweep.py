@@ -171,6 +171,9 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
                                 progress=progress, **args)
         return _assemble([part], first)
     from ._dask import run_on_dask
+    # The plan checked here, as a local sweep checks it, before any chunk goes to a worker
+    # (the chunks skip the check): a misspelt path raises instead of failing every run.
+    _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
     return _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
 
 
