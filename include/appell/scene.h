@@ -55,24 +55,27 @@ AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
  * quaternions, loop closures assembled, unspecified speeds completed and over-specified ones
  * projected (nearest in the metric g). report (may be NULL) receives a description of every
  * correction, empty when none was needed. An impossible state (no consistent speeds, a loop
- * that cannot close, a shape singular there) gives AP_ERR_ARG or the core's status and msg. */
+ * that cannot close, a shape singular there) gives AP_ERR_ARG or the core's status and msg.
+ * AP_ERR_ARG when s, q0 or v0 is NULL; report and msg may be NULL. */
 AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *report,
                                   size_t report_len, char *msg, size_t msg_len);
 
 /* Output channels: column names of a row (column 0 is "t") and their values at the
- * simulation's current state. */
+ * simulation's current state. Count 0 and name NULL when s is NULL or i out of range; the row
+ * is AP_ERR_ARG for a NULL argument or a simulation of another model. */
 AP_API int ap_scene_output_count(const ap_scene *s);
 AP_API const char *ap_scene_output_name(const ap_scene *s, int i);
 AP_API int ap_scene_output_row(ap_scene *s, ap_sim *sim, double *row);
 
 /* Total mechanical energy (kinetic + potential of gravity and springs) at (t, q, v), and the
- * largest |A v + a0| there. */
+ * largest |A v + a0| there. AP_ERR_ARG when an argument is NULL. */
 AP_API int ap_scene_energy(ap_scene *s, double t, const double *q, const double *v, double *E);
 AP_API int ap_scene_residual(ap_scene *s, double t, const double *q, const double *v,
                              double *resid);
 
 /* 1 when nothing in the scene adds or removes energy: no drivers, damping, applied forces,
- * prescribed non-zero speeds or moving ground; the energy drift then measures the error. */
+ * prescribed non-zero speeds or moving ground; the energy drift then measures the error.
+ * 0 when s is NULL. */
 AP_API int ap_scene_conserves_energy(const ap_scene *s);
 
 /* The scene's elements, for listings (appell check). */
@@ -84,10 +87,12 @@ typedef enum ap_scene_section {
   AP_SCENE_CHANNELS = 4    /* the output channels asked for (coordinates, energy, ...) */
 } ap_scene_section;
 
+/* 0, NULL, NULL when s is NULL, sec unknown or i out of range. */
 AP_API int ap_scene_count(const ap_scene *s, ap_scene_section sec);
 AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec, int i);
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
-/* The scene's name (name: key, default the file name without directory and extension). */
+/* The scene's name (name: key, default the file name without directory and extension); NULL
+ * when s is NULL. */
 AP_API const char *ap_scene_name(const ap_scene *s);
 
 #ifdef __cplusplus

@@ -28,7 +28,7 @@ enum {
   AP_ERR_INTERNAL = -10       /* a bug in Appell: please report */
 };
 
-/* A short, static text for a status code. */
+/* A short, static text for a status code ("unknown status" for any other int). */
 AP_API const char *ap_strerror(int status);
 
 #ifdef __cplusplus

@@ -62,7 +62,14 @@ typedef struct ap_scratch {
   double *work;             /* linalg scratch, ap_la_work_size(b, k) doubles */
   double *ev;               /* evaluator scratch, m->ev.scratch doubles (may be NULL) */
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
+  const ap_model *model;    /* the model the data was made for (buffers sized for it) */
 } ap_scratch;
+
+/* 1 when m and d are not NULL and d was made by ap_data_create for m: the public functions
+ * that take (m, d) return AP_ERR_ARG otherwise. */
+static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {
+  return m && d && d->internal && ((const ap_scratch *)d->internal)->model == m;
+}
 
 /* Check that x[0..len-1] is finite; otherwise write a message naming the callback and entry. */
 int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,

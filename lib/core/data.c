@@ -65,6 +65,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   s->gB = carve(&p, k * k), s->tk1 = carve(&p, k), s->tk2 = carve(&p, k), s->tl = carve(&p, k);
   s->work = carve(&p, lw);
   s->ev = m->ev.scratch ? carve(&p, m->ev.scratch) : NULL;
+  s->model = m;
   d->perm = carve_int(&ip, k), s->jpvt = carve_int(&ip, nb), s->iwork = carve_int(&ip, liw);
   blk->dbl = dbl, blk->ints = ints;
   d->internal = blk;

@@ -90,6 +90,7 @@ static int position_callbacks(const ap_model *m, ap_data *d);
 static int position_evaluator(const ap_model *m, ap_data *d);
 
 int ap_partition(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   ap_scratch *s = SCRATCH(d);
   d->cnt.partitions++;
   if (m->b == 0) {
@@ -195,6 +196,7 @@ static int position_evaluator(const ap_model *m, ap_data *d) {
 }
 
 int ap_fwd_position(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   d->cnt.position++;
   int rc = m->ev.position ? position_evaluator(m, d) : position_callbacks(m, d);
   if (rc != AP_OK || m->b == 0 || d->basis == AP_BASIS_NONE) return rc;  /* b == 0: B = I */
@@ -252,6 +254,7 @@ void ap_core_speeds(const ap_model *m, ap_data *d) {
 }
 
 int ap_fwd_velocity(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
   d->cnt.velocity++;
@@ -287,6 +290,7 @@ int ap_fwd_velocity(const ap_model *m, ap_data *d) {
 /* ---- acceleration stage ------------------------------------------------------------------- */
 
 int ap_fwd_acceleration(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l;
   d->cnt.acceleration++;
@@ -326,6 +330,7 @@ int ap_fwd_acceleration(const ap_model *m, ap_data *d) {
 /* ---- optional stages ---------------------------------------------------------------------- */
 
 int ap_fwd_reactions(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
   d->cnt.reactions++;
@@ -344,6 +349,7 @@ int ap_fwd_reactions(const ap_model *m, ap_data *d) {
 }
 
 int ap_forward(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
   d->cnt.forward++;
   int rc = ap_fwd_position(m, d);
   if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
@@ -355,6 +361,7 @@ int ap_forward(const ap_model *m, ap_data *d) {
 /* ---- projection and diagnostics ---------------------------------------------------------- */
 
 int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) {
+  if (!v) return AP_ERR_ARG;
   int rc = ap_fwd_position(m, d);
   return rc == AP_OK ? ap_core_project_here(m, d, v, change) : rc;
 }
@@ -396,6 +403,7 @@ void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x) {
 }
 
 double ap_constraint_residual(const ap_data *d, const double *v) {
+  if (!d || !v) return NAN;
   double mx = 0.0;
   for (int s = 0; s < d->b; s++) {
     double r = d->a0[s];
@@ -406,6 +414,7 @@ double ap_constraint_residual(const ap_data *d, const double *v) {
 }
 
 double ap_kinetic_energy(const ap_data *d, const double *v) {
+  if (!d || !v) return NAN;
   double e = 0.0;
   for (int j = 0; j < d->k; j++)
     for (int i = 0; i < d->k; i++) e += v[i] * d->g[i + (size_t)j * d->k] * v[j];

@@ -244,6 +244,9 @@ void ap_sim_free(ap_sim *s) {
 /* ---- advancing ----------------------------------------------------------------------------- */
 
 int ap_sim_advance(ap_sim *s, double tout) {
+  if (!s) return AP_ERR_ARG;
+  if (!isfinite(tout))
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %g is not finite", tout);
   if (!(tout >= s->t))
     return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
                          s->t);
@@ -279,14 +282,15 @@ int ap_sim_advance(ap_sim *s, double tout) {
 
 /* ---- queries ------------------------------------------------------------------------------ */
 
-double ap_sim_time(const ap_sim *s) { return s->t; }
-const double *ap_sim_q(const ap_sim *s) { return s->q; }
-const double *ap_sim_v(const ap_sim *s) { return s->v; }
-const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
-const char *ap_sim_message(const ap_sim *s) { return s->msg; }
-const char *ap_sim_warning(const ap_sim *s) { return s->warning; }
+double ap_sim_time(const ap_sim *s) { return s ? s->t : NAN; }
+const double *ap_sim_q(const ap_sim *s) { return s ? s->q : NULL; }
+const double *ap_sim_v(const ap_sim *s) { return s ? s->v : NULL; }
+const ap_data *ap_sim_data(const ap_sim *s) { return s ? s->d : NULL; }
+const char *ap_sim_message(const ap_sim *s) { return s ? s->msg : ""; }
+const char *ap_sim_warning(const ap_sim *s) { return s ? s->warning : ""; }
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
+  if (!s) return AP_ERR_ARG;
   if (s->dae) {   /* IDA's own multipliers: the cross-check compares them with Appell's */
     if (lambda) *lambda = s->y + s->n + s->k;
     return AP_OK;
@@ -298,6 +302,11 @@ int ap_sim_reactions(ap_sim *s, const double **lambda) {
 }
 
 void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st) {
+  if (!st) return;
+  if (!s) {
+    memset(st, 0, sizeof *st);
+    return;
+  }
   ap_step_stats ss;
   if (s->dae) ap_dae_stats(s->dae, &ss);
   else ap_step_get_stats(s->st, &ss);

@@ -305,7 +305,7 @@ int ap_constraint_row_index(const ap_model *m, int constraint) {
 }
 
 int ap_body_eval(const ap_model *m, ap_data *d) {
-  if (!ap_model_is_body_model(m) || !d) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d)) return AP_ERR_ARG;
   double *S = ap_bm_scratch(d);
   int rc = ap_kin_position(m, d, d->t, d->q, S);
   if (rc == AP_OK) ap_kin_velocity(ap_bm(m), d->v, S);
@@ -313,7 +313,8 @@ int ap_body_eval(const ap_model *m, ap_data *d) {
 }
 
 int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out) {
-  if (!ap_model_is_body_model(m) || !d || !out || body < 0 || body >= ap_bm(m)->nb)
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out || body < 0 ||
+      body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d);
@@ -337,7 +338,8 @@ int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_sta
 int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body, const double p[3],
                            double *Jw, double *Jv, double rw[3], double rv[3], double aw[3],
                            double av[3]) {
-  if (!ap_model_is_body_model(m) || !d || !p || body < 0 || body >= ap_bm(m)->nb)
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !p || body < 0 ||
+      body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d), *JP = S + M->off_tmp, r[3];
@@ -373,12 +375,14 @@ int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *poten
 }
 
 long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect) {
-  if (!ap_model_is_body_model(m) || !d || effect < 0 || effect >= ap_bm(m)->ne) return -1;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || effect < 0 ||
+      effect >= ap_bm(m)->ne)
+    return -1;
   return (long)ap_bm_scratch(d)[ap_bm(m)->off_cnt + (size_t)effect];
 }
 
 int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) {
-  if (!ap_model_is_body_model(m) || !d || !q) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q) return AP_ERR_ARG;
   double ch = 0.0;
   int rc = ap_bm_project(m, d, q, ap_bm_scratch(d), &ch, 0);
   if (change) *change = ch;
@@ -386,7 +390,7 @@ int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) 
 }
 
 int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
-  if (!ap_model_is_body_model(m) || !d || !phi_max) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !phi_max) return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   *phi_max = 0.0;
   if (!M->nloop) return AP_OK;
@@ -401,7 +405,8 @@ int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
 /* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T. */
 int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
                             double *v) {
-  if (!ap_model_is_body_model(m) || !d || !q || !given || !v) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q || !given || !v)
+    return AP_ERR_ARG;
   int k = m->k, b = m->b, nf = 0;
   memcpy(d->q, q, (size_t)m->n * sizeof *q);
   memset(d->g, 0, (size_t)k * k * sizeof *d->g);
@@ -461,7 +466,7 @@ int ap_bm_in_subtree(const ap_bmodel *M, int body, int root) {
  * a_b = Jc_b v' + ac_b the centre-of-mass accelerations at the data's v'. */
 int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
                           int constraint, ap_contact_force *out) {
-  if (!ap_model_is_body_model(m) || !d || !out) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out) return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
     return AP_ERR_ARG;

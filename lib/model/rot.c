@@ -84,12 +84,14 @@ void ap_sym3_eig(const double *A, double *lam) {
 /* ---- public quaternion helpers ---------------------------------------------------------- */
 
 void ap_quat_from_axis_angle(const double axis[3], double angle, double q[4]) {
+  if (!axis || !q) return;
   double n = v3_norm(axis), s = n > 0 ? sin(0.5 * angle) / n : 0.0;
   q[0] = cos(0.5 * angle), q[1] = s * axis[0], q[2] = s * axis[1], q[3] = s * axis[2];
   if (!(n > 0)) q[0] = 1.0;
 }
 
 void ap_quat_mul(const double a[4], const double b[4], double out[4]) {
+  if (!a || !b || !out) return;
   double w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
   double x = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
   double y = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
@@ -97,10 +99,13 @@ void ap_quat_mul(const double a[4], const double b[4], double out[4]) {
   out[0] = w, out[1] = x, out[2] = y, out[3] = z;
 }
 
-void ap_quat_to_matrix(const double q[4], double R[9]) { ap_quat_normalized_matrix(q, R); }
+void ap_quat_to_matrix(const double q[4], double R[9]) {
+  if (q && R) ap_quat_normalized_matrix(q, R);
+}
 
 /* Shepperd: pick the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 to divide by. */
 void ap_quat_from_matrix(const double R[9], double q[4]) {
+  if (!R || !q) return;
   double tr = R[0] + R[4] + R[8], r;
   if (tr >= R[0] && tr >= R[4] && tr >= R[8]) {
     r = sqrt(1.0 + tr);
