@@ -50,6 +50,7 @@ struct ap_dae {
   int ny, nphi;
   double *Phi_q, *dq;       /* (nphi x n) Jacobian of phi in q, (n) Phi_q^T mu */
   int res_status;           /* last failure of the residual */
+  int nomem;                /* SUNDIALS reported a failed allocation */
   char res_msg[512];
   char msg[1024];
 };
@@ -103,6 +104,14 @@ static void err_handler(int code, const char *module, const char *function, char
                         void *user) {
   ap_dae *s = user;
   snprintf(s->msg, sizeof s->msg, "%s.%s (flag %d): %s", module, function, code, text);
+  if ((code == IDA_MEM_FAIL && !strcmp(module, "IDA")) ||
+      (code == IDALS_MEM_FAIL && !strcmp(module, "IDALS")))
+    s->nomem = 1;
+}
+
+static int ap_dae_nomem(const ap_model *m, char *msg, size_t msg_len) {
+  if (msg && msg_len) snprintf(msg, msg_len, "IDA setup for system '%s': out of memory", m->name);
+  return AP_ERR_NOMEM;
 }
 
 int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
@@ -110,14 +119,14 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
                   size_t msg_len) {
   *out = NULL;
   ap_dae *s = calloc(1, sizeof *s);
-  if (!s) return AP_ERR_NOMEM;
+  if (!s) return ap_dae_nomem(m, msg, msg_len);
   s->m = m, s->d = d, s->nphi = m->ev.phi ? m->nphi : 0;
   s->ny = m->n + m->k + m->b + s->nphi;
   if (s->nphi > 0) {
     s->Phi_q = calloc((size_t)s->nphi * (size_t)m->n + (size_t)m->n, sizeof *s->Phi_q);
     if (!s->Phi_q) {
       free(s);
-      return AP_ERR_NOMEM;
+      return ap_dae_nomem(m, msg, msg_len);
     }
     s->dq = s->Phi_q + (size_t)s->nphi * (size_t)m->n;
   }
@@ -163,12 +172,13 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     s->LS = s->J ? SUNLinSol_Dense(s->yy, s->J, s->ctx) : NULL;
     ok = s->LS && IDASetLinearSolver(s->mem, s->LS, s->J) == IDA_SUCCESS;
   }
-  if (!ok) {
+  if (!ok) {   /* no message from IDA: an object could not be allocated */
+    int rc = s->nomem || !s->msg[0] ? AP_ERR_NOMEM : AP_ERR_SOLVER;
     if (msg && msg_len)
       snprintf(msg, msg_len, "IDA setup failed for system '%s': %.300s", m->name,
                s->msg[0] ? s->msg : "out of memory");
     ap_dae_free(s);
-    return AP_ERR_SOLVER;
+    return rc;
   }
   *out = s;
   return AP_OK;
@@ -190,7 +200,7 @@ int ap_dae_one(ap_dae *s, double tstop, double *t, double *y) {
     snprintf(s->msg, sizeof s->msg, "IDA failed at t = %.17g for system '%s': %.200s%s%.200s",
              tret, s->m->name, tmp, s->res_status > 0 ? "; last residual failure: " : "",
              s->res_status > 0 ? s->res_msg : "");
-    return AP_ERR_SOLVER;
+    return flag == IDA_MEM_FAIL ? AP_ERR_NOMEM : AP_ERR_SOLVER;
   }
   *t = tret;
   memcpy(y, N_VGetArrayPointer(s->yy), sizeof(double) * (size_t)s->ny);

@@ -212,6 +212,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
+    if (msg && msg_len) snprintf(msg, msg_len, "system '%s': out of memory", m->name);
     return AP_ERR_NOMEM;
   }
   s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;

@@ -420,6 +420,7 @@ int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, cons
   int *iw = calloc(liw + 1, sizeof *iw);
   if (!AfT || !iw) {
     free(AfT), free(iw);
+    AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
     return AP_ERR_NOMEM;
   }
   double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 1.0;

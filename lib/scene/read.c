@@ -42,6 +42,12 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   return AP_ERR_ARG;
 }
 
+int sc_nomem(sc_ctx *c, const sc_node *at) {
+  if (c->status != AP_OK) return c->status;
+  sc_err(c, at, "out of memory");
+  return c->status = AP_ERR_NOMEM;
+}
+
 /* Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
  * neighbouring letters each cost 1. */
 static int edit_distance(const char *a, const char *b) {

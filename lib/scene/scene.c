@@ -71,7 +71,7 @@ static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
-    return sc_err(c, sc->s.root, "out of memory");
+    return sc_nomem(c, sc->s.root);
   return AP_OK;
 }
 

@@ -66,6 +66,8 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/* Record "out of memory" at a node (as sc_err). Returns AP_ERR_NOMEM. */
+int sc_nomem(sc_ctx *c, const sc_node *at);
 /* Every key of map must be in keys (NULL-terminated); otherwise an error naming the closest
  * allowed key. A non-map node is an error too ("expected a mapping"). */
 int sc_check_keys(sc_ctx *c, const sc_node *map, const char *const *keys);

@@ -188,6 +188,12 @@ static sc_node *copy_node(tree_build *tb, yaml_node_t *y, char *path, int depth)
 }
 
 static void yaml_error(sc_ctx *c, const yaml_parser_t *p) {
+  /* libyaml's out of memory is not bad input; its loader also fails without setting an error
+   * when a strdup of a tag fails (libyaml 0.2.5 loader.c): no error means no memory. */
+  if (p->error == YAML_MEMORY_ERROR || p->error == YAML_NO_ERROR) {
+    nomem(c);
+    return;
+  }
   const char *what = p->problem ? p->problem : "malformed YAML";
   yaml_mark_t mk = p->problem_mark;
   if (p->context)
