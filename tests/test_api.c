@@ -558,6 +558,9 @@ static void cases_scene(void) {
        ap_scene_initial_state(SC, q, NULL, msg, sizeof msg, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_initial_state, "report, msg NULL (optional)",
        ap_scene_initial_state(SC, q, v, NULL, 100, NULL, 100) == AP_OK);
+  CASE(ap_scene_check_time, "s NULL", ap_scene_check_time(NULL, 0.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_check_time, "msg NULL, length > 0 (optional)",
+       ap_scene_check_time(SC, 0.0, NULL, 100) == AP_OK);
   CASE(ap_scene_output_count, "NULL", ap_scene_output_count(NULL) == 0);
   CASE(ap_scene_output_name, "s NULL", ap_scene_output_name(NULL, 0) == NULL);
   CASE(ap_scene_output_name, "i -1", ap_scene_output_name(SC, -1) == NULL);

@@ -11,22 +11,8 @@
 #include "check.h"
 #include "refsys.h"
 
-/* ---- counting allocations: this program's malloc wraps glibc's --------------------------- */
-/* AddressSanitizer owns malloc itself: under it the count is not taken (the plain build of
- * scripts/test runs it). */
-#if defined(__SANITIZE_ADDRESS__)
-#define AP_COUNT_ALLOC 0
-static long n_alloc = 0;
-#else
-#define AP_COUNT_ALLOC 1
-extern void *__libc_malloc(size_t);
-extern void *__libc_calloc(size_t, size_t);
-extern void *__libc_realloc(void *, size_t);
-static long n_alloc = 0;
-void *malloc(size_t size) { n_alloc++; return __libc_malloc(size); }
-void *calloc(size_t a, size_t b) { n_alloc++; return __libc_calloc(a, b); }
-void *realloc(void *p, size_t size) { n_alloc++; return __libc_realloc(p, size); }
-#endif
+/* ---- counting allocations: this program's malloc wraps glibc's (alloc.h) ----------------- */
+#include "alloc.h"
 
 /* ---- a random algebraic system: constant g, A, a0, gamma, h, Q at one state -------------- */
 enum { RK = 6, RB = 4 };

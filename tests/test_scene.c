@@ -71,6 +71,21 @@ static const bad_case bad[] = {
      "inconsistent_constraints.yaml:8:15: constraints.turn_again:", "contradict each other"},
     {"no_free_speed.yaml", "no_free_speed.yaml:6:3: constraints:", "no free speed"},
     {"driven_initial.yaml", "driven_initial.yaml:6:16: initial.arm.angle:", "is driven"},
+    /* Expressions and an initial state that a run would refuse at t0 (issue 10). */
+    {"drive_inverse.yaml", "drive_inverse.yaml:11:20: joints.wheel.drive.angle:",
+     "'1/t' is not finite at t = 0: 1 / 0 = inf (column 2 of the expression)"},
+    {"drive_log.yaml", "drive_log.yaml:11:20: joints.wheel.drive.angle:",
+     "is not finite at t = 0: log(-1) = nan (column 5 of the expression)"},
+    {"drive_abs.yaml", "drive_abs.yaml:11:20: joints.wheel.drive.angle:",
+     "'2 + abs(t)' has no finite first time derivative at t = 0"},
+    {"force_not_finite.yaml", "force_not_finite.yaml:7:69: effects.push.torque[2]:",
+     "'2*sqrt(t)' has no finite first time derivative at t = 0"},
+    {"speed_at_t0.yaml", "speed_at_t0.yaml:7:66: constraints.turn.value:",
+     "is not finite at t = 2: 1 / 0 = inf"},
+    {"ground_not_finite.yaml", "ground_not_finite.yaml:11:34: ground.omega:",
+     "log(0) = -inf (column 9 of the expression)"},
+    {"initial_overflow.yaml", "initial_overflow.yaml:13:53: initial.disk.heading_rate:",
+     "the equations of motion cannot be evaluated at the initial state"},
 };
 
 /* Load (and, if that works, initialize) a scene; return the status and the message. */

@@ -152,6 +152,39 @@ static void test_check(void) {
                    "'mass'?)"));
 }
 
+/* Expressions that are not finite where they are evaluated: check and run name the
+ * expression's FILE:LINE:COLUMN, at t0 (exit 2, both) and later in a run (exit 3). */
+static void test_not_finite(void) {
+  static const char *const cases[][2] = {
+      {"drive_inverse.yaml", "drive_inverse.yaml:11:20: joints.wheel.drive.angle: '1/t' is not "
+                             "finite at t = 0: 1 / 0 = inf (column 2 of the expression)"},
+      {"drive_log.yaml", "drive_log.yaml:11:20: joints.wheel.drive.angle: '0.5*log(t - 1)' is "
+                         "not finite at t = 0: log(-1) = nan (column 5 of the expression)"},
+      {"drive_abs.yaml", "drive_abs.yaml:11:20: joints.wheel.drive.angle: '2 + abs(t)' has no "
+                         "finite first time derivative at t = 0"},
+      {"initial_overflow.yaml", "initial_overflow.yaml:13:53: initial.disk.heading_rate: the "
+                                "equations of motion cannot be evaluated at the initial state"}};
+  char scene[1200], csv[1200];
+  snprintf(csv, sizeof csv, "%s/bad.csv", tmp);
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    scene_path(scene, sizeof scene, "tests/scenes", cases[i][0]);
+    const char *check[] = {bin, "check", scene, NULL};
+    AP_CHECK_EQ_INT(run(check), 2);
+    AP_CHECK(log_has(cases[i][1]));
+    expect_failure(scene, NULL, 2, csv);
+    AP_CHECK(log_has(cases[i][1]));
+  }
+  /* Fine at t0, a kink at t = 0.05 inside the run: exit 3, the expression located. */
+  scene_path(scene, sizeof scene, "tests/scenes", "drive_abs.yaml");
+  const char *argv[] = {bin, "run", scene, "--out", csv, "--quiet", "--t-end", "0.1",
+                        "--set", "joints.wheel.drive.angle=abs(t - 0.05)", NULL};
+  AP_CHECK_EQ_INT(run(argv), 3);
+  AP_CHECK(log_has("drive_abs.yaml:11:20: joints.wheel.drive.angle (set by --set "
+                   "joints.wheel.drive.angle=abs(t - 0.05)): 'abs(t - 0.05)' has no finite first "
+                   "time derivative at t = 0.05"));
+  AP_CHECK(!exists(csv));
+}
+
 static void test_plot(const char *csv) {
   char png[1200];
   snprintf(png, sizeof png, "%s/path.png", tmp);
@@ -225,6 +258,7 @@ int main(void) {
   test_good_run(csv);
   test_failures();
   test_check();
+  test_not_finite();
   test_plot(csv);
   test_mutants();
   unlink(csv);

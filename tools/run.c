@@ -223,6 +223,18 @@ static int write_row(run_state *rs, FILE *f) {
   return AP_OK;
 }
 
+/* A run that failed in a callback or on a NaN: name the scene expression that is not finite
+ * where it failed (at the failing evaluation's time, or at the output time). */
+static void locate(const run_state *rs, int rc, double tout) {
+  char msg[1024];
+  double when[2] = {ap_sim_data(rs->sim)->t, tout};
+  for (int i = 0; i < 2 && (rc == AP_ERR_CALLBACK || rc == AP_ERR_NAN); i++)
+    if (ap_scene_check_time(rs->sc, when[i], msg, sizeof msg) != AP_OK) {
+      fprintf(stderr, "%s\n", msg);
+      return;
+    }
+}
+
 static int loop(run_state *rs, FILE *f) {
   long nrows = (long)ceil((rs->run.t_end - rs->run.t0) / rs->run.interval - 1e-9);
   double last_draw = 0.0;
@@ -233,6 +245,7 @@ static int loop(run_state *rs, FILE *f) {
     if (rc != AP_OK) {
       fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
               ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
+      locate(rs, rc, t);
       return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
     }
     rc = write_row(rs, f);

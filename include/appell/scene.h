@@ -56,9 +56,21 @@ AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
  * projected (nearest in the metric g). report (may be NULL) receives a description of every
  * correction, empty when none was needed. An impossible state (no consistent speeds, a loop
  * that cannot close, a shape singular there) gives AP_ERR_ARG or the core's status and msg.
+ * So does a scene that a simulation would refuse at t0: an expression (drive, ground motion,
+ * prescribed speed, applied force) that is not finite at t0 with its first and second
+ * derivatives (`1/t`, `log(t-1)`, `abs(t)` at t0 = 0), or equations of motion that are not
+ * finite at the initial state (speeds that overflow); msg then names FILE:LINE:COLUMN.
  * AP_ERR_ARG when s, q0 or v0 is NULL; report and msg may be NULL. */
 AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *report,
                                   size_t report_len, char *msg, size_t msg_len);
+
+/* Evaluate every expression of the scene (drives, ground motion, prescribed speeds, applied
+ * forces) with its first and second time derivatives at time t. AP_OK when all are finite;
+ * otherwise AP_ERR_ARG, and msg names the first in the file that is not:
+ * "FILE:LINE:COLUMN: key.path: 'log(t-1)' is not finite at t = 0: log(-1) = nan (column 1 of
+ * the expression)". Only reads the scene: safe from any thread. For a run that failed with
+ * AP_ERR_CALLBACK or AP_ERR_NAN, call it at the failing time to locate the cause. */
+AP_API int ap_scene_check_time(const ap_scene *s, double t, char *msg, size_t msg_len);
 
 /* Output channels: column names of a row (column 0 is "t") and their values at the
  * simulation's current state. Count 0 and name NULL when s is NULL or i out of range; the row

@@ -134,13 +134,14 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   memset(&k->ground.omega, 0, sizeof k->ground.omega);
   memset(k->ground.vel, 0, sizeof k->ground.vel);
   if (g) return sc_parse_ground(c, g, &k->ground);
-  /* Inherit the top-level ground: copy its expressions by recompiling their text. */
+  /* Inherit the top-level ground: copy its expressions by recompiling their text (messages
+   * then point at the top-level node). */
   if (s->ground.omega.timed &&
-      sc_expr_compile(c, s->ground_node, s->ground.omega.text, 1, &k->ground.omega))
+      sc_expr_compile(c, s->ground.omega.node, s->ground.omega.text, 1, &k->ground.omega))
     return AP_ERR_ARG;
   for (int i = 0; i < 2; i++) {
     if (s->ground.vel[i].timed &&
-        sc_expr_compile(c, s->ground_node, s->ground.vel[i].text, 1, &k->ground.vel[i]))
+        sc_expr_compile(c, s->ground.vel[i].node, s->ground.vel[i].text, 1, &k->ground.vel[i]))
       return AP_ERR_ARG;
     k->ground.vel[i].value = s->ground.vel[i].value;
   }

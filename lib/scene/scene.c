@@ -150,7 +150,17 @@ int ap_scene_initial_state(ap_scene *sc, double *q0, double *v0, char *report,
                            size_t report_len, char *msg, size_t msg_len) {
   if (!sc || !q0 || !v0) return AP_ERR_ARG;
   sc_ctx c = {sc->s.file, "", AP_OK};
-  int rc = sc_initial_state(&c, &sc->s, sc->m, q0, v0, report, report_len);
+  int rc = sc_check_exprs(&c, &sc->s, sc->s.run.t0);
+  if (rc == AP_OK) rc = sc_initial_state(&c, &sc->s, sc->m, q0, v0, report, report_len);
+  if (rc == AP_OK) rc = sc_check_start(&c, &sc->s, sc->m, q0, v0);
+  if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
+  return rc;
+}
+
+int ap_scene_check_time(const ap_scene *sc, double t, char *msg, size_t msg_len) {
+  if (!sc) return AP_ERR_ARG;
+  sc_ctx c = {sc->s.file, "", AP_OK};
+  int rc = sc_check_exprs(&c, &sc->s, t);
   if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
   return rc;
 }

@@ -4,7 +4,9 @@
  * Layout of the layer (docs/scenes.md is the user's reference):
  *   tree.c    libyaml document -> sc_node tree with line:column of every node; --set overrides
  *   read.c    typed getters on the tree, unknown-key checks ("did you mean"), messages
- *   expr.c    expressions of t (libmatheval) with first and second derivatives
+ *   expr.c    scene expressions: constants and functions of t, located messages
+ *   expr_parse.c expr_eval.c expr_fn.c  the evaluator (expr.h): text -> program -> jets
+ *   expr_scene.c every expression of a scene, and the initial state, checked at a time
  *   parse.c   tree -> sc_scene (bodies, joints, constraints, effects, ground)
  *   parse_run.c  tree -> initial state, simulation settings, outputs
  *   build.c   sc_scene -> ap_builder -> ap_model
@@ -22,6 +24,7 @@
 #include "appell/body.h"
 #include "appell/scene.h"
 #include "appell/sim.h"
+#include "scene/expr.h"
 
 /* ---- the tree (tree.c) ---------------------------------------------------------------- */
 
@@ -89,25 +92,41 @@ int sc_get_enum(sc_ctx *c, const sc_node *map, const char *key, const char *cons
 int sc_check_positive(sc_ctx *c, const sc_node *map, const char *key, double x);
 int sc_check_nonneg(sc_ctx *c, const sc_node *map, const char *key, double x);
 
-/* ---- expressions (expr.c) -------------------------------------------------------------- */
+/* ---- expressions (expr.c; the evaluator: expr.h) ---------------------------------------- */
 
-/* A scalar that is a constant or an expression of t. */
+/* A scalar of the scene: a constant, or a compiled expression of t (and, through a symbol
+ * table, of named variables). Never written after compile: safe to evaluate from threads. */
 typedef struct sc_expr {
-  int timed;               /* 0: constant `value`; 1: f(t) with derivatives */
+  int timed;               /* 0: the constant `value`; 1: `prog` (depends on t or variables) */
   double value;
-  void *f[3];              /* libmatheval evaluators: f, f', f'' */
-  char *text;
+  sc_prog *prog;           /* immutable program (timed only) */
+  char *text;              /* its text (timed only) */
+  const sc_node *node;     /* where it was read: the location of its messages */
 } sc_expr;
 
-/* Compile text as an expression; variables allowed: t (when allow_t) and deg = pi/180. */
+/* Compile text read at node `at`; names allowed: t (when allow_t), pi, e, deg. A text that
+ * folds to a number gives a constant. Errors: AP_ERR_ARG with the located message, or
+ * AP_ERR_NOMEM (c->status too). */
 int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e);
+/* The same with a symbol table: t and named variables mapped to slots of x (expr.h). */
+int sc_expr_compile_sym(sc_ctx *c, const sc_node *at, const char *text, const sc_symtab *sym,
+                        sc_expr *e);
 /* Read a number or expression of t from a node. */
 int sc_expr_read(sc_ctx *c, const sc_node *n, sc_expr *e);
 void sc_expr_free(sc_expr *e);
-/* f[0..2] at t: value and the two time derivatives (constants: value, 0, 0). */
+/* f[0..2] at t: value and the two time derivatives (constants: value, 0, 0). Returns 0, or
+ * -1 when one is not finite (or the expression needs variables). */
 int sc_expr_eval(const sc_expr *e, double t, double f[3]);
 /* An ap_time_fn with user = sc_expr *. */
 int sc_expr_time_fn(double t, double f[3], void *user);
+/* AP_OK when the expression's jet from these seeds is finite up to `order` (0: value, 2:
+ * both derivatives); otherwise a message at its node: "'log(t-1)' is not finite at t = 0:
+ * log(-1) = nan (column 1 of the expression)". */
+int sc_expr_check_jet(sc_ctx *c, const sc_expr *e, const sc_jet *t, const sc_jet *x,
+                      int order);
+/* The same for an expression of t at time t with both derivatives (expressions that use
+ * variables are skipped: they need the state). */
+int sc_expr_check(sc_ctx *c, const sc_expr *e, double t);
 
 /* ---- the parsed scene (parse.c, parse_run.c) ------------------------------------------- */
 
@@ -237,6 +256,16 @@ const ap_data *sc_scene_output_data(const ap_scene *sc);
 int sc_build(sc_ctx *c, sc_scene *s, ap_model **out);
 int sc_initial_state(sc_ctx *c, const sc_scene *s, const ap_model *m, double *q0, double *v0,
                      char *report, size_t report_len);
+
+/* ---- checks at a time (expr_scene.c) ------------------------------------------------------ */
+
+/* Every expression of t in the scene, with both derivatives, at t: AP_OK, or a message at the
+ * first one (in file order) that is not finite. Reads the scene only. */
+int sc_check_exprs(sc_ctx *c, const sc_scene *s, double t);
+/* The equations of motion at (t0, q0, v0): AP_OK, or a located message when they are not
+ * finite there (speeds that overflow are blamed on the largest number under initial:). */
+int sc_check_start(sc_ctx *c, const sc_scene *s, const ap_model *m, const double *q0,
+                   const double *v0);
 
 /* Euler angles (rad) to a quaternion [w x y z]: zxz = Rz(a) Rx(b) Rz(c), zyx = Rz(a) Ry(b)
  * Rx(c). */
