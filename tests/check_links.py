@@ -7,8 +7,9 @@ For each inline Markdown link or image [text](target) outside code: a web addres
 (http, https, mailto) is not followed; any other target must be a file or directory of the
 repository, relative to the page, and its #anchor (or a bare #anchor on the same page) must be
 a heading of the target page, named as GitHub names it (lower case, punctuation dropped, spaces
-to hyphens, -1, -2 ... for repeats). The pages must also not name the team's private notes
-(DESIGN.md, REFERENCES.md, ../shared): the documentation stands alone.
+to hyphens, -1, -2 ... for repeats). No page, and no source, header, script, scene or build
+file of the repository, may name the team's private notes (DESIGN.md, REFERENCES.md,
+../shared): the documentation stands alone.
 Prints each broken link as FILE:LINE: target: why; exits 1 when there is one."""
 import os
 import re
@@ -79,6 +80,29 @@ def check(root, page, problems):
                                 f'{os.path.relpath(dest, root)}')
 
 
+TEXT = ('.c', '.h', '.cc', '.md', '.py', '.yaml', '.yml', '.build', '.txt', '.sh', '.csv')
+
+
+def check_sources(root, problems):
+    """Files outside docs/ and README.md (those are checked line by line with their links)."""
+    for d, dirs, files in os.walk(root):
+        dirs[:] = [x for x in dirs if not x.startswith(('build', '.')) and x != 'crashes']
+        for f in files:
+            path = os.path.join(d, f)
+            rel = os.path.relpath(path, root)
+            if (not f.endswith(TEXT) and not rel.startswith(('scripts', '.ci'))) or \
+                    rel in ('tests/check_links.py', 'README.md') or rel.startswith('docs'):
+                continue
+            try:
+                lines = open(path, encoding='utf-8').read().splitlines()
+            except (UnicodeDecodeError, OSError):
+                continue
+            for no, line in enumerate(lines, 1):
+                m = PRIVATE.search(line)
+                if m:
+                    problems.append(f'{rel}:{no}: names {m.group(0)}, the team\'s private notes')
+
+
 def main():
     root = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else '.')
     docs = os.path.join(root, 'docs')
@@ -89,6 +113,7 @@ def main():
         for _, line, _ in prose_lines(open(page, encoding='utf-8').read()):
             links += len(LINK.findall(line))
         check(root, page, problems)
+    check_sources(root, problems)
     for p in problems:
         print(p)
     print(f'links: {len(pages)} pages, {links} links, {len(problems)} broken')

@@ -9,7 +9,7 @@
  *     g = sum_b J_b^T M_b J_b,   h = sum_b J_b^T (M_b a_b + [w_b x I_b w_b; 0]),   Q,
  *     A, a0 and gamma = -(A' v + a0')
  *
- * from the bodies (DESIGN.md §1 "Holonomic reduction from bodies"; docs/bodies.md).
+ * from the bodies (docs/design.md §1 "Holonomic reduction from bodies"; docs/bodies.md).
  *
  * Conventions: SI units; world z is up and the ground plane is z = 0; vectors "in body axes"
  * are components in the body frame, everything else in world axes; 3 x 3 matrices are

@@ -1,6 +1,6 @@
 /* Appell: simulation drivers.
  *
- * A simulation integrates one model from an initial state, in one of the modes of DESIGN.md:
+ * A simulation integrates one model from an initial state, in one of the modes of docs/design.md:
  *
  *   AP_MODE_MINIMAL    state (q, e'), partitioned basis frozen during a step, re-partitioned
  *                      between steps when R11 degrades; the constraints hold to round-off.
@@ -106,7 +106,7 @@ AP_API const char *ap_sim_message(const ap_sim *s);
 AP_API const char *ap_sim_warning(const ap_sim *s);
 AP_API void ap_sim_free(ap_sim *s);   /* NULL: nothing */
 
-/* The cross-check (DESIGN.md §1): the same model run in minimal, projected and DAE modes with
+/* The cross-check (docs/design.md §1): the same model run in minimal, projected and DAE modes with
  * the same tolerances, compared at n_out equally spaced times in (t0, t_end]. Differences are
  * absolute, the largest over all compared times and entries. */
 typedef struct ap_crosscheck_report {

@@ -1,6 +1,7 @@
 /* Appell: math-level systems, the model, the data, and the Appell solve.
  *
- * A math-level system is the founding paper's objects handed over as callbacks (DESIGN.md §1):
+ * A math-level system is the founding paper's objects handed over as callbacks
+ * (docs/design.md §1):
  *
  *     q' = N(q) v                          kinematics (N = I when v = q')
  *     g(q,t) v' + h(q,v,t) = Q(q,v,t)      unconstrained equations of motion, k speeds

@@ -1,6 +1,6 @@
 /* Appell core (internal): the compiled model and the data's private scratch.
  *
- * The model is a validated copy of a math-level system definition (DESIGN.md §2, "Math-level
+ * The model is a validated copy of a math-level system definition (docs/design.md §2, "Math-level
  * systems"); the body layer will compile into the same struct. The data's internal arena holds
  * the factorizations and scratch of the pipeline, sized once in ap_data_create. */
 #ifndef AP_CORE_H

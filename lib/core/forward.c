@@ -1,6 +1,6 @@
 /* The Appell solve: from (t, q, v or e') to e'', v', q' (and the multipliers on request).
  *
- * DESIGN.md §1: with a basis B of the null space of A (A B = 0), b0 (A b0 = -a0) and
+ * docs/design.md §1: with a basis B of the null space of A (A B = 0), b0 (A b0 = -a0) and
  * w (A w = gamma), the speeds are v = B e' + b0, and Appell's equations in covariant form are
  *
  *     G e'' = Phi - B^T (h + g w),    G = B^T g B,   Phi = B^T Q,    v' = B e'' + w.

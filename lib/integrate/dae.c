@@ -1,4 +1,4 @@
-/* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (DESIGN.md §1, "The DAE
+/* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (docs/design.md §1, "The DAE
  * cross-check").
  *
  * Variables y = (q, v, lambda, mu), n + k + b + nphi of them, and the residual

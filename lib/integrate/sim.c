@@ -1,4 +1,4 @@
-/* Simulation drivers: minimal, projected, plain and DAE modes (DESIGN.md §1 "Choosing B",
+/* Simulation drivers: minimal, projected, plain and DAE modes (docs/design.md §1 "Choosing B",
  * "The DAE cross-check", §2).
  *
  * Minimal mode integrates y = (q, e') with the partitioned basis frozen during a step. After

@@ -1,4 +1,4 @@
-/* Constraint kinds: rows of A v + a0 = 0 and gamma = -(A' v + a0') (DESIGN.md §1).
+/* Constraint kinds: rows of A v + a0 = 0 and gamma = -(A' v + a0') (docs/design.md §1).
  *
  * With a point's Jacobian JP (3 x K1, column k = rheonomic part) a row c . (JP [v; 1]) gives
  * A = c^T JP[:, 0..k-1] and a0 = c . JP[:, k] minus the ground surface's velocity. The ground

@@ -17,7 +17,7 @@
  * (Sv' vj is non-zero only for the plane contact: e_z ((e_z x rc') . w), rc' = w x rc + R H u',
  * u' = R^T (w x e_z): the contact point moving over the surface.) Exact; no differences.
  *
- * Convention for Appell's equations g v' + h = Q (DESIGN.md §1): with the com Jacobian
+ * Convention for Appell's equations g v' + h = Q (docs/design.md §1): with the com Jacobian
  * Jc = Jo - [R com]x Jw and the com bias ac = ao + al x rcom + w x (w x rcom),
  *   g = sum_b m Jc^T Jc + Jw^T Iw Jw,   h = sum_b m Jc^T ac + Jw^T (Iw al + w x Iw w),
  * Iw = R I R^T (inertia about the com in world axes): dS/dv' of the Gibbs-Appell function. */

@@ -1,4 +1,4 @@
-/* Support functions of the convex shapes, for the plane-contact joint (DESIGN.md §1).
+/* Support functions of the convex shapes, for the plane-contact joint (docs/design.md §1).
  *
  * sigma(u) = max over shape points p of p . u (body axes, shape centred at the body origin,
  * symmetry axis body z). sigma is positively homogeneous of degree 1, so its gradient
