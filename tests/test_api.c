@@ -266,6 +266,9 @@ static void cases_sim(void) {
   CASE(ap_sim_get_stats, "s NULL: zeroed",
        (memset(&st, 1, sizeof st), ap_sim_get_stats(NULL, &st), all_zero(&st, sizeof st)));
   CASE(ap_sim_get_stats, "st NULL", (ap_sim_get_stats(S, NULL), 1));
+  CASE(ap_sim_set_poll, "s NULL", (ap_sim_set_poll(NULL, NULL, NULL), 1));
+  CASE(ap_sim_set_poll, "poll NULL (removes it)",
+       (ap_sim_set_poll(S, NULL, NULL), ap_sim_advance(S, ap_sim_time(S) + 1e-3) == AP_OK));
   CASE(ap_sim_message, "NULL", is_empty(ap_sim_message(NULL)));
   CASE(ap_sim_warning, "NULL", is_empty(ap_sim_warning(NULL)));
   CASE(ap_sim_free, "NULL", (ap_sim_free(NULL), 1));

@@ -1,19 +1,6 @@
 /* Body layer: the builder's validation and messages, names, and the exact kinematics against
- * central finite differences along the motion.
+ * central finite differences along the motion (fdcheck.h: the method and its tolerance).
  *
- * Finite differences: at a random state (t, q, v) the path q(s) = q + s N(q) v, t(s) = t + s
- * has tangent (q', 1) at s = 0, so along it (v held fixed)
- *   d/ds x_p   = v_p          (point velocity from the Jacobian: J_p v + rheonomic part)
- *   d/ds R R^T = [w]x         (angular velocity)
- *   d/ds w(s)  = aw           (angular bias acceleration Jw' v + rw')
- *   d/ds v_p(s)= av           (point bias acceleration)
- *   d/ds (A v + a0) = -gamma
- *   d/ds V     = -Q . v       (conservative effects, scleronomic models)
- * The derivative is a Richardson-extrapolated central difference, (4 D(h/2) - D(h)) / 3 with
- * D(h) = (f(h) - f(-h)) / 2h: truncation O(h^4 f^(5)) ~ 1e-12 for h = 1e-3 on these O(1)
- * problems and round-off ~ eps |f| / h ~ 1e-13, so the asserted relative tolerance 1e-7
- * (relative to max(1, |analytic|)) leaves five orders of margin while any missing term
- * (a factor 2 in a Coriolis term, the contact point moving over the surface) is O(1) wrong.
  * Near a singular shape (disk 0.1 degree from flat) h is scaled with the distance to the
  * singularity. A deliberately broken rolling gamma (without the surface-motion term) must
  * fail the same check by orders of magnitude: the test shows it catches that mistake. */
@@ -21,71 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
-#include "model/model.h"
+#include "fdcheck.h"
 
-#define FD_TOL 1e-7
-#define RS_PI_ 3.14159265358979323846
-#define MAXB 8
-#define MAXK 40
-#define MAXR 24
+/* ---- callbacks of the chain model -------------------------------------------------------- */
 
-/* ---- random numbers (xorshift64*, fixed seed) -------------------------------------------- */
-
-static unsigned long long rng_state = 0x9E3779B97F4A7C15ull;
-static double urand(void) {
-  rng_state ^= rng_state >> 12, rng_state ^= rng_state << 25, rng_state ^= rng_state >> 27;
-  return (double)((rng_state * 2685821657736338717ull) >> 11) / 9007199254740992.0;
-}
-static double srand1(void) { return 2.0 * urand() - 1.0; }
-static void rand_vec(double *x, int n, double s) {
-  for (int i = 0; i < n; i++) x[i] = s * srand1();
-}
-static void rand_quat(double *q) {
-  double n = 0.0;
-  for (int i = 0; i < 4; i++) q[i] = srand1(), n += q[i] * q[i];
-  n = sqrt(n);
-  for (int i = 0; i < 4; i++) q[i] /= n;
-}
-static void rand_frame(ap_frame *f) {
-  rand_vec(f->pos, 3, 0.3);
-  rand_quat(f->quat);
-}
-/* A random physical inertia: R diag(l) R^T, l in [1, 1.5] * scale (triangle inequality). */
-static void rand_inertia(double *I, double scale) {
-  double q[4], R[9], l[3];
-  rand_quat(q);
-  ap_quat_to_matrix(q, R);
-  for (int i = 0; i < 3; i++) l[i] = scale * (1.0 + 0.5 * urand());
-  for (int i = 0; i < 3; i++)
-    for (int j = 0; j < 3; j++) {
-      double s = 0.0;
-      for (int c = 0; c < 3; c++) s += R[i + 3 * c] * l[c] * R[j + 3 * c];
-      I[i + 3 * j] = s;
-    }
-}
-
-/* ---- time functions used by drives, turntables, prescribed speeds ---------------------------- */
-
-static int f_sine(double t, double f[3], void *user) {
-  double a = user ? *(double *)user : 1.0, w = 1.3;
-  f[0] = 0.5 * a * sin(w * t) + 0.2 * t;
-  f[1] = 0.5 * a * w * cos(w * t) + 0.2;
-  f[2] = -0.5 * a * w * w * sin(w * t);
-  return 0;
-}
-static int f_omega(double t, double f[3], void *user) {
-  (void)user;
-  f[0] = 0.7 + 0.3 * sin(0.9 * t);
-  f[1] = 0.27 * cos(0.9 * t);
-  return 0;
-}
-static int f_vel(double t, double f[3], void *user) {
-  (void)user;
-  f[0] = 0.4 * cos(1.1 * t);
-  f[1] = -0.44 * sin(1.1 * t);
-  return 0;
-}
 static int wrench_fn(double t, double F[3], double T[3], void *user) {
   (void)user;
   F[0] = cos(t), F[1] = 0.5, F[2] = -sin(t);
@@ -141,167 +67,6 @@ static ap_model *compile(ap_builder *b) {
   AP_CHECK(rc == AP_OK);
   ap_builder_free(b);
   return m;
-}
-
-/* ---- measurements along the path ------------------------------------------------------------ */
-
-typedef struct meas {
-  double x[MAXB][3], R[MAXB][9], w[MAXB][3], vp[MAXB][3], aw[MAXB][3], av[MAXB][3];
-  double c[MAXR], gamma[MAXR], QV, V;
-} meas;
-
-static const double probe[3] = {0.13, -0.21, 0.17};
-
-static int measure(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                   meas *out) {
-  int nb = ap_model_body_count(m), k = m->k;
-  d->t = t;
-  memcpy(d->q, q, sizeof(double) * (size_t)m->n);
-  memcpy(d->v, v, sizeof(double) * (size_t)k);
-  d->basis = AP_BASIS_NONE, d->speeds_from_e = 0;
-  int rc = ap_fwd_position(m, d);
-  if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
-  if (rc != AP_OK) return rc;
-  for (int b = 0; b < nb; b++) {
-    ap_body_state st;
-    double Jw[3 * MAXK], Jv[3 * MAXK], rw[3], rv[3];
-    ap_body_get_state(m, d, b, &st);
-    ap_body_point_jacobian(m, d, b, probe, Jw, Jv, rw, rv, out->aw[b], out->av[b]);
-    memcpy(out->R[b], st.R, sizeof st.R);
-    for (int i = 0; i < 3; i++) {
-      out->x[b][i] = st.pos[i];
-      for (int j = 0; j < 3; j++) out->x[b][i] += st.R[i + 3 * j] * probe[j];
-      out->w[b][i] = rw[i], out->vp[b][i] = rv[i];
-      for (int c = 0; c < k; c++)
-        out->w[b][i] += Jw[i + 3 * c] * v[c], out->vp[b][i] += Jv[i + 3 * c] * v[c];
-    }
-  }
-  for (int s = 0; s < m->b; s++) {
-    out->c[s] = d->a0[s], out->gamma[s] = d->gamma[s];
-    for (int c = 0; c < k; c++) out->c[s] += d->A[s + (size_t)c * m->b] * v[c];
-  }
-  out->QV = 0.0;
-  for (int c = 0; c < k; c++) out->QV += d->Q[c] * v[c];
-  double T = 0.0;
-  return ap_body_energy(m, d, &T, &out->V);
-}
-
-/* All fields of a meas as one flat array, so differences apply to everything at once. */
-#define MEAS_N (sizeof(meas) / sizeof(double))
-
-static double err_rel(const double *an, const double *fd, int n) {
-  double e = 0.0, s = 1.0;
-  for (int i = 0; i < n; i++) s = fmax(s, fabs(an[i]));
-  for (int i = 0; i < n; i++) e = fmax(e, fabs(an[i] - fd[i]));
-  return e / s;
-}
-
-typedef struct fd_result {
-  double vel, omega, alpha, acc, gamma, power;   /* relative errors */
-} fd_result;
-
-/* Richardson-extrapolated derivative of every field along the path. */
-static int fd_along(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                    const double *qd, double h, meas *der) {
-  static meas f[4];
-  const double sgn[4] = {1, -1, 0.5, -0.5};
-  double qs[MAXK];
-  for (int i = 0; i < 4; i++) {
-    for (int j = 0; j < m->n; j++) qs[j] = q[j] + sgn[i] * h * qd[j];
-    int rc = measure(m, d, t + sgn[i] * h, qs, v, &f[i]);
-    if (rc != AP_OK) return rc;
-  }
-  double *D = (double *)der, *f0 = (double *)&f[0], *f1 = (double *)&f[1],
-         *f2 = (double *)&f[2], *f3 = (double *)&f[3];
-  for (size_t i = 0; i < MEAS_N; i++) {
-    double Dh = (f0[i] - f1[i]) / (2 * h), Dh2 = (f2[i] - f3[i]) / h;
-    D[i] = (4 * Dh2 - Dh) / 3;
-  }
-  return AP_OK;
-}
-
-/* Compare the analytic quantities at (t, q, v) with finite differences along the motion. */
-static int fd_check(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                    double h, fd_result *res) {
-  static meas a, der;
-  double qd[MAXK];
-  int nb = ap_model_body_count(m), rc = measure(m, d, t, q, v, &a);
-  if (rc != AP_OK) return rc;
-  for (int i = 0; i < m->n; i++) {
-    qd[i] = 0.0;
-    for (int c = 0; c < m->k; c++) qd[i] += d->N[i + (size_t)c * m->n] * v[c];
-  }
-  rc = fd_along(m, d, t, q, v, qd, h, &der);
-  if (rc != AP_OK) return rc;
-  memset(res, 0, sizeof *res);
-  for (int b = 0; b < nb; b++) {
-    double w[3], *Rd = der.R[b], *R = a.R[b], W[9];
-    for (int i = 0; i < 3; i++)   /* W = R' R^T */
-      for (int j = 0; j < 3; j++)
-        W[i + 3 * j] = Rd[i] * R[j] + Rd[i + 3] * R[j + 3] + Rd[i + 6] * R[j + 6];
-    w[0] = 0.5 * (W[2 + 3 * 1] - W[1 + 3 * 2]);
-    w[1] = 0.5 * (W[0 + 3 * 2] - W[2 + 3 * 0]);
-    w[2] = 0.5 * (W[1 + 3 * 0] - W[0 + 3 * 1]);
-    res->vel = fmax(res->vel, err_rel(a.vp[b], der.x[b], 3));
-    res->omega = fmax(res->omega, err_rel(a.w[b], w, 3));
-    res->alpha = fmax(res->alpha, err_rel(a.aw[b], der.w[b], 3));
-    res->acc = fmax(res->acc, err_rel(a.av[b], der.vp[b], 3));
-  }
-  double mg[MAXR], pw = -a.QV;
-  for (int s = 0; s < m->b; s++) mg[s] = -a.gamma[s];
-  res->gamma = m->b ? err_rel(mg, der.c, m->b) : 0.0;
-  res->power = err_rel(&pw, &der.V, 1);
-  return AP_OK;
-}
-
-/* Random state: coordinates (quaternions unit), speeds, time. */
-static void rand_state(const ap_model *m, double *q, double *v, double *t) {
-  rand_vec(q, m->n, 1.0);
-  for (int i = 0; i < m->n; i++) {
-    const char *nm = ap_model_coord_name(m, i);
-    const char *dot = strrchr(nm, '.');
-    if (dot && strcmp(dot, ".qw") == 0) rand_quat(q + i), i += 3;
-  }
-  rand_vec(v, m->k, 1.0);
-  *t = 2.0 * urand();
-}
-
-/* Run fd_check at several random states and assert every error; returns the worst. */
-static fd_result fd_many(const char *label, const ap_model *m, int samples, int check_power,
-                         double min_flat) {
-  ap_data *d = NULL;
-  fd_result worst = {0, 0, 0, 0, 0, 0};
-  AP_CHECK(ap_data_create(m, &d) == AP_OK);
-  for (int s = 0; s < samples; s++) {
-    double q[MAXK], v[MAXK], t;
-    fd_result r;
-    int rc;
-    do {   /* keep disks and tori away from lying flat in the generic samples */
-      rand_state(m, q, v, &t);
-      rc = measure(m, d, t, q, v, &(meas){0});
-      if (rc == AP_OK && min_flat > 0) {
-        ap_body_state st;
-        ap_body_get_state(m, d, 0, &st);
-        if (hypot(st.R[8], 0.0) > sqrt(1 - min_flat * min_flat)) rc = 1;
-      }
-    } while (rc != AP_OK);
-    rc = fd_check(m, d, t, q, v, 1e-3, &r);
-    AP_CHECK(rc == AP_OK);
-    worst.vel = fmax(worst.vel, r.vel), worst.omega = fmax(worst.omega, r.omega);
-    worst.alpha = fmax(worst.alpha, r.alpha), worst.acc = fmax(worst.acc, r.acc);
-    worst.gamma = fmax(worst.gamma, r.gamma), worst.power = fmax(worst.power, r.power);
-  }
-  printf("  %-22s vel %.1e  omega %.1e  alpha %.1e  acc %.1e  gamma %.1e  power %.1e\n", label,
-         worst.vel, worst.omega, worst.alpha, worst.acc, worst.gamma,
-         check_power ? worst.power : 0.0);
-  AP_CHECK_LE(worst.vel, FD_TOL);
-  AP_CHECK_LE(worst.omega, FD_TOL);
-  AP_CHECK_LE(worst.alpha, FD_TOL);
-  AP_CHECK_LE(worst.acc, FD_TOL);
-  AP_CHECK_LE(worst.gamma, FD_TOL);
-  if (check_power) AP_CHECK_LE(worst.power, FD_TOL);
-  ap_data_free(d);
-  return worst;
 }
 
 /* ---- models for the finite-difference checks ------------------------------------------------- */
@@ -494,7 +259,7 @@ static void test_near_flat(void) {
         tilted_state(off, flip, q, v);
         /* h ~ 1e-3 of the distance to the singularity: the contact point runs round the rim
          * at a rate ~ |w| / sin(off), so the derivatives of order p grow like sin(off)^-p. */
-        AP_CHECK(fd_check(m, d, 0.3, q, v, 1e-3 * sin(off), &r) == AP_OK);
+        AP_CHECK(fd_check(m, d, 0.3, q, v, 1e-3 * sin(off), &r, NULL, NULL) == AP_OK);
         worst = fmax(worst, fmax(fmax(r.vel, r.omega), fmax(fmax(r.alpha, r.acc), r.gamma)));
       }
       printf("  %-9s %s: worst relative error %.1e\n", shape_names[kind],
@@ -608,8 +373,11 @@ static void test_validation(void) {
   expect_fail(disk_builder(&bd, &jd, &cd), "leave parent_frame and child_frame");
   disk_defs(&bd, &jd, &cd), jd.kind = AP_JOINT_BALL, jd.drive[0] = f_sine;
   expect_fail(disk_builder(&bd, &jd, &cd), "cannot be driven");
-  disk_defs(&bd, &jd, &cd), jd.kind = AP_JOINT_BALL;
-  expect_fail(disk_builder(&bd, &jd, &cd), "rolling needs body 'disk' on a plane-contact");
+  disk_defs(&bd, &jd, &cd), jd.kind = AP_JOINT_BALL, bd.shape.kind = AP_SHAPE_NONE;
+  expect_fail(disk_builder(&bd, &jd, &cd), "rolling needs body 'disk' to have a shape");
+  disk_defs(&bd, &jd, &cd), bd.shape.kind = AP_SHAPE_SPHERE, cd.kind = AP_CON_KNIFE_EDGE;
+  cd.wheel = 1;
+  expect_fail(disk_builder(&bd, &jd, &cd), "a wheel knife edge needs body 'disk' to be a disk");
   disk_defs(&bd, &jd, &cd), cd.kind = AP_CON_KNIFE_EDGE, cd.direction[1] = 0.0;
   expect_fail(disk_builder(&bd, &jd, &cd), "direction (0, 0, 0) is zero");
   disk_defs(&bd, &jd, &cd), cd.kind = AP_CON_USER, cd.rows = 2;

@@ -3,6 +3,7 @@
  * This file dispatches to the subcommands and holds their shared helpers: option matching
  * ("--opt VALUE" and "--opt=VALUE"), numbers, "did you mean" for unknown options, and the map
  * from library status codes to exit codes. Public API only (<appell/appell.h>). */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,7 +27,8 @@ static const char usage[] =
     "  bench SCENE   work-precision sweep of a scene against its own tight reference\n"
     "\n"
     "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
-    "3 numerical failure, 1 internal error. Scenes: docs/scenes.md; the tool: docs/cli.md.\n";
+    "3 numerical failure, 1 internal error or failed write, 128 + N stopped by signal N.\n"
+    "Scenes: docs/scenes.md; the tool: docs/cli.md.\n";
 
 int cli_exit_code(int status) {
   switch (status) {
@@ -113,6 +115,15 @@ int cli_unknown(const char *cmd, const char *arg, const char *const *known) {
   return EXIT_INPUT;
 }
 
+/* What the command printed must have reached standard output: a full disk or a closed pipe
+ * is an I/O failure (exit 1), not a silent success. */
+static int finish(int code) {
+  if (fflush(stdout) == 0 && !ferror(stdout)) return code;
+  if (errno != EPIPE) fprintf(stderr, "appell: writing standard output failed: %s\n",
+                              strerror(errno ? errno : EIO));
+  return code == EXIT_OK ? EXIT_INTERNAL : code;
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fputs(usage, stderr);
@@ -121,16 +132,16 @@ int main(int argc, char **argv) {
   const char *cmd = argv[1];
   if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
     fputs(usage, stdout);
-    return EXIT_OK;
+    return finish(EXIT_OK);
   }
   if (strcmp(cmd, "--version") == 0) {
     printf("appell %s\n", AP_VERSION_STRING);
-    return EXIT_OK;
+    return finish(EXIT_OK);
   }
-  if (strcmp(cmd, "run") == 0) return cmd_run(argc - 1, argv + 1);
-  if (strcmp(cmd, "check") == 0) return cmd_check(argc - 1, argv + 1);
-  if (strcmp(cmd, "plot") == 0) return cmd_plot(argc - 1, argv + 1);
-  if (strcmp(cmd, "bench") == 0) return cmd_bench(argc - 1, argv + 1);
+  if (strcmp(cmd, "run") == 0) return finish(cmd_run(argc - 1, argv + 1));
+  if (strcmp(cmd, "check") == 0) return finish(cmd_check(argc - 1, argv + 1));
+  if (strcmp(cmd, "plot") == 0) return finish(cmd_plot(argc - 1, argv + 1));
+  if (strcmp(cmd, "bench") == 0) return finish(cmd_bench(argc - 1, argv + 1));
   static const char *const cmds[] = {"run", "check", "plot", "bench"};
   const char *s = cli_suggest(cmd, cmds, 4);
   fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,

@@ -2,13 +2,17 @@
  *
  * Exit codes (docs/cli.md): 0 success, 2 bad input (scene, options, CSV columns), 3 numerical
  * failure (the integrator or a pipeline stage failed during the run), 1 internal error (out of
- * memory, a missing program, an I/O failure), 130 interrupted. Only the public API is used. */
+ * memory, a missing program, an I/O failure such as a failed write), 128 + N stopped by signal
+ * N (EXIT_SIGNAL; 130 for SIGINT). Only the public API is used. */
 #ifndef APPELL_CLI_H
 #define APPELL_CLI_H
 
 #include <stddef.h>
 
-enum { EXIT_OK = 0, EXIT_INTERNAL = 1, EXIT_INPUT = 2, EXIT_NUMERIC = 3, EXIT_INTERRUPT = 130 };
+enum { EXIT_OK = 0, EXIT_INTERNAL = 1, EXIT_INPUT = 2, EXIT_NUMERIC = 3 };
+
+/* Exit code of a run stopped by signal sig: 128 + sig (SIGINT 130, SIGTERM 143). */
+#define EXIT_SIGNAL(sig) (128 + (sig))
 
 int cmd_run(int argc, char **argv);
 int cmd_check(int argc, char **argv);
@@ -25,5 +29,44 @@ int cli_number(const char *cmd, const char *opt, const char *text, double *out);
 int cli_unknown(const char *cmd, const char *arg, const char *const *known);
 /* The closest of words to word by edit distance, or NULL. */
 const char *cli_suggest(const char *word, const char *const *words, int count);
+
+/* ---- appell run's output target and signals (tools/output.c) ---- */
+
+#include <limits.h>
+#include <stdio.h>
+#include <sys/types.h>
+
+typedef enum cli_out_kind {
+  CLI_OUT_STDOUT,          /* no --out, or "-" */
+  CLI_OUT_DIRECT,          /* a FIFO or a device: written in place */
+  CLI_OUT_FILE             /* a regular file: a temporary file renamed over it at the end */
+} cli_out_kind;
+
+typedef struct cli_out {
+  cli_out_kind kind;
+  const char *target;      /* --out as given */
+  char path[PATH_MAX];     /* the file written (links to regular files resolved) */
+  char tmp[PATH_MAX + 64]; /* CLI_OUT_FILE: PATH.appell-tmp.PID.XXXXXX */
+  mode_t mode;             /* permissions of the new file */
+  FILE *f;
+  int err;                 /* errno of the first failed write, or 0 */
+} cli_out;
+
+/* Handlers for every catchable terminating signal (see tools/output.c). */
+void cli_signals_install(void);
+/* The first terminating signal received, or 0; and its name ("SIGINT"). */
+int cli_interrupted(void);
+const char *cli_signal_name(int sig);
+/* Before simulating: what --out names (NULL or "-": standard output). Refuses a directory,
+ * a dangling link and the scene itself with a message; returns an exit code. */
+int cli_out_check(cli_out *o, const char *target, const char *scene);
+/* Open the target (removing stale temporary files of killed runs first). */
+int cli_out_open(cli_out *o);
+/* Non-zero (an errno value) once a write has failed. */
+int cli_out_failed(cli_out *o);
+/* Finish: on code EXIT_OK rename the temporary file over the target, else remove it; a
+ * failed write is reported. Returns the exit code. */
+int cli_out_close(cli_out *o, int code);
+const char *cli_out_name(const cli_out *o);   /* the path, or "standard output" */
 
 #endif

@@ -1,11 +1,13 @@
 /* appell run: simulate a scene and write its output channels as CSV (docs/cli.md).
  *
- * Flow: options -> overrides (--set first, then --mode/--method/--rtol/--atol/--t-end, so the
- * command line wins over the file) -> ap_scene_load -> initial state (corrections reported)
- * -> ap_sim_create -> rows at t0 + i * interval up to t_end -> summary on stderr.
- * Invariant: with --out, rows go to a temporary file beside the target, renamed over it only
- * after the last row; any failure or interruption removes the temporary file, so a file at
- * the target path is always complete. */
+ * Flow: options -> the output target checked (tools/output.c) -> signal handlers -> overrides
+ * (--set first, then --mode/--method/--rtol/--atol/--t-end, so the command line wins over the
+ * file) -> ap_scene_load -> initial state (corrections reported) -> ap_sim_create -> rows at
+ * t0 + i * interval up to t_end -> summary on stderr. A terminating signal is seen between
+ * internal steps (the simulation polls cli_interrupted) and a failed write after the row.
+ * Invariant: with --out naming a regular file, rows go to a temporary file beside the target,
+ * renamed over it only after the last row; any failure or interruption removes the temporary
+ * file, so a file at the target path is always complete. */
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -28,8 +30,9 @@ static const char help[] =
     "interval: a header, then t and the channels the scene asks for (docs/cli.md).\n"
     "\n"
     "options:\n"
-    "  --out FILE.csv     write the CSV to FILE.csv (default: standard output); the file\n"
-    "                     appears only when the run succeeds\n"
+    "  --out FILE.csv     write the CSV to FILE.csv (default or -: standard output); a\n"
+    "                     regular file appears only when the run succeeds, a FIFO or a\n"
+    "                     device is written in place; a directory or the scene is refused\n"
     "  --set PATH=VALUE   override a scalar of the scene by its dotted key path, e.g.\n"
     "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
     "  --mode M           minimal, projected, dae or plain (simulation.mode)\n"
@@ -44,10 +47,7 @@ static const char help[] =
     "Command-line values win over the file. A summary (steps, evaluations, wall time, largest\n"
     "constraint residual, energy drift) goes to standard error, with a progress bar when\n"
     "standard error is a terminal. Exit codes: 0 success, 2 bad input, 3 numerical failure,\n"
-    "1 internal error, 130 interrupted.\n";
-
-static volatile sig_atomic_t interrupted = 0;
-static void on_signal(int sig) { interrupted = sig; }
+    "1 internal error or a failed write, 128 + N stopped by signal N (130: Ctrl-C).\n";
 
 typedef struct run_opts {
   const char *scene, *out;
@@ -123,52 +123,6 @@ static int parse_args(int argc, char **argv, run_opts *o) {
   return 0;
 }
 
-/* ---- output file ------------------------------------------------------------------------ */
-
-typedef struct out_file {
-  FILE *f;
-  char tmp[4096];
-  const char *target;
-} out_file;
-
-static int open_out(out_file *of, const char *target) {
-  of->target = target;
-  if (!target || strcmp(target, "-") == 0) {
-    of->f = stdout, of->target = NULL;
-    return EXIT_OK;
-  }
-  if (snprintf(of->tmp, sizeof of->tmp, "%s.tmp.XXXXXX", target) >= (int)sizeof of->tmp)
-    return fprintf(stderr, "appell run: --out: path too long\n"), EXIT_INPUT;
-  int fd = mkstemp(of->tmp);
-  of->f = fd >= 0 ? fdopen(fd, "w") : NULL;
-  if (!of->f) {
-    fprintf(stderr, "appell run: cannot create %s: %s\n", of->tmp, strerror(errno));
-    if (fd >= 0) close(fd), unlink(of->tmp);
-    of->tmp[0] = '\0';
-    return EXIT_INPUT;
-  }
-  return EXIT_OK;
-}
-
-/* Finish: rename on success, remove otherwise. Returns the exit code. */
-static int close_out(out_file *of, int code) {
-  if (!of->f) return code;
-  if (!of->target) return fflush(stdout) != 0 && code == EXIT_OK ? EXIT_INTERNAL : code;
-  int bad = ferror(of->f) | (fclose(of->f) != 0);
-  of->f = NULL;
-  if (code == EXIT_OK && bad) {
-    fprintf(stderr, "appell run: writing %s failed\n", of->tmp);
-    code = EXIT_INTERNAL;
-  }
-  if (code == EXIT_OK && rename(of->tmp, of->target) != 0) {
-    fprintf(stderr, "appell run: cannot rename %s to %s: %s\n", of->tmp, of->target,
-            strerror(errno));
-    code = EXIT_INTERNAL;
-  }
-  if (code != EXIT_OK) unlink(of->tmp);
-  return code;
-}
-
 /* ---- the run ---------------------------------------------------------------------------- */
 
 typedef struct run_state {
@@ -235,27 +189,44 @@ static void locate(const run_state *rs, int rc, double tout) {
     }
 }
 
-static int loop(run_state *rs, FILE *f) {
+/* The simulation's poll (ap_sim_set_poll): stop at a terminating signal. */
+static int poll_signal(double t, void *user) {
+  (void)t, (void)user;
+  return cli_interrupted();
+}
+
+/* After a failed write: the message comes from cli_out_close. */
+static int write_failed(const cli_out *out) {
+  return out->err == EPIPE ? EXIT_SIGNAL(SIGPIPE) : EXIT_INTERNAL;
+}
+
+static int loop(run_state *rs, cli_out *out) {
   long nrows = (long)ceil((rs->run.t_end - rs->run.t0) / rs->run.interval - 1e-9);
   double last_draw = 0.0;
-  int rc = write_row(rs, f);
-  for (long i = 1; rc == AP_OK && i <= nrows && !interrupted; i++) {
+  int rc = write_row(rs, out->f);
+  if (cli_out_failed(out)) return write_failed(out);
+  for (long i = 1; rc == AP_OK && i <= nrows && !cli_interrupted(); i++) {
     double t = i == nrows ? rs->run.t_end : rs->run.t0 + (double)i * rs->run.interval;
     rc = ap_sim_advance(rs->sim, t);
+    if (rc == AP_ERR_INTERRUPTED && cli_interrupted()) break;
     if (rc != AP_OK) {
       fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
               ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
       locate(rs, rc, t);
       return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
     }
-    rc = write_row(rs, f);
+    rc = write_row(rs, out->f);
+    if (cli_out_failed(out)) return write_failed(out);
     if (rs->progress && (now() - last_draw > 0.1 || i == nrows)) {
       progress(rs, t, 0);
       last_draw = now();
     }
   }
   if (rs->progress) progress(rs, rs->run.t_end, 1);
-  if (interrupted) return fprintf(stderr, "appell run: interrupted\n"), EXIT_INTERRUPT;
+  int sig = cli_interrupted();
+  if (sig)
+    return fprintf(stderr, "appell run: interrupted by %s at t = %.10g\n", cli_signal_name(sig),
+                   ap_sim_time(rs->sim)), EXIT_SIGNAL(sig);
   if (rc != AP_OK)
     return fprintf(stderr, "appell run: output at t = %.10g failed: %s\n", ap_sim_time(rs->sim),
                    ap_strerror(rc)), cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC
@@ -320,22 +291,27 @@ int cmd_run(int argc, char **argv) {
   run_opts o = {0};
   int rc = parse_args(argc, argv, &o);
   if (rc != 0) return rc > 0 ? (fputs(help, stdout), print_methods(), EXIT_OK) : EXIT_INPUT;
+  cli_out out;
+  int code = cli_out_check(&out, o.out, o.scene);
+  if (code != EXIT_OK) return code;
+  cli_signals_install();
   char msg[1024];
   run_state rs = {0};
   int st = ap_scene_load(o.scene, o.sets, o.nsets, &rs.sc, msg, sizeof msg);
   if (st != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(st);
-  out_file of = {0};
-  int code = start(&rs, &o);
-  if (code == EXIT_OK) code = open_out(&of, o.out);
+  code = start(&rs, &o);
+  if (code == EXIT_OK && cli_interrupted())
+    code = fprintf(stderr, "appell run: interrupted by %s\n", cli_signal_name(cli_interrupted())),
+    EXIT_SIGNAL(cli_interrupted());
+  if (code == EXIT_OK) code = cli_out_open(&out);
   if (code == EXIT_OK) {
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
+    ap_sim_set_poll(rs.sim, poll_signal, NULL);
     rs.progress = !o.quiet && isatty(STDERR_FILENO);
     double t_start = now();
-    write_header(rs.sc, of.f);
-    code = loop(&rs, of.f);
+    write_header(rs.sc, out.f);
+    code = loop(&rs, &out);
     rs.wall = now() - t_start;
-    code = close_out(&of, code);
+    code = cli_out_close(&out, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
   }
   free(rs.buf);

@@ -142,12 +142,21 @@ AP_API ap_joint_def ap_joint_def_default(void);
 /* Constraints: rows of A v + a0 = 0.                                                          */
 
 typedef enum ap_constraint_kind {
-  AP_CON_ROLLING = 0,      /* body on a PLANE_CONTACT joint: the material contact point has no
-                              horizontal velocity relative to the ground surface (2 rows:
-                              .x, .y); with no_spin a third row (.spin): no angular velocity
-                              about the vertical relative to the ground */
-  AP_CON_KNIFE_EDGE = 1,   /* the body point `point` has no velocity (relative to the ground
-                              surface) along the body-fixed `direction` (1 row) */
+  AP_CON_ROLLING = 0,      /* the material contact point of the body's shape with the ground
+                              plane has no horizontal velocity relative to the ground surface
+                              (rows .x, .y); with no_spin a row .spin: no angular velocity
+                              about the vertical relative to the ground. On a PLANE_CONTACT
+                              joint the joint keeps the shape on the plane; on any other joint
+                              (a wheel on a revolute joint of a chassis, a free body) the
+                              constraint adds the contact row .z: the shape's lowest point
+                              stays on z = 0 (an implicit holonomic row, like a loop closure).
+                              Shapes: sphere, ellipsoid, disk, torus (and point) */
+  AP_CON_KNIFE_EDGE = 1,   /* wheel == 0: the body point `point` has no velocity (relative to
+                              the ground surface) along the body-fixed `direction` (1 row).
+                              wheel == 1: a wheel's knife edge: the contact point of the body's
+                              disk or torus has no velocity across the wheel plane (along the
+                              body z axis) (row .side), plus the contact row .z unless the body
+                              is on a PLANE_CONTACT joint */
   AP_CON_PRESCRIBED_SPEED = 2, /* speed `speed` of joint `joint` equals f(t) (1 row) */
   AP_CON_USER = 3,         /* `rows` rows from user callbacks */
   AP_CON_COINCIDENT = 4,   /* loop closure: point of body equals point2 of body2, along the
@@ -185,6 +194,8 @@ typedef struct ap_constraint_def {
   double point[3];         /* knife edge, loops: point in body axes (m); default 0 */
   double direction[3];     /* knife edge: body axes; line direction or plane normal: body2 axes;
                               default (0, 1, 0) */
+  int wheel;               /* knife edge: 1 = at the contact point of the body's disk or torus,
+                              across the wheel plane (point and direction unused); default 0 */
   int body2;               /* loops: the other body or AP_GROUND (default) */
   double point2[3];        /* loops: point in body2 axes (world for AP_GROUND) (m) */
   unsigned axes;           /* coincident: world axes kept, bit 0 = x, 1 = y, 2 = z; default 7 */
@@ -283,8 +294,8 @@ typedef struct ap_body_state {
   double com[3];           /* centre of mass (m) */
   double omega[3];         /* angular velocity (rad/s) */
   double vel[3];           /* velocity of the centre of mass (m/s) */
-  int has_contact;         /* body on a plane-contact joint */
-  double contact[3];       /* its contact point on z = 0 (m) */
+  int has_contact;         /* body on a plane-contact joint or held by a wheel contact */
+  double contact[3];       /* its contact point: the lowest point of its shape (m) */
 } ap_body_state;
 
 AP_API int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out);

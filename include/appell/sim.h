@@ -97,6 +97,17 @@ AP_API const ap_data *ap_sim_data(const ap_sim *s);
 AP_API int ap_sim_reactions(ap_sim *s, const double **lambda);
 /* *st zeroed when s is NULL; nothing written when st is NULL. */
 AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
+
+/* Interrupting a long advance. ap_sim_advance calls poll(t, user) before every internal step,
+ * t being the time reached; when it returns non-zero, the advance stops and returns
+ * AP_ERR_INTERRUPTED with the simulation at its last accepted step (ap_sim_time, ap_sim_q,
+ * ap_sim_v and ap_sim_data describe it) and can be advanced again. The function runs in the
+ * caller's thread and should be cheap: read a flag (set by a signal handler or another thread
+ * through an atomic or sig_atomic_t variable), check a deadline, draw progress. The library
+ * installs no signal handler and reads no global state of its own. poll = NULL (the default)
+ * removes it. Nothing happens when s is NULL. */
+typedef int (*ap_sim_poll_fn)(double t, void *user);
+AP_API void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user);
 /* The last message; "" when s is NULL. */
 AP_API const char *ap_sim_message(const ap_sim *s);
 /* The first warning of the run, or "" when there is none (or s is NULL). A warning is issued

@@ -25,7 +25,8 @@ enum {
   AP_ERR_RANK = -7,           /* the constraints leave no free speed, or the rank changed */
   AP_ERR_SOLVER = -8,         /* the integrator failed (too many steps, step too small, ...) */
   AP_ERR_UNSUPPORTED = -9,    /* method or option not available for this model */
-  AP_ERR_INTERNAL = -10       /* a bug in Appell: please report */
+  AP_ERR_INTERNAL = -10,      /* a bug in Appell: please report */
+  AP_ERR_INTERRUPTED = -11    /* the caller's poll function asked to stop (ap_sim_set_poll) */
 };
 
 /* A short, static text for a status code ("unknown status" for any other int). */

@@ -131,11 +131,22 @@ typedef struct ap_data {
   int estimate_cond;   /* estimate rcond_R and rcond_G (LAPACK condition estimators); the
                           drivers turn it on at output times only, not in the hot path */
   double rank_rtol;    /* relative tolerance on |R_ii| for the numerical rank; default 1e-10 */
+  double manifold_rtol; /* relative tolerance on the consistency of redundant rows that are
+                           redundant only where the implicit holonomic rows (loop closures,
+                           wheel contacts) hold: judged by ap_partition and at accepted steps,
+                           not at every evaluation (a stepper's trial states are off that
+                           manifold); default 1e-8, the drivers set 100 (rtol + 1e-12) */
 
   /* partition (partitioned basis): set by ap_partition, frozen between calls */
   int *perm;           /* (k) perm[0..rank-1] dependent speeds, perm[rank..k-1] independent */
-  int rank;            /* numerical rank of A; l = k - rank free speeds */
+  int rank;            /* numerical rank of A; l = k - rank free speeds (may be 0: the
+                          constraints then prescribe the motion) */
   int l;               /* number of free speeds */
+  int redundant;       /* rows beyond the rank, b - rank: dropped */
+  int redundant_manifold; /* of those, the rows redundant only on the holonomic manifold: the
+                          rank is then kept (projected mode too) and their consistency is
+                          judged against manifold_rtol; the others hold for every q and are
+                          judged at every evaluation (relative 1e-8: round-off) */
 
   /* position stage: ap_fwd_position */
   double *g;           /* (k x k) metric */
@@ -177,9 +188,11 @@ typedef struct ap_data {
 AP_API int ap_data_create(const ap_model *m, ap_data **out);   /* AP_ERR_ARG: m or out NULL */
 AP_API void ap_data_free(ap_data *d);                          /* NULL: nothing */
 
-/* Pick the partition of the speeds by pivoted QR of A at (d->t, d->q): writes perm, rank, l.
- * Redundant rows that are consistent are dropped (and named in d->msg); inconsistent ones give
- * AP_ERR_INCONSISTENT with their names. */
+/* Pick the partition of the speeds by pivoted QR of A at (d->t, d->q): writes perm, rank, l,
+ * redundant, redundant_manifold. Redundant rows that are consistent are dropped (and named in
+ * d->msg); inconsistent ones give AP_ERR_INCONSISTENT with their names. A body model with loop
+ * closures or wheel contacts tells apart, once, rows redundant for every q from rows redundant
+ * only where those holonomic rows hold (the rank rises at a nearby state off them). */
 AP_API int ap_partition(const ap_model *m, ap_data *d);
 
 /* The pipeline stages, in the order ap_forward runs them. */

@@ -43,6 +43,9 @@ struct ap_model {
   ap_evaluator ev;          /* set by the body layer; all NULL for math-level systems */
   int n, k, b;
   int nphi;                 /* rows of ev.phi; 0 for math-level systems */
+  int nhol;                 /* implicit holonomic rows among the constraint rows (loop
+                               closures, wheel contacts): redundancy among the rows may then
+                               hold only where they are closed; 0 for math-level systems */
   char name[64];
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */
@@ -59,6 +62,7 @@ typedef struct ap_scratch {
   double *gB;               /* g B (k x l) */
   double *tk1, *tk2;        /* k-vectors */
   double *tl;               /* l-vector */
+  double *tn;               /* n-vector (ap_partition: q while it tries a nearby state) */
   double *work;             /* linalg scratch, ap_la_work_size(b, k) doubles */
   double *ev;               /* evaluator scratch, m->ev.scratch doubles (may be NULL) */
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
@@ -80,6 +84,12 @@ int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int
 
 /* ap_project_speeds without the position stage: the data's g, B, b0 must be current. */
 int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *change);
+
+/* The consistency of redundant rows that hold only on the holonomic manifold, judged at an
+ * accepted state (after ap_fwd_position and ap_fwd_velocity there, q projected): the residuals
+ * of a0 and gamma on the dropped rows against d->manifold_rtol. AP_ERR_INCONSISTENT with the
+ * rows named; AP_OK when the model has no such rows. */
+int ap_core_judge_redundant(const ap_model *m, ap_data *d);
 
 /* x <- B G^-1 B^T g x: the g-orthogonal projection onto the null space of A, with the factor
  * of G left by ap_core_project_here. */

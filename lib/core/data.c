@@ -38,7 +38,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   size_t lw = ap_la_work_size(m->b, m->k), liw = ap_la_iwork_size(m->b, m->k);
   size_t nd = n + k + k + k * k + n * k + nb * k + nb + k * k + k  /* q v e g N A a0 B b0 */
             + k + k + nb + k + k * k + k + k + k + n + nb          /* h Q gamma w G Phi edd vdot qdot lambda */
-            + nb * k + mk + k * k + ndg + k * k + 3 * k + lw      /* scratch */
+            + nb * k + mk + k * k + ndg + k * k + 3 * k + lw + n  /* scratch */
             + m->ev.scratch;
   size_t ni = k + nb + liw;
 
@@ -63,7 +63,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   s->F = carve(&p, nb * k), s->tau = carve(&p, mk), s->Qf = carve(&p, k * k);
   s->dg = ndg ? carve(&p, ndg) : NULL;
   s->gB = carve(&p, k * k), s->tk1 = carve(&p, k), s->tk2 = carve(&p, k), s->tl = carve(&p, k);
-  s->work = carve(&p, lw);
+  s->work = carve(&p, lw), s->tn = carve(&p, n);
   s->ev = m->ev.scratch ? carve(&p, m->ev.scratch) : NULL;
   s->model = m;
   d->perm = carve_int(&ip, k), s->jpvt = carve_int(&ip, nb), s->iwork = carve_int(&ip, liw);
@@ -73,6 +73,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   /* Defaults: no constraints means the identity basis; no kinematics means N = I. */
   d->basis = AP_BASIS_PARTITIONED;
   d->rank_rtol = 1e-10;
+  d->manifold_rtol = 1e-8;
   d->rank = 0, d->l = m->k;
   for (int i = 0; i < m->k; i++) d->perm[i] = i, d->B[i + (size_t)i * k] = 1.0;
   if (!m->sys.kinematic)

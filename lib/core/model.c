@@ -18,6 +18,12 @@ ap_system_def ap_system_def_default(void) {
   return def;
 }
 
+static int fail(char *msg, size_t len, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
 static int fail(char *msg, size_t len, const char *fmt, ...) {
   if (msg && len > 0) {
     va_list ap;

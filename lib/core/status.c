@@ -15,6 +15,7 @@ const char *ap_strerror(int status) {
     case AP_ERR_SOLVER: return "the integrator failed";
     case AP_ERR_UNSUPPORTED: return "not supported";
     case AP_ERR_INTERNAL: return "internal error";
+    case AP_ERR_INTERRUPTED: return "interrupted";
     default: return "unknown status";
   }
 }

@@ -105,8 +105,8 @@ static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double
   int rc = ap_body_loop_residual(s->m, d, &phi);
   if (rc == AP_OK && phi > s->def.init_tol)
     return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial coordinates leave the "
-                         "loop closures open by %.3g m, more than init_tol %.3g: close them first "
-                         "(ap_body_project_q)", s->m->name, phi, s->def.init_tol);
+                         "loop closures or wheel contacts open by %.3g m, more than init_tol %.3g: "
+                         "close them first (ap_body_project_q)", s->m->name, phi, s->def.init_tol);
   if (rc == AP_OK) rc = s->m->ev.project_q(s->m, d, q, ((ap_scratch *)d->internal)->ev, &change);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                       d->msg);
@@ -119,7 +119,7 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   d->t = t0;
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
   memcpy(s->v, v0, sizeof(double) * (size_t)s->k);
-  if (s->def.mode == AP_MODE_MINIMAL) {
+  if (s->def.mode != AP_MODE_DAE) {   /* rank, and which redundancy is structural */
     int rc = ap_partition(s->m, d);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   }
@@ -173,6 +173,10 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
   if (rc != AP_OK) return rc == AP_ERR_NOMEM ? ap_drv_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
+  /* Rows redundant only where the loops and wheel contacts close: judged at accepted states,
+   * which lie off that manifold by the projection tolerance or, for CVODE, by up to a tenth of
+   * the step tolerance (docs/vehicles.md "Redundant rows"). */
+  s->d->manifold_rtol = 100 * (s->def.rtol + 1e-12);
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
   if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0);
@@ -252,6 +256,12 @@ int ap_sim_advance(ap_sim *s, double tout) {
     return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
                          s->t);
   for (long steps = 0; s->t < tout; steps++) {
+    int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
+    if (stop) {
+      int rc = ap_drv_evaluate_current(s);
+      return rc != AP_OK ? rc : ap_drv_fail(s, AP_ERR_INTERRUPTED, "interrupted at t = %.17g "
+                                            "(the poll function returned %d)", s->t, stop);
+    }
     if (steps >= s->def.max_steps)
       return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
                            "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
@@ -289,6 +299,11 @@ const double *ap_sim_v(const ap_sim *s) { return s ? s->v : NULL; }
 const ap_data *ap_sim_data(const ap_sim *s) { return s ? s->d : NULL; }
 const char *ap_sim_message(const ap_sim *s) { return s ? s->msg : ""; }
 const char *ap_sim_warning(const ap_sim *s) { return s ? s->warning : ""; }
+
+void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user) {
+  if (!s) return;
+  s->poll = poll, s->poll_user = user;
+}
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
   if (!s) return AP_ERR_ARG;

@@ -27,6 +27,8 @@ struct ap_sim {
   ap_sim_stats stats;
   char msg[512];
   char warning[512];        /* the first warning, "" when none */
+  ap_sim_poll_fn poll;      /* called before every internal step (ap_sim_set_poll), or NULL */
+  void *poll_user;
 };
 
 /* printf into s->msg; returns status. */

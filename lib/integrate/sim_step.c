@@ -195,14 +195,27 @@ int ap_drv_after_step_dae(ap_sim *s, double t) {
   return AP_OK;
 }
 
+/* Rows redundant only on the holonomic manifold are not judged at trial states (they lie off
+ * it); here, at the accepted and projected state, their residuals must be within
+ * manifold_rtol. */
+static int judge_redundant(ap_sim *s, double t) {
+  ap_data *d = s->d;
+  ap_drv_load_state(s, t, s->y);
+  int rc = ap_fwd_position(s->m, d);
+  if (rc == AP_OK) rc = ap_fwd_velocity(s->m, d);
+  if (rc == AP_OK) rc = ap_core_judge_redundant(s->m, d);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+}
+
 int ap_drv_after_step(ap_sim *s, double t) {
   int rc = project_coordinates(s, t);
   if (rc != AP_OK) return rc;
   switch (s->def.mode) {
-    case AP_MODE_MINIMAL: return after_step_minimal(s, t);
-    case AP_MODE_PLAIN: return after_step_plain(s, t);
-    default: return after_step_projected(s, t);
+    case AP_MODE_MINIMAL: rc = after_step_minimal(s, t); break;
+    case AP_MODE_PLAIN: rc = after_step_plain(s, t); break;
+    default: rc = after_step_projected(s, t); break;
   }
+  return rc == AP_OK && s->d->redundant_manifold ? judge_redundant(s, t) : rc;
 }
 
 /* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the

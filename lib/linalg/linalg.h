@@ -67,7 +67,9 @@ int ap_la_partition_particular(int b, int k, int r, const int *perm, const doubl
 
 /* ---- Orthonormal basis ("projected" mode) ------------------------------------------------ */
 
-/* Pivoted QR (dgeqp3) of A^T (k x b): A^T P = Q R. rank as above. Forms the full orthogonal
+/* Pivoted QR (dgeqp3) of A^T (k x b): A^T P = Q R. rank as above; or, when rtol < 0, the
+ * rank given in *rank (0..min(b, k)): the first *rank pivoted rows span the constraints (a
+ * rank decided once, kept while nearly dependent rows drift apart). Forms the full orthogonal
  * Q (k x k, ld k; dorgqr) in Qf and Z = Q[:, rank..k-1] (k x l, ld k).
  * F (k x b, ld k) and tau (min(k,b)) keep the factorization, jpvt (b) the row order of A
  * (0-based), for ap_la_orth_particular.

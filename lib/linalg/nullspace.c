@@ -421,9 +421,10 @@ int ap_la_orth_basis(int b, int k, const double *A, const double *a0, double rto
                      double *F, double *tau, int *jpvt, double *Qf, double *Z, double *b0,
                      double *resid, double *work, int *iwork) {
   (void)iwork;
+  int m = imin(k, b), r = 0, fixed = rtol < 0.0 ? *rank : -1;   /* rtol < 0: rank given */
+  if (fixed >= 0 && fixed <= m) rtol = 0.0;
   if (bad_args(b, k, rtol)) return AP_ERR_ARG;
   if (!all_finite((size_t)b * k, A)) return AP_ERR_ARG;
-  int m = imin(k, b), r = 0;
   double *y = work, *lw = work + b;
   if (small(b, k)) { /* A^T P = Q R in F (k x b), the full Q (k x k) in Qf */
     if (b > 0) {
@@ -442,6 +443,7 @@ int ap_la_orth_basis(int b, int k, const double *A, const double *a0, double rto
       for (int j = 0; j < k; j++)
         for (int i = 0; i < k; i++) Qf[i + (size_t)j * k] = i == j ? 1.0 : 0.0;
   }
+  if (fixed >= 0) r = fixed;
   memcpy(Z, Qf + (size_t)r * k, sizeof(double) * (size_t)k * (k - r));
   *rank = r;
   *resid = 0.0;

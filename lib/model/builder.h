@@ -1,4 +1,5 @@
-/* Appell body layer (internal): the builder's storage, shared by builder.c and compile.c. */
+/* Appell body layer (internal): the builder's storage, shared by builder.c, compile.c and
+ * compile_con.c. */
 #ifndef AP_MODEL_BUILDER_H
 #define AP_MODEL_BUILDER_H
 
@@ -27,5 +28,10 @@ int ap_builder_fail(ap_builder *b, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* compile_con.c: validate the constraints and lay out their rows in M (after the joints and
+ * the coordinates); the suffix of row r of a constraint ("", ".x", ".z", ...; buf: 16 chars). */
+int ap_compile_constraints(ap_builder *b, ap_bmodel *M);
+const char *ap_con_row_suffix(const ap_mcon *c, int r, char *buf);
 
 #endif

@@ -3,8 +3,9 @@
  * Order: bodies (mass, inertia symmetric, positive definite and physical, shape), joints
  * (references, frames, axes, drives), tree (each body the child of exactly one joint, no
  * cycles; joints sorted parents first), coordinates and speeds (driven ones eliminated),
- * constraints (references, directions, row layout), effects, degrees of freedom; then names
- * ("disk.x", "disk.qw", "roll.x"), the scratch layout and the ap_model with its evaluator.
+ * constraints (compile_con.c: references, directions, row layout), effects, degrees of
+ * freedom; then names ("disk.x", "disk.qw", "roll.x"), the scratch layout and the ap_model
+ * with its evaluator.
  * Every message names the element and the offending number. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -263,135 +264,6 @@ static void copy_bodies(ap_builder *b, ap_bmodel *M) {
   }
 }
 
-/* ---- constraints ---------------------------------------------------------------------------- */
-
-static int check_body_ref(ap_builder *b, const char *nm, const char *what, int body,
-                          int ground_ok) {
-  if ((ground_ok && body == AP_GROUND) || (body >= 0 && body < b->nb)) return AP_OK;
-  FAIL("constraint '%s': %s %d does not exist (%d bodies%s)", nm, what, body, b->nb,
-       ground_ok ? "; AP_GROUND allowed" : "");
-}
-
-static int check_ground(ap_builder *b, const char *nm, const ap_ground_motion *g) {
-  if ((int)g->kind < 0 || (int)g->kind > 2)
-    FAIL("constraint '%s': unknown ground kind %d", nm, (int)g->kind);
-  if (!finite_n(g->center, 2) || !isfinite(g->omega) || !finite_n(g->velocity, 2))
-    FAIL("constraint '%s': the ground motion has a non-finite parameter", nm);
-  return AP_OK;
-}
-
-/* Unit normals n1, n2 of the unit direction t. */
-static void normals_of(const double *t, double *n1, double *n2) {
-  double e[3] = {0, 0, 0};
-  int i = fabs(t[0]) <= fabs(t[1]) && fabs(t[0]) <= fabs(t[2]) ? 0
-          : fabs(t[1]) <= fabs(t[2])                         ? 1
-                                                              : 2;
-  e[i] = 1.0;
-  v3_cross(t, e, n1);
-  double nn = v3_norm(n1);
-  for (int k = 0; k < 3; k++) n1[k] /= nn;
-  v3_cross(t, n1, n2);
-}
-
-static int unit_direction(ap_builder *b, const char *nm, const double *dir, double *out) {
-  double n = v3_norm(dir);
-  if (!(n > 1e-12) || !finite_n(dir, 3))
-    FAIL("constraint '%s': direction (%g, %g, %g) is zero or not finite", nm, dir[0], dir[1],
-         dir[2]);
-  for (int i = 0; i < 3; i++) out[i] = dir[i] / n;
-  return AP_OK;
-}
-
-static int compile_speed(ap_builder *b, const ap_bmodel *M, const char *nm, ap_mcon *c) {
-  const ap_constraint_def *d = &c->def;
-  if (d->joint < 0 || d->joint >= b->nj)
-    FAIL("constraint '%s': joint %d does not exist (%d joints)", nm, d->joint, b->nj);
-  const ap_mjoint *J = &M->joints[M->joint_topo[d->joint]];
-  if (d->speed < 0 || d->speed >= J->nv)
-    FAIL("constraint '%s': joint '%s' has %d speeds, not speed %d", nm, J->name, J->nv, d->speed);
-  if (J->vidx[d->speed] < 0)
-    FAIL("constraint '%s': speed %d of joint '%s' is driven (eliminated) already", nm, d->speed,
-         J->name);
-  if (!isfinite(d->speed_value)) FAIL("constraint '%s': speed_value is not finite", nm);
-  c->col = J->vidx[d->speed], c->nrows = 1, c->timed = 1;
-  return AP_OK;
-}
-
-static int compile_loop(ap_builder *b, const char *nm, ap_mcon *c) {
-  const ap_constraint_def *d = &c->def;
-  int rc = check_body_ref(b, nm, "body", d->body, 0);
-  if (rc == AP_OK) rc = check_body_ref(b, nm, "body2", d->body2, 1);
-  if (rc != AP_OK) return rc;
-  if (d->body == d->body2) FAIL("constraint '%s': body and body2 are the same body", nm);
-  if (!finite_n(d->point, 3) || !finite_n(d->point2, 3))
-    FAIL("constraint '%s': points not finite", nm);
-  c->loop = 1;
-  if (d->kind == AP_CON_COINCIDENT) {
-    if ((d->axes & 7u) == 0 || (d->axes & ~7u))
-      FAIL("constraint '%s': axes mask %u is not a set of world axes (bits 1 = x, 2 = y, "
-           "4 = z)", nm, d->axes);
-    c->nrows = (int)((d->axes & 1u) + ((d->axes >> 1) & 1u) + ((d->axes >> 2) & 1u));
-    return AP_OK;
-  }
-  rc = unit_direction(b, nm, d->direction, c->dir);
-  if (d->kind == AP_CON_POINT_ON_LINE) normals_of(c->dir, c->n1, c->n2);
-  c->nrows = d->kind == AP_CON_POINT_ON_LINE ? 2 : 1;
-  return rc;
-}
-
-static int compile_contact(ap_builder *b, const ap_bmodel *M, const char *nm, ap_mcon *c) {
-  const ap_constraint_def *d = &c->def;
-  int rc = check_body_ref(b, nm, "body", d->body, 0);
-  if (rc == AP_OK) rc = check_ground(b, nm, &d->ground);
-  if (rc != AP_OK) return rc;
-  c->timed = d->ground.kind != AP_GROUND_FIXED;
-  if (d->kind == AP_CON_KNIFE_EDGE) {
-    if (!finite_n(d->point, 3)) FAIL("constraint '%s': point not finite", nm);
-    c->nrows = 1;
-    return unit_direction(b, nm, d->direction, c->dir);
-  }
-  const ap_mjoint *J = &M->joints[M->bodies[d->body].joint];
-  if (J->kind != AP_JOINT_PLANE_CONTACT)
-    FAIL("constraint '%s': rolling needs body '%s' on a plane-contact joint (it is on %s joint "
-         "'%s')", nm, M->bodies[d->body].name, ap_joint_kind_name(J->kind), J->name);
-  c->nrows = d->no_spin ? 3 : 2;
-  return AP_OK;
-}
-
-static int compile_constraints(ap_builder *b, ap_bmodel *M) {
-  int row = 0;
-  for (int i = 0; i < b->nc; i++) {
-    ap_mcon *c = &M->cons[i];
-    const char *nm = b->cons[i].name;
-    int rc = AP_OK;
-    snprintf(c->name, sizeof c->name, "%s", nm);
-    c->def = b->cons[i].def;
-    switch (c->def.kind) {
-      case AP_CON_ROLLING:
-      case AP_CON_KNIFE_EDGE: rc = compile_contact(b, M, nm, c); break;
-      case AP_CON_PRESCRIBED_SPEED: rc = compile_speed(b, M, nm, c); break;
-      case AP_CON_USER:
-        if (c->def.rows < 1 || !c->def.user_constraint || !c->def.user_gamma)
-          FAIL("constraint '%s': a user constraint needs rows >= 1 (got %d) and both "
-               "user_constraint and user_gamma", nm, c->def.rows);
-        c->nrows = c->def.rows;
-        M->max_user_rows = c->nrows > M->max_user_rows ? c->nrows : M->max_user_rows;
-        break;
-      case AP_CON_COINCIDENT:
-      case AP_CON_POINT_ON_LINE:
-      case AP_CON_POINT_ON_PLANE: rc = compile_loop(b, nm, c); break;
-      default: FAIL("constraint '%s': unknown kind %d", nm, (int)c->def.kind);
-    }
-    if (rc != AP_OK) return rc;
-    c->row = row;
-    row += c->nrows;
-    if (c->loop) M->nloop += c->nrows;
-    M->lscale = fmax(M->lscale, fmax(v3_norm(c->def.point), v3_norm(c->def.point2)));
-  }
-  M->b = row;
-  return AP_OK;
-}
-
 /* ---- effects --------------------------------------------------------------------------------- */
 
 static int check_effect(ap_builder *b, int i) {
@@ -457,26 +329,12 @@ static int name_coords(const ap_bmodel *M, ap_model *m) {
   return AP_OK;
 }
 
-static const char *row_suffix(const ap_mcon *c, int r, char *buf) {
-  static const char *const xyz[] = {".x", ".y", ".z"};
-  switch (c->def.kind) {
-    case AP_CON_ROLLING: return r < 2 ? xyz[r] : ".spin";
-    case AP_CON_POINT_ON_LINE: return r ? ".n2" : ".n1";
-    case AP_CON_COINCIDENT:
-      for (int a = 0, seen = 0; a < 3; a++)
-        if (c->def.axes & (1u << a) && seen++ == r) return xyz[a];
-      return "";
-    case AP_CON_USER: snprintf(buf, 16, ".%d", r); return buf;
-    default: return "";
-  }
-}
-
 static int name_rows(const ap_bmodel *M, ap_model *m) {
   for (int i = 0; i < M->nc; i++) {
     const ap_mcon *c = &M->cons[i];
     for (int r = 0; r < c->nrows; r++) {
       char buf[16];
-      if (!(m->constraint_names[c->row + r] = dup_name(c->name, "", row_suffix(c, r, buf))))
+      if (!(m->constraint_names[c->row + r] = dup_name(c->name, "", ap_con_row_suffix(c, r, buf))))
         return AP_ERR_NOMEM;
     }
   }
@@ -514,6 +372,7 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->ev.project_q = ap_bm_project_q;
   m->ev.check_q = ap_bm_check_q;
   m->nphi = M->nloop + M->nquat;
+  m->nhol = M->nloop;
   if (m->nphi > 0) m->ev.phi = ap_bm_phi;
   *out = m;
   return AP_OK;
@@ -538,7 +397,7 @@ static int compile_all(ap_builder *b, ap_bmodel *M) {
     FAIL("model '%s': no degrees of freedom (%d bodies; every joint is fixed or driven)",
          b->name, b->nb);
   rc = body_columns(M);
-  if (rc == AP_OK) rc = compile_constraints(b, M);
+  if (rc == AP_OK) rc = ap_compile_constraints(b, M);
   for (int i = 0; rc == AP_OK && i < b->ne; i++) {
     rc = check_effect(b, i);
     snprintf(M->effs[i].name, sizeof M->effs[i].name, "%s", b->effs[i].name);

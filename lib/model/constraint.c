@@ -5,12 +5,7 @@
  * surface moves with Vg(p, t) = V(t) + Omega(t) e_z x (p - center); along a point moving at p'
  * its rate is Ag = V' + Omega' e_z x (p - center) + Omega e_z x p'.
  *
- *  rolling   rc = R c_b (contact vector), vP = vo + w x rc (material contact point),
- *            rows e_i . (vP - Vg(o + rc)), i = x, y; no-spin row e_z . w - Omega.
- *            gamma_i = -e_i . (ao + al x rc + w x (w x rc) + w x R c_b' - Ag), where
- *            c_b' = H u', u' = R^T (w x e_z), and Ag is taken along the geometric contact point
- *            p' = vP + R c_b'. The term w x R c_b' is the contact point moving over the body
- *            surface: for a sphere it cancels w x (w x rc) exactly (rc' = 0).
+ *  rolling   and the wheel's knife edge: rows at the shape's contact point (contact.c).
  *  knife     n = R dir; row n . (vP - Vg(x)) at the body point x;
  *            gamma = -((w x n) . (vP - Vg) + n . (aP - Ag)), aP = ao + al x r + w x (w x r).
  *  speed     row v_j - f(t); gamma = f'(t).
@@ -24,7 +19,7 @@
 
 #include "model/model.h"
 
-enum { G_OM, G_DOM, G_VX, G_VY, G_DVX, G_DVY, G_F, G_FD };
+enum { G_OM = AP_G_OM, G_DOM = AP_G_DOM, G_VX, G_VY, G_DVX, G_DVY, G_F, G_FD };
 
 static double *con_scr(const ap_bmodel *M, double *S, int c) {
   return S + M->off_con + (size_t)c * CON_STRIDE;
@@ -93,7 +88,7 @@ int ap_con_time(const ap_model *m, ap_data *d, double t, double *S) {
 
 /* A fixed ground (c->timed == 0) has no surface velocity or acceleration: those rheonomic terms
  * are skipped, not evaluated as zeros. */
-static void ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg) {
+void ap_con_ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg) {
   const double *ctr = c->def.ground.center;
   Vg[2] = 0.0;
   if (!c->timed) {
@@ -104,7 +99,7 @@ static void ground_velocity(const ap_mcon *c, const double *G, const double *x, 
   Vg[1] = G[G_VY] + G[G_OM] * (x[0] - ctr[0]);
 }
 
-static void ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
+void ap_con_ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
                          double *Ag) {
   const double *ctr = c->def.ground.center;
   Ag[2] = 0.0;
@@ -186,9 +181,8 @@ void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT) {
   int s = 0;
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
-    if (!c->loop) continue;
-    for (int r = 0; r < c->nrows; r++, s++) {
-      phi[s] = loop_row(M, S, c, r, row);
+    for (int r = c->hrow; r < c->hrow + c->nhol; r++, s++) {
+      phi[s] = c->wheel >= -1 ? ap_contact_hol_row(M, S, c, row) : loop_row(M, S, c, r, row);
       memcpy(JlT + (size_t)s * M->k, row, (size_t)M->k * sizeof *row);
     }
   }
@@ -207,27 +201,13 @@ static void put_row(const ap_bmodel *M, double *A, double *a0, int r, const doub
   }
 }
 
-static void rolling_rows(const ap_bmodel *M, double *S, int ci, double *A, double *a0) {
-  const ap_mcon *c = &M->cons[ci];
-  const double *G = con_scr(M, S, ci);
-  kbody C = ap_kin_body(M, S, c->def.body);
-  kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);
-  double *JP = S + M->off_tmp, x[3], Vg[3];
-  static const double ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0}, ez[3] = {0, 0, 1};
-  ap_kin_point(M, S, c->def.body, J.cb, x, NULL, JP);
-  ground_velocity(c, G, x, Vg);
-  put_row(M, A, a0, c->row, ex, JP, 0, Vg[0]);
-  put_row(M, A, a0, c->row + 1, ey, JP, 0, Vg[1]);
-  if (c->def.no_spin) put_row(M, A, a0, c->row + 2, ez, C.Jw, 0, G[G_OM]);
-}
-
 static void knife_rows(const ap_bmodel *M, double *S, int ci, double *A, double *a0) {
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
   double *JP = S + M->off_tmp, x[3], n[3], Vg[3];
   ap_kin_point(M, S, c->def.body, c->def.point, x, NULL, JP);
   m3_mul_v(C.R, c->dir, n);
-  ground_velocity(c, con_scr(M, S, ci), x, Vg);
+  ap_con_ground_velocity(c, con_scr(M, S, ci), x, Vg);
   put_row(M, A, a0, c->row, n, JP, 0, v3_dot(n, Vg));
 }
 
@@ -260,8 +240,11 @@ int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double
     const ap_mcon *c = &M->cons[ci];
     int rc = AP_OK;
     switch (c->def.kind) {
-      case AP_CON_ROLLING: rolling_rows(M, S, ci, A, a0); break;
-      case AP_CON_KNIFE_EDGE: knife_rows(M, S, ci, A, a0); break;
+      case AP_CON_ROLLING: ap_con_contact_rows(M, S, ci, con_scr(M, S, ci), A, a0); break;
+      case AP_CON_KNIFE_EDGE:
+        if (c->def.wheel) ap_con_contact_rows(M, S, ci, con_scr(M, S, ci), A, a0);
+        else knife_rows(M, S, ci, A, a0);
+        break;
       case AP_CON_PRESCRIBED_SPEED:
         A[c->row + (size_t)c->col * M->b] = 1.0;
         a0[c->row] = -con_scr(M, S, ci)[G_F];
@@ -284,26 +267,7 @@ int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double
 /* ---- gamma --------------------------------------------------------------------------------- */
 
 void ap_con_rolling_gamma(const ap_bmodel *M, double *S, int ci, int surface, double *gamma) {
-  static const double ez[3] = {0, 0, 1};
-  const ap_mcon *c = &M->cons[ci];
-  const double *G = con_scr(M, S, ci);
-  kbody C = ap_kin_body(M, S, c->def.body);
-  kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);
-  double vP[3], a[3], Rcd[3] = {0, 0, 0}, x[3], pd[3], Ag[3];
-  ap_kin_point_motion(M, S, c->def.body, J.rc, vP, a);   /* material point: ao + al x rc + ... */
-  if (surface) {
-    double wxe[3], ud[3], cd[3];
-    v3_cross(C.w, ez, wxe);
-    m3t_mul_v(C.R, wxe, ud);
-    m3_mul_v(J.H, ud, cd);
-    m3_mul_v(C.R, cd, Rcd);
-    v3_cross_add(C.w, Rcd, a);                            /* w x R c_b' */
-  }
-  for (int i = 0; i < 3; i++) x[i] = C.o[i] + J.rc[i], pd[i] = vP[i] + Rcd[i];
-  ground_accel(c, G, x, pd, Ag);
-  gamma[c->row] = -(a[0] - Ag[0]);
-  gamma[c->row + 1] = -(a[1] - Ag[1]);
-  if (c->def.no_spin) gamma[c->row + 2] = -(C.al[2] - G[G_DOM]);
+  ap_con_contact_gamma(M, S, ci, con_scr(M, S, ci), surface, gamma);
 }
 
 static void knife_gamma(const ap_bmodel *M, double *S, int ci, double *gamma) {
@@ -315,8 +279,8 @@ static void knife_gamma(const ap_bmodel *M, double *S, int ci, double *gamma) {
   ap_kin_point_motion(M, S, c->def.body, r, vP, aP);
   m3_mul_v(C.R, c->dir, n);
   v3_cross(C.w, n, wn);
-  ground_velocity(c, G, x, Vg);
-  ground_accel(c, G, x, vP, Ag);
+  ap_con_ground_velocity(c, G, x, Vg);
+  ap_con_ground_accel(c, G, x, vP, Ag);
   for (int i = 0; i < 3; i++) g += wn[i] * (vP[i] - Vg[i]) + n[i] * (aP[i] - Ag[i]);
   gamma[c->row] = -g;
 }
@@ -345,8 +309,11 @@ int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const
     const ap_mcon *c = &M->cons[ci];
     int rc = AP_OK;
     switch (c->def.kind) {
-      case AP_CON_ROLLING: ap_con_rolling_gamma(M, S, ci, 1, gamma); break;
-      case AP_CON_KNIFE_EDGE: knife_gamma(M, S, ci, gamma); break;
+      case AP_CON_ROLLING: ap_con_contact_gamma(M, S, ci, con_scr(M, S, ci), 1, gamma); break;
+      case AP_CON_KNIFE_EDGE:
+        if (c->def.wheel) ap_con_contact_gamma(M, S, ci, con_scr(M, S, ci), 1, gamma);
+        else knife_gamma(M, S, ci, gamma);
+        break;
       case AP_CON_PRESCRIBED_SPEED: gamma[c->row] = con_scr(M, S, ci)[G_FD]; break;
       case AP_CON_USER: rc = user_gamma(m, d, ci, t, q, v, S, gamma); break;
       case AP_CON_COINCIDENT:
@@ -379,10 +346,12 @@ int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, in
     if (ci == skip) continue;
     switch (c->def.kind) {
       case AP_CON_ROLLING:
-        if (ap_bm_in_subtree(M, c->def.body, root)) F[0] += lam[0], F[1] += lam[1];
+        if (ap_bm_in_subtree(M, c->def.body, root)) ap_con_contact_force(M, S, c, lam, F);
         break;
       case AP_CON_KNIFE_EDGE:
-        if (ap_bm_in_subtree(M, c->def.body, root)) {
+        if (c->def.wheel && ap_bm_in_subtree(M, c->def.body, root))
+          ap_con_contact_force(M, S, c, lam, F);
+        else if (ap_bm_in_subtree(M, c->def.body, root)) {
           double n[3];
           m3_mul_v(ap_kin_body(M, S, c->def.body).R, c->dir, n);
           v3_axpy(lam[0], n, F);

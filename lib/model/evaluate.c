@@ -3,8 +3,9 @@
  * Position stage: kinematics at (t, q) -> g, N (quaternion blocks), A, a0.
  * Velocity stage: body velocities and bias accelerations at v -> h, Q, gamma.
  * project_q (after each accepted step): quaternions back to unit norm when they drifted by more
- * than AP_QUAT_TOL, then loop closures phi(q, t) = 0 by Gauss-Newton with minimum-norm steps
- * dv (lstsq on the loop Jacobian) mapped to q through N. Corrections below the tolerances are
+ * than AP_QUAT_TOL, then loop closures and wheel contacts phi(q, t) = 0 (the implicit
+ * holonomic rows) by Gauss-Newton with minimum-norm steps dv (lstsq on their Jacobian) mapped
+ * to q through N. Corrections below the tolerances are
  * not applied, so the stepper restarts only when something really moved.
  * Everything writes into the data's scratch; the model is never modified.
  * Counters (d->cnt, as the core counts a math-level system's callbacks): metric, kinematic
@@ -104,6 +105,17 @@ static double max_abs(const double *x, int n) {
   return mx;
 }
 
+/* The constraint row of the largest |phi| among the implicit holonomic rows. */
+static int hol_row(const ap_bmodel *M, const double *phi) {
+  int worst = 0, s = 0;
+  for (int i = 1; i < M->nloop; i++)
+    if (fabs(phi[i]) > fabs(phi[worst])) worst = i;
+  for (int ci = 0; ci < M->nc; ci++)
+    for (int r = 0; r < M->cons[ci].nhol; r++, s++)
+      if (s == worst) return M->cons[ci].row + M->cons[ci].hrow + r;
+  return 0;
+}
+
 static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
   const ap_bmodel *M = ap_bm(m);
   int k = M->k, nl = M->nloop;
@@ -124,9 +136,9 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
     step_q(M, q, dv);
     for (int c = 0; c < k; c++) *change += fabs(dv[c]);
   }
-  AP_BM_MSG(d, "model '%s': the loop closures cannot be closed at t = %.17g: residual %.3g m "
-            "after %d Gauss-Newton steps (tolerance %.3g m)", m->name, d->t, err, AP_LOOP_ITER,
-            tol);
+  AP_BM_MSG(d, "model '%s': the loop closures and wheel contacts cannot be closed at "
+            "t = %.17g: row '%s' is off by %.3g m after %d Gauss-Newton steps (tolerance %.3g m)",
+            m->name, d->t, m->constraint_names[hol_row(M, phi)], err, AP_LOOP_ITER, tol);
   return AP_ERR_INCONSISTENT;
 }
 
@@ -144,38 +156,59 @@ static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n
   if (turn > 0)
     AP_BM_MSG(d, "model '%s': body '%s': the %s passed through lying flat between t = %.17g "
               "and t = %.17g (its contact point jumped %.0f degrees round the rim): a falling "
-              "%s hits the ground with its face, which the plane-contact joint does not "
+              "%s hits the ground with its face, which a single contact point does not "
               "describe", m->name, B->name, what, t_prev, d->t, turn, what);
   else
     AP_BM_MSG(d, "model '%s': body '%s': the %s reached lying flat at t = %.17g (its axis is "
               "%.3g degrees from the vertical, within 2 flat_tol = %.3g): the contact point is "
-              "undefined and a falling %s hits the ground with its face, which the "
-              "plane-contact joint does not describe", m->name, B->name, what, d->t,
+              "undefined and a falling %s hits the ground with its face, which a single "
+              "contact point does not describe", m->name, B->name, what, d->t,
               asin(fmin(n, 1.0)) * 57.29577951308232, 2 * B->shape.flat_tol, what);
   return AP_ERR_SINGULAR;
 }
 
-static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S, int track) {
+/* One disk or torus with rotation R (body to world) and tracking block trk. */
+static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const double *R,
+                     double *trk, int track) {
+  double ux = -R[2], uy = -R[5], n = hypot(ux, uy);
+  if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
+  if (!(n > 0)) return AP_OK;   /* exactly flat while assembling: the position stage reports it */
+  ux /= n, uy /= n;
+  double c = ux * trk[0] + uy * trk[1];
+  if (track && trk[2] != 0.0 && c < 0.0)
+    return flat_error(m, d, B, n, acos(fmax(-1.0, c)) * 57.29577951308232, trk[3]);
+  trk[0] = ux, trk[1] = uy, trk[2] = track ? 1.0 : 0.0, trk[3] = d->t;
+  return AP_OK;
+}
+
+static int is_wheel_shape(const ap_mbody *B) {
+  return B->shape.kind == AP_SHAPE_DISK || B->shape.kind == AP_SHAPE_TORUS;
+}
+
+/* Plane-contact disks and tori from q; wheel contacts from the kinematics at q, computed here
+ * unless `fresh` says the scratch holds them already. */
+static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S, int track,
+                      int fresh) {
   const ap_bmodel *M = ap_bm(m);
-  for (int j = 0; j < M->nj; j++) {
+  int rc = AP_OK;
+  for (int j = 0; j < M->nj && rc == AP_OK; j++) {
     const ap_mjoint *J = &M->joints[j];
     const ap_mbody *B = &M->bodies[J->child];
-    if (J->kind != AP_JOINT_PLANE_CONTACT ||
-        (B->shape.kind != AP_SHAPE_DISK && B->shape.kind != AP_SHAPE_TORUS))
-      continue;
-    kjoint K = ap_kin_joint(M, S, j);
-    double R[9], ux, uy, n;
+    if (J->kind != AP_JOINT_PLANE_CONTACT || !is_wheel_shape(B)) continue;
+    double R[9];
     ap_quat_normalized_matrix(q + J->qidx[J->quat], R);
-    ux = -R[2], uy = -R[5], n = hypot(ux, uy);
-    if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
-    if (!(n > 0)) continue;   /* exactly flat while assembling: the position stage reports it */
-    ux /= n, uy /= n;
-    double c = ux * K.track[0] + uy * K.track[1];
-    if (track && K.track[2] != 0.0 && c < 0.0)
-      return flat_error(m, d, B, n, acos(fmax(-1.0, c)) * 57.29577951308232, K.track[3]);
-    K.track[0] = ux, K.track[1] = uy, K.track[2] = track ? 1.0 : 0.0, K.track[3] = d->t;
+    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track);
   }
-  return AP_OK;
+  if (rc != AP_OK || !M->nwheel) return rc;
+  if (!fresh) rc = ap_kin_position(m, d, d->t, q, S);
+  for (int ci = 0; ci < M->nc && rc == AP_OK; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    const ap_mbody *B = c->wheel >= 0 ? &M->bodies[c->def.body] : NULL;
+    if (!B || !is_wheel_shape(B)) continue;
+    rc = track_one(m, d, B, ap_kin_body(M, S, c->def.body).R, ap_contact_geom(M, S, c).track,
+                   track);
+  }
+  return rc;
 }
 
 int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *change,
@@ -184,7 +217,7 @@ int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *c
   *change = 0.0;
   int rc = M->nquat ? normalize_quats(m, d, q, change) : AP_OK;
   if (rc == AP_OK && M->nloop) rc = close_loops(m, d, q, S, change);
-  if (rc == AP_OK && M->nquat) rc = track_flat(m, d, q, S, track);
+  if (rc == AP_OK && (M->nquat || M->nwheel)) rc = track_flat(m, d, q, S, track, M->nloop > 0);
   return rc;
 }
 
@@ -193,12 +226,14 @@ int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double 
 }
 
 int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
-  return ap_bm(m)->nquat ? track_flat(m, d, q, S, 1) : AP_OK;
+  const ap_bmodel *M = ap_bm(m);
+  return M->nquat || M->nwheel ? track_flat(m, d, q, S, 1, 0) : AP_OK;
 }
 
 /* ---- implicit holonomic constraints for the DAE mode (GGL) ----------------------------------
  *
- * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c). Their Jacobian with
+ * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c) and the wheel contacts'
+ * rows .z, phi = the contact point's height (contact.c). Their Jacobian with
  * respect to the speeds, Jl = d phi' / d v = Phi_q N, comes from ap_con_loops; it is mapped to
  * q joint by joint: a scalar coordinate has N = 1 against its speed, so its column of Phi_q is
  * Jl's; a quaternion p enters phi only through R(p / |p|), so Phi_q p = 0, and
@@ -327,11 +362,13 @@ int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_sta
   v3_copy(C.vo, out->vel);
   v3_cross_add(C.w, C.rcom, out->vel);
   const ap_mjoint *j = &M->joints[M->bodies[body].joint];
-  if (j->kind == AP_JOINT_PLANE_CONTACT) {
-    kjoint J = ap_kin_joint(M, S, M->bodies[body].joint);
-    out->has_contact = 1;
-    for (int i = 0; i < 3; i++) out->contact[i] = C.o[i] + J.rc[i];
-  }
+  const double *rc = NULL;
+  if (j->kind == AP_JOINT_PLANE_CONTACT) rc = ap_kin_joint(M, S, M->bodies[body].joint).rc;
+  for (int ci = 0; ci < M->nc && !rc; ci++)
+    if (M->cons[ci].wheel >= 0 && M->cons[ci].def.body == body)
+      rc = ap_contact_geom(M, S, &M->cons[ci]).rc;
+  out->has_contact = rc != NULL;
+  for (int i = 0; i < 3 && rc; i++) out->contact[i] = C.o[i] + rc[i];
   return AP_OK;
 }
 
@@ -457,6 +494,26 @@ int ap_bm_in_subtree(const ap_bmodel *M, int body, int root) {
   return 0;
 }
 
+static void finish_force(const ap_mcon *c, const double *lam, ap_contact_force *out) {
+  out->tangential = hypot(out->force[0], out->force[1]);
+  out->friction_ratio = out->normal > 0 ? out->tangential / out->normal : HUGE_VAL;
+  out->spin_torque = c->def.no_spin ? lam[c->row + 2] : 0.0;
+  out->lift_off = out->normal < 0;
+}
+
+/* A wheel contact carries its normal force as the multiplier of its contact row .z. */
+static int wheel_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
+                       ap_contact_force *out) {
+  kwheel W = ap_contact_geom(M, S, c);
+  kbody C = ap_kin_body(M, S, c->def.body);
+  memset(out, 0, sizeof *out);
+  for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + W.rc[i];
+  out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
+  out->force[2] = out->normal = lam[c->row + c->hrow];
+  finish_force(c, lam, out);
+  return AP_OK;
+}
+
 /* The force of the ground on a rolling body (docs/bodies.md "Contact forces"). Tangential: the
  * rolling rows are e_i . vP with vP the material contact point, so A^T lambda = JP^T
  * (lambda_x, lambda_y, 0): the friction force itself. Normal: the plane-contact joint carries
@@ -474,6 +531,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   const ap_mcon *c = &M->cons[constraint];
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
+  if (c->wheel >= 0) return wheel_force(M, S, c, lam, out);
   int root = c->def.body, k = M->k;
   for (int b = 0; b < M->nb; b++) {
     if (!ap_bm_in_subtree(M, b, root)) continue;
@@ -496,9 +554,6 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   out->point[2] = 0.0;
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   out->force[2] = out->normal = ma[2] - Fe[2] - Fc[2];
-  out->tangential = hypot(out->force[0], out->force[1]);
-  out->friction_ratio = out->normal > 0 ? out->tangential / out->normal : HUGE_VAL;
-  out->spin_torque = c->def.no_spin ? lam[c->row + 2] : 0.0;
-  out->lift_off = out->normal < 0;
+  finish_force(c, lam, out);
   return AP_OK;
 }

@@ -35,7 +35,8 @@ void ap_kin_layout(ap_bmodel *M) {
   M->off_body = 0;
   M->off_joint = M->off_body + (size_t)M->nb * M->body_stride;
   M->off_con = M->off_joint + (size_t)M->nj * JOINT_STRIDE;
-  M->off_cnt = M->off_con + (size_t)M->nc * CON_STRIDE;
+  M->off_wheel = M->off_con + (size_t)M->nc * CON_STRIDE;
+  M->off_cnt = M->off_wheel + (size_t)M->nwheel * WHEEL_STRIDE;
   M->off_tmp = M->off_cnt + (size_t)M->ne;
   size_t tmp = 6 * K1 + 2 * k + (size_t)M->max_user_rows * (k + 2) + 16;
   M->off_proj = M->off_tmp + tmp;
@@ -201,7 +202,7 @@ int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, do
     kbody C = ap_kin_body(M, S, b);
     body_mass(M, &M->bodies[b], &C);
   }
-  return AP_OK;
+  return M->nwheel ? ap_contact_position(m, d, t, S) : AP_OK;
 }
 
 /* ---- velocity stage ---------------------------------------------------------------------- */

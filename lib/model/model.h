@@ -9,6 +9,7 @@
  *   bodies       nb blocks of BODY_STRIDE(K1) doubles (kbody below)
  *   joints       nj blocks of JOINT_STRIDE (kjoint below)
  *   constraints  nc blocks of CON_STRIDE: ground motion and prescribed values at t
+ *   wheels       nwheel blocks of WHEEL_STRIDE: contact geometry of the wheel contacts (kwheel)
  *   counters     ne effect evaluation counts (stored as doubles)
  *   tmp          scratch for constraint and effect assembly
  *   proj         loop-closure projection: Jacobian, residual, step, lstsq work
@@ -69,7 +70,12 @@ typedef struct ap_mcon {
   double n1[3], n2[3];        /* point on line: unit normals of the line (body2 axes) */
   int col;                    /* prescribed speed: global speed index */
   int timed;                  /* needs time functions evaluated (ground motion, speed fn) */
-  int loop;                   /* a loop closure (holonomic) */
+  int nhol, hrow;             /* implicit holonomic rows: rows hrow..hrow+nhol-1 of the
+                                 constraint (loop closures: all; wheel contacts: the last) */
+  int wheel;                  /* contact at the shape's lowest point (rolling, knife edge with
+                                 def.wheel): index of its geometry block when the body is not on
+                                 a plane-contact joint, -1 when the joint carries the geometry;
+                                 -2 for every other constraint */
 } ap_mcon;
 
 typedef struct ap_meff {
@@ -85,7 +91,8 @@ typedef struct ap_bmodel {
   int *joint_topo;            /* user joint id -> index in joints */
   ap_mcon *cons;
   ap_meff *effs;
-  int nloop;                  /* loop-closure rows */
+  int nloop;                  /* implicit holonomic rows: loop closures and wheel contacts */
+  int nwheel;                 /* wheel contacts with their own geometry block */
   int nquat;                  /* joints with a quaternion */
   int has_drive;
   int ncol;                   /* Jacobian columns evaluated: K1 with drives; k without (the
@@ -93,12 +100,13 @@ typedef struct ap_bmodel {
   int rheonomic;              /* drives or timed constraints: time-dependent terms exist */
   double lscale;              /* length scale for the loop tolerance (m) */
   int max_user_rows;
-  size_t off_body, off_joint, off_con, off_cnt, off_tmp, off_proj, scratch;
+  size_t off_body, off_joint, off_con, off_wheel, off_cnt, off_tmp, off_proj, scratch;
   size_t body_stride, proj_work, proj_iwork;
 } ap_bmodel;
 
 #define JOINT_STRIDE 72
 #define CON_STRIDE 8
+#define WHEEL_STRIDE 24
 
 /* ---- views into the scratch ------------------------------------------------------------- */
 
@@ -120,6 +128,14 @@ typedef struct kjoint {
   double *track;              /* disk, torus: in-plane direction of u at the last accepted
                                  step (2), whether it is set (1), its time (1) (project_q) */
 } kjoint;
+
+/* Contact geometry of a rolling or wheel knife-edge constraint (contact.c): the joint's block
+ * for a body on a plane-contact joint, the wheel block otherwise. */
+typedef struct kwheel {
+  double *u, *cb, *H, *rc;    /* u = -R^T e_z (body), contact point c_b = grad sigma(u) (body),
+                                 Hessian of sigma (body), contact vector R c_b (world) */
+  double *track;              /* disk, torus: as kjoint.track (wheel blocks only) */
+} kwheel;
 
 static inline const ap_bmodel *ap_bm(const ap_model *m) { return (const ap_bmodel *)m->ev.impl; }
 static inline double *ap_bm_scratch(const ap_data *d) {
@@ -203,7 +219,8 @@ const char *ap_joint_kind_name(ap_joint_kind kind);
 /* ---- kinematics (kinematics.c) ---------------------------------------------------------- */
 
 /* Position stage of the bodies at (t, q): drives, transforms, Jacobians, world inertias, plane
- * contacts. Writes d->msg on failure (drive callback, disk lying flat). */
+ * contacts, then the wheel contacts' support points (contact.c). Writes d->msg on failure
+ * (drive callback, disk lying flat). */
 int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, double *S);
 /* Velocity stage: full body velocities and bias accelerations for speeds v. */
 void ap_kin_velocity(const ap_bmodel *M, const double *v, double *S);
@@ -233,13 +250,38 @@ int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double
 /* gamma (b) after ap_kin_velocity. */
 int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
                  double *S, double *gamma);
-/* Rolling gamma with or without the term of the contact point moving over the body surface
- * (surface = 0 is the classic mistake; tests use it to show the finite-difference check
- * catches it). Writes the constraint's rows of gamma. */
+/* Rolling (or wheel knife-edge) gamma with or without the term of the contact point moving
+ * over the body surface (surface = 0 is the classic mistake; tests use it to show the
+ * finite-difference check catches it). Writes the constraint's rows of gamma. */
 void ap_con_rolling_gamma(const ap_bmodel *M, double *S, int con, int surface, double *gamma);
-/* Loop closures: residuals phi (nloop) and their Jacobian transposed, JlT (k x nloop, ld k):
- * JlT[c + k s] = d phi_s / d v_c. */
+/* Implicit holonomic rows (loop closures, wheel contact rows): residuals phi (nloop) and their
+ * Jacobian transposed, JlT (k x nloop, ld k): JlT[c + k s] = d phi_s / d v_c. */
 void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT);
+/* Ground surface velocity Vg at the world point x and its rate Ag along x' = xd, from the
+ * constraint's time scratch G (zero for a fixed ground). */
+enum { AP_G_OM = 0, AP_G_DOM = 1 };   /* Omega, Omega' in the constraint's time scratch */
+void ap_con_ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg);
+void ap_con_ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
+                         double *Ag);
+
+/* ---- contacts (contact.c) --------------------------------------------------------------- */
+
+/* The contact geometry of a rolling or wheel knife-edge constraint. */
+kwheel ap_contact_geom(const ap_bmodel *M, double *S, const ap_mcon *c);
+/* Support points of the wheel contacts (after the bodies' position stage); AP_RECOVERABLE with
+ * a message naming the body when a disk or torus lies flat. */
+int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S);
+/* The contact row .z: returns the height phi of the contact point, row = its K1 coefficients. */
+double ap_contact_hol_row(const ap_bmodel *M, double *S, const ap_mcon *c, double *row);
+/* Rows of A, a0 and gamma of a rolling or wheel knife-edge constraint (G: its time scratch);
+ * surface = 0 drops the term of the contact point moving over the body surface (tests). */
+void ap_con_contact_rows(const ap_bmodel *M, double *S, int ci, const double *G, double *A,
+                         double *a0);
+void ap_con_contact_gamma(const ap_bmodel *M, double *S, int ci, const double *G, int surface,
+                          double *gamma);
+/* F += the force (world) of the constraint's rows with multipliers lam on its body. */
+void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
+                          double *F);
 
 /* ---- effects (effect.c) ----------------------------------------------------------------- */
 

@@ -33,7 +33,7 @@ static const sc_node *blame(const sc_scene *s, const char *msg) {
 
 /* A builder call failed with rc: its message at node at (out of memory as such). */
 static int builder_err(sc_ctx *c, const sc_node *at, ap_builder *b, int rc) {
-  if (rc == AP_ERR_NOMEM) return sc_nomem(c, at);
+  if (rc == AP_ERR_NOMEM) return sc_nomem(c);
   return sc_err(c, at, "%s", ap_builder_message(b));
 }
 
@@ -65,11 +65,11 @@ static int add_rest(sc_ctx *c, sc_scene *s, ap_builder *b) {
 int sc_build(sc_ctx *c, sc_scene *s, ap_model **out) {
   ap_builder *b = NULL;
   *out = NULL;
-  if (ap_builder_create(s->name, &b) != AP_OK) return sc_nomem(c, s->root);
+  if (ap_builder_create(s->name, &b) != AP_OK) return sc_nomem(c);
   int rc = add_bodies(c, s, b);
   if (rc == AP_OK) rc = add_rest(c, s, b);
   int crc = rc == AP_OK ? ap_builder_compile(b, out) : AP_OK;
-  if (crc == AP_ERR_NOMEM) rc = sc_nomem(c, s->root);
+  if (crc == AP_ERR_NOMEM) rc = sc_nomem(c);
   else if (crc != AP_OK) {
     const char *msg = ap_builder_message(b);
     rc = sc_err(c, blame(s, msg ? msg : ""), "%s", msg && msg[0] ? msg : "the model does not "

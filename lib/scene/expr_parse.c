@@ -50,6 +50,11 @@ typedef struct parser {
 
 /* ---- messages ---------------------------------------------------------------------------- */
 
+static int vset(sc_prog_err *e, int status, size_t at, const char *fmt, va_list ap)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 0)))
+#endif
+    ;
 static int vset(sc_prog_err *e, int status, size_t at, const char *fmt, va_list ap) {
   if (e->status != AP_OK) return -1;
   vsnprintf(e->msg, sizeof e->msg, fmt, ap);

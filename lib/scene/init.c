@@ -14,6 +14,7 @@
  * project v onto A v + a0 = 0 in the metric g (ap_project_speeds). Every correction is
  * reported; a state with no consistent speeds is refused. */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -134,9 +135,20 @@ static void place_joint(const ap_model *m, const sc_joint *j, int id, double *q,
 
 /* ---- steps 2 and 3: make it consistent ------------------------------------------------------ */
 
-static void append(char *buf, size_t len, const char *fmt, const char *a, double x, double y) {
+/* printf at the end of the report buffer (truncated when it is full). */
+static void append(char *buf, size_t len, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static void append(char *buf, size_t len, const char *fmt, ...) {
   size_t used = strlen(buf);
-  if (used + 1 < len) snprintf(buf + used, len - used, fmt, a, x, y);
+  if (used + 1 >= len) return;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(buf + used, len - used, fmt, ap);
+  va_end(ap);
 }
 
 /* Is word in text as a whole name (row names add ".x" and the like)? */
@@ -173,7 +185,7 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
                              double *v, const int *given, char *rep, size_t rlen) {
   int k = ap_model_k(m);
   double *v_in = malloc(sizeof(double) * (size_t)k), change = 0.0;
-  if (!v_in) return sc_nomem(c, s->root);
+  if (!v_in) return sc_nomem(c);
   memcpy(v_in, v, sizeof(double) * (size_t)k);
   int rc = ap_body_complete_speeds(m, d, d->q, given, v);
   if (rc == AP_ERR_INCONSISTENT) {
@@ -182,17 +194,16 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
     double resid = rc == AP_OK ? ap_constraint_residual(d, v) : 0.0;
     if (rc == AP_OK) rc = ap_project_speeds(m, d, v, &change);
     if (rc == AP_OK) {
-      append(rep, rlen, "%sthe given speeds violate the constraints (max |A v + a0| = %.3g); "
-             "projected onto them (change %.3g in the metric g):", "", resid, change);
+      append(rep, rlen, "the given speeds violate the constraints (max |A v + a0| = %.3g); "
+             "projected onto them (change %.3g in the metric g):", resid, change);
       for (int i = 0; i < k; i++)
         if (fabs(v[i] - v_in[i]) > 1e-12 * (1.0 + fabs(v_in[i])))
-          append(rep, rlen, " %s %.6g ->", ap_model_speed_name(m, i), v_in[i], 0.0),
-          append(rep, rlen, "%s %.6g", "", v[i], 0.0);
-      append(rep, rlen, "%s\n", "", 0.0, 0.0);
+          append(rep, rlen, " %s %.6g -> %.6g", ap_model_speed_name(m, i), v_in[i], v[i]);
+      append(rep, rlen, "\n");
     }
   }
   free(v_in);
-  if (rc == AP_ERR_NOMEM) return sc_nomem(c, s->root);
+  if (rc == AP_ERR_NOMEM) return sc_nomem(c);
   if (rc != AP_OK) return refuse(c, s, d, "no speeds satisfy the constraints");
   if ((rc = ap_fwd_position(m, d)) != AP_OK)
     return refuse(c, s, d, "the model cannot be evaluated there");
@@ -215,8 +226,8 @@ static int consistent_state(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_
   int rc = ap_body_project_q(m, d, q, &change);
   if (rc != AP_OK) return refuse(c, s, d, "the coordinates cannot be put on their manifold");
   if (change > 1e-12)
-    append(rep, rlen, "%scoordinates corrected by %.3g (unit quaternions, loop closures)%s\n",
-           "", change, 0.0);
+    append(rep, rlen, "coordinates corrected by %.3g (unit quaternions, loop closures)\n",
+           change);
   memcpy(d->q, q, sizeof(double) * (size_t)n);
   d->basis = AP_BASIS_ORTHONORMAL;
   if ((rc = ap_partition(m, d)) == AP_ERR_INCONSISTENT)
@@ -234,7 +245,7 @@ int sc_initial_state(sc_ctx *c, const sc_scene *s, const ap_model *m, double *q0
   ap_data *d = NULL;
   if (!given || ap_data_create(m, &d) != AP_OK) {
     free(given);
-    return sc_nomem(c, s->root);
+    return sc_nomem(c);
   }
   memset(q0, 0, sizeof(double) * (size_t)n);
   memset(v0, 0, sizeof(double) * (size_t)k);

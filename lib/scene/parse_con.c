@@ -19,7 +19,7 @@ static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_spe
                                         "coincident", "point_on_line", "point_on_plane", NULL};
 static const char *const con_keys[][8] = {
     {"kind", "body", "no_spin", "ground", NULL},
-    {"kind", "body", "point", "direction", "ground", NULL},
+    {"kind", "body", "point", "direction", "wheel", "ground", NULL},
     {"kind", "joint", "speed", "value", NULL},
     {"kind", NULL},
     {"kind", "body", "point", "body2", "point2", "axes", NULL},
@@ -48,14 +48,14 @@ int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g) {
   if (sc_map_get(n, "center") && kind != AP_GROUND_TURNTABLE)
     return sc_err(c, sc_map_get(n, "center"), "center belongs to a turntable ground");
   if (om) {
-    if (sc_expr_read(c, om, &g->omega)) return AP_ERR_ARG;
+    if (sc_expr_node(c, om, &g->omega)) return AP_ERR_ARG;
     g->def.omega = g->omega.value;
   }
   if (!ve) return AP_OK;
   if (ve->kind != SC_SEQ || ve->n != 2)
     return sc_err(c, ve, "expected [vx, vy]: two numbers or expressions of t");
   for (int i = 0; i < 2; i++)
-    if (sc_expr_read(c, ve->kids[i], &g->vel[i])) return AP_ERR_ARG;
+    if (sc_expr_node(c, ve->kids[i], &g->vel[i])) return AP_ERR_ARG;
   g->def.velocity[0] = g->vel[0].value, g->def.velocity[1] = g->vel[1].value;
   return AP_OK;
 }
@@ -102,9 +102,29 @@ static int parse_speed_ref(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) 
   k->def.joint = j, k->def.speed = i;
   const sc_node *v = sc_map_get(n, "value");
   if (!v) return sc_err(c, n, "a prescribed_speed constraint needs value (a number or f(t))");
-  if (sc_expr_read(c, v, &k->value)) return AP_ERR_ARG;
+  if (sc_expr_node(c, v, &k->value)) return AP_ERR_ARG;
   k->def.speed_value = k->value.value;
   if (k->value.timed) k->def.speed_fn = sc_expr_time_fn, k->def.user = &k->value;
+  return AP_OK;
+}
+
+/* A knife edge is a wheel's (at the contact point of a disk or torus, across the wheel plane)
+ * when `wheel: true`, or when the body is a disk or torus and neither point nor direction is
+ * given; otherwise it is the body point's (docs/scenes.md "constraints"). */
+static int parse_knife_wheel(sc_ctx *c, sc_scene *s, const sc_node *n, ap_constraint_def *d) {
+  const sc_node *w = sc_map_get(n, "wheel");
+  ap_shape_kind sk = s->bodies[d->body].def.shape.kind;
+  int disk = sk == AP_SHAPE_DISK || sk == AP_SHAPE_TORUS;
+  int pt = sc_map_get(n, "point") || sc_map_get(n, "direction");
+  d->wheel = disk && !pt;
+  if (!w) return AP_OK;
+  if (sc_get_bool(c, n, "wheel", &d->wheel)) return AP_ERR_ARG;
+  if (d->wheel && pt)
+    return sc_err(c, w, "a wheel knife edge acts at the contact point across the wheel plane: "
+                  "drop point and direction, or set wheel: false");
+  if (d->wheel && !disk)
+    return sc_err(c, w, "a wheel knife edge needs a body shaped as a disk or torus; '%s' is "
+                  "not", s->bodies[d->body].name);
   return AP_OK;
 }
 
@@ -120,14 +140,7 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   if (sc_map_get(n, "direction") && !(fabs(d->direction[0]) + fabs(d->direction[1]) +
                                           fabs(d->direction[2]) > 0))
     return sc_err(c, sc_map_get(n, "direction"), "the direction must not be zero");
-  if (d->kind == AP_CON_ROLLING) {
-    int j = 0;
-    while (j < s->nj && s->joints[j].def.child != d->body) j++;
-    if (j < s->nj && s->joints[j].def.kind != AP_JOINT_PLANE_CONTACT)
-      return sc_err(c, sc_map_get(n, "body"), "rolling needs a body on a plane_contact joint; "
-                    "'%s' is on the %s joint '%s'", s->bodies[d->body].name,
-                    sc_joint_kind_name(s->joints[j].def.kind), s->joints[j].name);
-  }
+  if (d->kind == AP_CON_KNIFE_EDGE && parse_knife_wheel(c, s, n, d)) return AP_ERR_ARG;
   const sc_node *g = sc_map_get(n, "ground");
   if (d->kind != AP_CON_ROLLING && d->kind != AP_CON_KNIFE_EDGE) return AP_OK;
   k->ground = s->ground;
@@ -177,7 +190,7 @@ static int parse_wrench(sc_ctx *c, const sc_node *n, const char *key, sc_expr *e
   if (v->kind != SC_SEQ || v->n != 3)
     return sc_err(c, v, "expected three numbers or expressions of t, e.g. [0, 0, \"sin(t)\"]");
   for (int i = 0; i < 3; i++) {
-    if (sc_expr_read(c, v->kids[i], &e[i])) return AP_ERR_ARG;
+    if (sc_expr_node(c, v->kids[i], &e[i])) return AP_ERR_ARG;
     out[i] = e[i].value;
     *timed |= e[i].timed;
   }
@@ -247,7 +260,7 @@ int sc_parse_con_eff(sc_ctx *c, sc_scene *s) {
   if ((cn && sc_expect(c, cn, SC_MAP)) || (en && sc_expect(c, en, SC_MAP))) return AP_ERR_ARG;
   s->cons = calloc(cn ? (size_t)cn->n + 1 : 1, sizeof *s->cons);
   s->effs = calloc(en ? (size_t)en->n + 1 : 1, sizeof *s->effs);
-  if (!s->cons || !s->effs) return sc_nomem(c, s->root);
+  if (!s->cons || !s->effs) return sc_nomem(c);
   /* Counts grow before each element is read so that sc_scene_clear frees a half-read one. */
   for (int i = 0; cn && i < cn->n; i++)
     if (s->nc++, parse_con(c, s, cn->keys[i], cn->kids[i], &s->cons[i])) return AP_ERR_ARG;

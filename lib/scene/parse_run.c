@@ -203,11 +203,13 @@ static int parse_sim(sc_ctx *c, sc_scene *s) {
       sc_check_positive(c, n, "max_steps", (double)r->sim.max_steps))
     return AP_ERR_ARG;
   if (r->sim.switch_growth < 1)
-    return sc_err(c, sc_map_get(n, "switch_growth"), "switch_growth must be >= 1 (got %g)",
+    return sc_err(c, sc_map_get(n, "switch_growth"), "must be >= 1 (got %g)",
                   r->sim.switch_growth);
+  if (!(r->t_end > r->t0) && sc_map_get(n, "t_end"))
+    return sc_err(c, sc_map_get(n, "t_end"), "must be after t0 (got %g, t0 = %g)", r->t_end,
+                  r->t0);
   if (!(r->t_end > r->t0))
-    return sc_err(c, sc_map_get(n, "t_end") ? sc_map_get(n, "t_end") : n, "t_end (%g) must be "
-                  "after t0 (%g)", r->t_end, r->t0);
+    return sc_err(c, n, "t_end (%g by default) must be after t0 (%g)", r->t_end, r->t0);
   return AP_OK;
 }
 

@@ -42,12 +42,6 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   return AP_ERR_ARG;
 }
 
-int sc_nomem(sc_ctx *c, const sc_node *at) {
-  if (c->status != AP_OK) return c->status;
-  sc_err(c, at, "out of memory");
-  return c->status = AP_ERR_NOMEM;
-}
-
 /* Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
  * neighbouring letters each cost 1. */
 static int edit_distance(const char *a, const char *b) {
@@ -113,22 +107,41 @@ int sc_check_keys(sc_ctx *c, const sc_node *map, const char *const *keys) {
   return rc;
 }
 
+/* YAML's names of infinity and not-a-number (.inf, -.Inf, .NaN, ...) are not numbers here: a
+ * located message instead of the expression parser's "unexpected '.'". */
+static int special_float(sc_ctx *c, const sc_node *n) {
+  const char *s = n->text + (n->text[0] == '+' || n->text[0] == '-');
+  int inf = strcasecmp(s, ".inf") == 0, nan = strcasecmp(s, ".nan") == 0;
+  if (!inf && !nan) return AP_OK;
+  return sc_err(c, n, "expected a finite number, got '%s' (YAML's %s)", n->text,
+                inf ? "infinity" : "not-a-number");
+}
+
 /* A number, or an expression of constants (pi, deg, ...) when the text is not one. */
 int sc_number(sc_ctx *c, const sc_node *n, double *out) {
-  if (sc_expect(c, n, SC_SCALAR) != AP_OK) return AP_ERR_ARG;
+  if (sc_expect(c, n, SC_SCALAR) != AP_OK || special_float(c, n) != AP_OK) return AP_ERR_ARG;
   const char *s = n->text;
   char *end = NULL;
   double x = strtod(s, &end);
   while (end && end != s && isspace((unsigned char)*end)) end++;
-  if (end == s || *end != '\0' || n->quoted) {
+  int number = end != s && *end == '\0' && !n->quoted;
+  if (!number) {
     sc_expr e;
     if (sc_expr_compile(c, n, s, 0, &e) != AP_OK) return AP_ERR_ARG;
     x = e.value;
     sc_expr_free(&e);
   }
+  if (number && isinf(x) && !strpbrk(s, "iI"))
+    return sc_err(c, n, "expected a finite number, got '%s' (beyond the range of a double)", s);
   if (!isfinite(x)) return sc_err(c, n, "expected a finite number, got '%s'", s);
   *out = x;
   return AP_OK;
+}
+
+int sc_expr_node(sc_ctx *c, const sc_node *n, sc_expr *e) {
+  memset(e, 0, sizeof *e);
+  if (sc_expect(c, n, SC_SCALAR) != AP_OK || special_float(c, n) != AP_OK) return AP_ERR_ARG;
+  return sc_expr_read(c, n, e);
 }
 
 int sc_get_number(sc_ctx *c, const sc_node *map, const char *key, double *out) {
@@ -196,17 +209,19 @@ int sc_get_enum(sc_ctx *c, const sc_node *map, const char *key, const char *cons
   return sc_err(c, sc_map_get(map, key), "unknown %s '%s' (one of: %s)", key, w, all);
 }
 
-static const sc_node *key_or_map(const sc_node *map, const char *key) {
+/* A range error at the key's value ("must be ...", the path names the key) or, when the key
+ * is absent and its default is out of range, at the map ("radius must be ..."). */
+static int range_err(sc_ctx *c, const sc_node *map, const char *key, const char *what,
+                     double x) {
   const sc_node *n = sc_map_get(map, key);
-  return n ? n : map;
+  if (n) return sc_err(c, n, "must %s (got %g)", what, x);
+  return sc_err(c, map, "%s must %s (it is not given and defaults to %g)", key, what, x);
 }
 
 int sc_check_positive(sc_ctx *c, const sc_node *map, const char *key, double x) {
-  if (x > 0) return AP_OK;
-  return sc_err(c, key_or_map(map, key), "%s must be positive (got %g)", key, x);
+  return x > 0 ? AP_OK : range_err(c, map, key, "be positive", x);
 }
 
 int sc_check_nonneg(sc_ctx *c, const sc_node *map, const char *key, double x) {
-  if (x >= 0) return AP_OK;
-  return sc_err(c, key_or_map(map, key), "%s must not be negative (got %g)", key, x);
+  return x >= 0 ? AP_OK : range_err(c, map, key, "not be negative", x);
 }

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "scene/scene_int.h"
 
@@ -71,7 +72,7 @@ static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
-    return sc_nomem(c, sc->s.root);
+    return sc_nomem(c);
   return AP_OK;
 }
 
@@ -113,6 +114,27 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
   return AP_OK;
 }
 
+/* Read all of f (at most SC_MAX_FILE bytes; hint: the size when known). 0, or an errno value,
+ * or EFBIG when the file is larger. */
+static int read_all(FILE *f, size_t hint, char **out, size_t *len) {
+  size_t cap = hint + 1 > (size_t)SC_MAX_FILE + 1 ? (size_t)SC_MAX_FILE + 1 : hint + 1, n = 0;
+  char *buf = NULL;
+  for (;;) {
+    if (n == cap || !buf) {
+      if (buf) cap = cap > (size_t)SC_MAX_FILE / 2 ? (size_t)SC_MAX_FILE + 1 : 2 * cap;
+      char *b = realloc(buf, cap);
+      if (!b) return free(buf), ENOMEM;
+      buf = b;
+    }
+    n += fread(buf + n, 1, cap - n, f);
+    if (ferror(f)) return free(buf), errno ? errno : EIO;
+    if (n > (size_t)SC_MAX_FILE) return free(buf), EFBIG;
+    if (feof(f)) break;
+  }
+  *out = buf, *len = n;
+  return 0;
+}
+
 int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
                   char *msg, size_t msg_len) {
   if (out) *out = NULL;
@@ -122,15 +144,17 @@ int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene
                                  strerror(errno));
     return AP_ERR_ARG;
   }
-  char *buf = malloc((size_t)SC_MAX_FILE + 1);
-  size_t len = buf ? fread(buf, 1, (size_t)SC_MAX_FILE + 1, f) : 0;
-  int bad = !buf || ferror(f) || len > (size_t)SC_MAX_FILE;
+  struct stat st;
+  int dir = fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode);
+  size_t hint = !dir && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536, len = 0;
+  char *buf = NULL;
+  int err = dir ? EISDIR : read_all(f, hint, &buf, &len);
   fclose(f);
-  if (bad) {
-    if (msg && msg_len) snprintf(msg, msg_len, "%s: %s", path, !buf ? "out of memory" :
-                                 len > (size_t)SC_MAX_FILE ? "larger than 16 MiB" : "read error");
-    free(buf);
-    return buf ? AP_ERR_ARG : AP_ERR_NOMEM;
+  if (err) {
+    if (msg && msg_len)
+      snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
+               : err == EFBIG ? "larger than 16 MiB: not a scene file" : strerror(err));
+    return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
   }
   int rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
   free(buf);

@@ -2,7 +2,8 @@
  * parsed scene.
  *
  * Layout of the layer (docs/scenes.md is the user's reference):
- *   tree.c    libyaml document -> sc_node tree with line:column of every node; --set overrides
+ *   tree.c    libyaml events -> sc_node tree with line:column of every node, within limits
+ *   tree_set.c  --set overrides: edit the tree by key path before it is read
  *   read.c    typed getters on the tree, unknown-key checks ("did you mean"), messages
  *   expr.c    scene expressions: constants and functions of t, located messages
  *   expr_parse.c expr_eval.c expr_fn.c  the evaluator (expr.h): text -> program -> jets
@@ -42,9 +43,12 @@ typedef struct sc_node {
   struct sc_node **kids;   /* map values or sequence items (n) */
 } sc_node;
 
-/* Limits that keep hostile input (alias bombs, deep nesting) cheap. */
+/* Limits that keep hostile input (alias bombs, long keys above wide aliases, deep nesting)
+ * cheap: a tree, counted as it is read with aliases expanded, has at most SC_MAX_NODES nodes,
+ * SC_MAX_BYTES bytes (nodes, key paths, texts) and SC_MAX_DEPTH levels (docs/scenes.md). */
 #define SC_MAX_DEPTH 64
-#define SC_MAX_NODES 200000
+#define SC_MAX_NODES 1000000
+#define SC_MAX_BYTES (64L << 20)
 
 /* The reader context: the file name and the first error. */
 typedef struct sc_ctx {
@@ -55,11 +59,25 @@ typedef struct sc_ctx {
 
 /* Parse YAML text into a tree. Returns NULL with ctx->msg set on failure. */
 sc_node *sc_tree_load(sc_ctx *c, const char *text, size_t len);
+/* The same, adding to *compares the string comparisons made by the duplicate-key and anchor
+ * lookups (tests check that they grow linearly with the input). */
+sc_node *sc_tree_load_counted(sc_ctx *c, const char *text, size_t len, long *compares);
+/* Parse a --set value (a YAML flow sequence or mapping) into a tree whose root has path and
+ * whose nodes carry origin and line 0. NULL with ctx->msg set on failure. */
+sc_node *sc_tree_parse_value(sc_ctx *c, const char *text, const char *path, const char *origin);
 void sc_tree_free(sc_node *root);
-/* Apply "dotted.path=value" to the tree (creates missing map keys). */
+/* Apply "dotted.path=value" to the tree (tree_set.c has the rules). */
 int sc_tree_set(sc_ctx *c, sc_node *root, const char *assignment);
 /* Child of a map by key, or NULL. */
 sc_node *sc_map_get(const sc_node *map, const char *key);
+/* Node helpers shared by tree.c and tree_set.c. sc_node_new takes path (frees it on failure,
+ * returns NULL when path is NULL); sc_node_push appends a child (and its key for maps). */
+sc_node *sc_node_new(sc_kind kind, int line, int col, char *path);
+int sc_node_push(sc_node *n, sc_node *key, sc_node *kid);
+char *sc_strdup_len(const char *s, size_t len);
+char *sc_child_path(const char *parent, const char *key, int index);   /* key or [index] */
+/* Record "FILE: out of memory" (unless an error is recorded already); returns the status. */
+int sc_nomem(sc_ctx *c);
 
 /* ---- reading (read.c) ----------------------------------------------------------------- */
 
@@ -69,8 +87,6 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
-/* Record "out of memory" at a node (as sc_err). Returns AP_ERR_NOMEM. */
-int sc_nomem(sc_ctx *c, const sc_node *at);
 /* Every key of map must be in keys (NULL-terminated); otherwise an error naming the closest
  * allowed key. A non-map node is an error too ("expected a mapping"). */
 int sc_check_keys(sc_ctx *c, const sc_node *map, const char *const *keys);
@@ -113,6 +129,9 @@ int sc_expr_compile_sym(sc_ctx *c, const sc_node *at, const char *text, const sc
                         sc_expr *e);
 /* Read a number or expression of t from a node. */
 int sc_expr_read(sc_ctx *c, const sc_node *n, sc_expr *e);
+/* sc_expr_read after the checks of read.c (a scalar, not YAML's .inf or .nan): what the
+ * parsers call for a function of t. */
+int sc_expr_node(sc_ctx *c, const sc_node *n, sc_expr *e);
 void sc_expr_free(sc_expr *e);
 /* f[0..2] at t: value and the two time derivatives (constants: value, 0, 0). Returns 0, or
  * -1 when one is not finite (or the expression needs variables). */
