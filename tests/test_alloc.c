@@ -10,7 +10,8 @@
  *   minimal, projected, plain, dae: ap_sim_create in that mode (dopri5: ARKODE; DAE: IDA),
  *              ap_sim_advance over 0.2 s with an output row every 0.05 s, ap_sim_free, on a
  *              scene loaded before the phase
- *   bdf        the same in minimal mode with CVODE's BDF
+ *   bdf        the same in minimal mode with CVODE's BDF, over 4 ms (its difference-quotient
+ *              Jacobian allocates at every evaluation)
  * A phase's allocations are counted once (N); then for i = 1 .. N a child process (fork)
  * runs the phase with allocation i failing and reports how it ended:
  *   nomem   a call returned AP_ERR_NOMEM with a message (the required outcome)
@@ -20,9 +21,9 @@
  *   exit    the process exited by itself (a library calling exit)
  * The test fails on any "other", "exit", "nomem" without a message, and on any crash whose
  * innermost frames are not inside SUNDIALS (crashes inside SUNDIALS 6.4.1 are reported with
- * their stacks and tolerated: docs/design.md "Allocation failures"). Under the
- * sanitizers leaks on the error paths are reported too (a child that ends through exit()
- * runs LeakSanitizer: counted as a crash outside SUNDIALS). */
+ * their stacks and tolerated: docs/design.md "Allocation failures"). Under the sanitizers a
+ * child ends through exit(), so LeakSanitizer checks each error path: a leak of a block that
+ * libyaml or SUNDIALS allocated for itself is tolerated and counted, any other fails. */
 #define _GNU_SOURCE
 #include <execinfo.h>
 #include <signal.h>
