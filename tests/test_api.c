@@ -43,6 +43,10 @@ static ap_data *BD, *TD, *SD;    /* their data; TD is the wrong data for BM and 
 static ap_sim *S;                /* the disk, minimal mode */
 static ap_scene *SC;             /* a sleigh scene (n = k = 3: S is not its simulation) */
 static ap_builder *B;            /* one body, nothing else */
+static ap_scene_out *O;          /* a run's outputs of SC */
+static ap_plan *PL;              /* one grid: bodies.sleigh.mass = 1, 1.5, 2 */
+static ap_batch *BT;             /* a batch of SC's text */
+static ap_lin *LN;               /* a linearizer of the heavy top (not linearized) */
 static char SCENE_PATH[4096];
 static const char SCENE[] =
     "name: api\n"
@@ -62,6 +66,15 @@ static ap_sim *os;
 static ap_scene *osc;
 static ap_builder *ob;
 static ap_method_info mi;
+static ap_batch *obt;
+static ap_lin *oln;
+static ap_lin_eig eg;
+static ap_lin_sweep sw;
+static ap_scene_out *oo;
+static ap_scene_lin sl;
+static int stat_[4];
+static char *msgs[4];
+static const double sweep_p[3] = {0.0, 1.0, 2.0};
 static ap_body_state bst;
 static ap_contact_force cf;
 static ap_crosscheck_report rep;
@@ -598,6 +611,176 @@ static void cases_scene(void) {
   CASE(ap_scene_name, "NULL", ap_scene_name(NULL) == NULL);
 }
 
+static int eig_fn(double p_, int n, double *re, double *im, void *user) {
+  (void)user;
+  for (int i = 0; i < n; i++) re[i] = p_ - 1.0 - i, im[i] = 0.0;
+  return 0;
+}
+
+static void cases_scene_runs(void) {
+  CASE(ap_scene_out_create, "s NULL", ap_scene_out_create(NULL, &oo) == AP_ERR_ARG && !oo);
+  CASE(ap_scene_out_create, "out NULL", ap_scene_out_create(SC, NULL) == AP_ERR_ARG);
+  CASE(ap_scene_out_row, "o NULL", ap_scene_out_row(NULL, S, row) == AP_ERR_ARG);
+  CASE(ap_scene_out_row, "sim NULL", ap_scene_out_row(O, NULL, row) == AP_ERR_ARG);
+  CASE(ap_scene_out_row, "row NULL", ap_scene_out_row(O, S, NULL) == AP_ERR_ARG);
+  CASE(ap_scene_out_row, "sim of another model", ap_scene_out_row(O, S, row) == AP_ERR_ARG);
+  CASE(ap_scene_out_energy, "o NULL", ap_scene_out_energy(NULL, 0, q, v, &E) == AP_ERR_ARG);
+  CASE(ap_scene_out_energy, "q NULL", ap_scene_out_energy(O, 0, NULL, v, &E) == AP_ERR_ARG);
+  CASE(ap_scene_out_energy, "v NULL", ap_scene_out_energy(O, 0, q, NULL, &E) == AP_ERR_ARG);
+  CASE(ap_scene_out_energy, "E NULL", ap_scene_out_energy(O, 0, q, v, NULL) == AP_ERR_ARG);
+  CASE(ap_scene_out_free, "NULL", (ap_scene_out_free(NULL), 1));
+  CASE(ap_scene_constant, "text NULL", ap_scene_constant(NULL, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_constant, "x NULL", ap_scene_constant("2", NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_constant, "not an expression",
+       ap_scene_constant("1 +", &E, msg, sizeof msg) == AP_ERR_ARG && msg[0]);
+  CASE(ap_scene_constant, "msg NULL, length > 0 (optional)",
+       ap_scene_constant("70*deg", &E, NULL, 100) == AP_OK);
+  CASE(ap_scene_get_linearize, "s NULL", ap_scene_get_linearize(NULL, &sl, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_get_linearize, "out NULL", ap_scene_get_linearize(SC, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_lin_free, "NULL", (ap_scene_lin_free(NULL), 1));
+  CASE(ap_body_actuator_partials, "m NULL",
+       ap_body_actuator_partials(NULL, BD, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_body_actuator_partials, "d NULL",
+       ap_body_actuator_partials(BM, NULL, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_body_actuator_partials, "d of another model",
+       ap_body_actuator_partials(BM, TD, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_body_actuator_partials, "effect -1",
+       ap_body_actuator_partials(BM, BD, -1, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_body_actuator_partials, "effect 99",
+       ap_body_actuator_partials(BM, BD, 99, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_body_actuator_partials, "gravity, not an actuator",
+       ap_body_actuator_partials(BM, BD, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
+}
+
+static void cases_batch(void) {
+  double vals[64];
+  const char *const one[1] = {"bodies.sleigh.mass=2"};
+  size_t n = strlen(SCENE);
+  ap_batch_def bd = ap_batch_def_default();
+  CASE(ap_plan_create, "out NULL", ap_plan_create(NULL) == AP_ERR_ARG);
+  CASE(ap_plan_free, "NULL", (ap_plan_free(NULL), 1));
+  CASE(ap_plan_add_grid, "p NULL", ap_plan_add_grid(NULL, "a=1:2:3", msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "spec NULL", ap_plan_add_grid(PL, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "spec without '='", ap_plan_add_grid(PL, "nonsense", msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "msg NULL, length > 0", ap_plan_add_grid(PL, "x", NULL, 100) == AP_ERR_ARG);
+  CASE(ap_plan_add_random, "p NULL",
+       ap_plan_add_random(NULL, "a=uniform(0,1)", msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_random, "spec NULL", ap_plan_add_random(PL, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_set_samples, "p NULL", ap_plan_set_samples(NULL, 4, 1) == AP_ERR_ARG);
+  CASE(ap_plan_set_samples, "samples 0", ap_plan_set_samples(PL, 0, 1) == AP_ERR_ARG);
+  CASE(ap_plan_set_samples, "samples -5", ap_plan_set_samples(PL, -5, 1) == AP_ERR_ARG);
+  CASE(ap_plan_count, "NULL", ap_plan_count(NULL) == 0);
+  CASE(ap_plan_nparams, "NULL", ap_plan_nparams(NULL) == 0);
+  CASE(ap_plan_path, "p NULL", ap_plan_path(NULL, 0) == NULL);
+  CASE(ap_plan_path, "r -1", ap_plan_path(PL, -1) == NULL);
+  CASE(ap_plan_path, "r 99", ap_plan_path(PL, 99) == NULL);
+  CASE(ap_plan_value, "p NULL", ap_plan_value(NULL, 0, 0, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_value, "i -1", ap_plan_value(PL, -1, 0, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_value, "i = count", ap_plan_value(PL, ap_plan_count(PL), 0, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_value, "r 5", ap_plan_value(PL, 0, 5, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_value, "buf too short", ap_plan_value(PL, 0, 0, &E, msg, 3) == AP_ERR_ARG);
+  CASE(ap_plan_value, "x, buf NULL (optional)", ap_plan_value(PL, 0, 0, NULL, NULL, 0) == AP_OK);
+  CASE(ap_plan_typical, "p NULL", ap_plan_typical(NULL, 0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_typical, "r 5", ap_plan_typical(PL, 5, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_typical, "buf NULL", ap_plan_typical(PL, 0, NULL, 10) == AP_ERR_ARG);
+  CASE(ap_batch_def_default, "no arguments", ap_batch_def_default().threads >= 1);
+  CASE(ap_batch_create, "text NULL",
+       ap_batch_create(NULL, 9, "b", NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_create, "out NULL",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &bd, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_create, "sets NULL, nsets 1",
+       ap_batch_create(SCENE, n, "b", NULL, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_create, "nsets -1",
+       ap_batch_create(SCENE, n, "b", one, -1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_create, "sets[0] NULL",
+       ap_batch_create(SCENE, n, "b", no_sets, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_load, "path NULL", ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_load, "sets NULL, nsets 1",
+       ap_batch_load(SCENE_PATH, NULL, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_load, "out NULL", ap_batch_load(SCENE_PATH, NULL, 0, &bd, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_free, "NULL", (ap_batch_free(NULL), 1));
+  CASE(ap_batch_ncols, "NULL", ap_batch_ncols(NULL) == 0);
+  CASE(ap_batch_col_name, "b NULL", ap_batch_col_name(NULL, 0) == NULL);
+  CASE(ap_batch_col_name, "j -1", ap_batch_col_name(BT, -1) == NULL);
+  CASE(ap_batch_col_name, "j = ncols", ap_batch_col_name(BT, ap_batch_ncols(BT)) == NULL);
+  CASE(ap_batch_check, "b NULL", ap_batch_check(NULL, one, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check, "sets NULL, nsets 1", ap_batch_check(BT, NULL, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check, "nsets -1", ap_batch_check(BT, one, -1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check, "sets[0] NULL", ap_batch_check(BT, no_sets, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check_plan, "b NULL", ap_batch_check_plan(NULL, PL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check_plan, "p NULL", ap_batch_check_plan(BT, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_run, "b NULL", ap_batch_run(NULL, 1, 1, one, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "count -1", ap_batch_run(BT, -1, 1, one, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "nper -1", ap_batch_run(BT, 1, -1, one, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "sets NULL", ap_batch_run(BT, 1, 1, NULL, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "values NULL", ap_batch_run(BT, 1, 1, one, NULL, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "status NULL", ap_batch_run(BT, 1, 1, one, vals, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run, "sets[0] NULL", ap_batch_run(BT, 1, 1, no_sets, vals, stat_, msgs) == AP_OK &&
+       stat_[0] == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "b NULL", ap_batch_run_plan(NULL, PL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "p NULL", ap_batch_run_plan(BT, NULL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "first -1", ap_batch_run_plan(BT, PL, -1, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "past the plan", ap_batch_run_plan(BT, PL, 2, 5, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "values NULL", ap_batch_run_plan(BT, PL, 0, 1, NULL, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_messages_free, "messages NULL", (ap_batch_messages_free(3, NULL), 1));
+  CASE(ap_batch_messages_free, "count -1", (ap_batch_messages_free(-1, msgs), 1));
+}
+
+static void cases_lin(void) {
+  double tq[4], tw[3], sv[2] = {0.0, 1.0};
+  int sel[1] = {0};
+  bs_top_initial(tq, tw);
+  CASE(ap_lin_def_default, "no arguments", ap_lin_def_default().about == AP_LIN_STEADY);
+  CASE(ap_lin_create, "m NULL", ap_lin_create(NULL, NULL, 0.0, tq, tw, &oln) == AP_ERR_ARG && !oln);
+  CASE(ap_lin_create, "q NULL", ap_lin_create(TM, NULL, 0.0, NULL, tw, &oln) == AP_ERR_ARG && !oln);
+  CASE(ap_lin_create, "t NaN", ap_lin_create(TM, NULL, NAN, tq, tw, &oln) == AP_ERR_ARG && !oln);
+  CASE(ap_lin_create, "out NULL", ap_lin_create(TM, NULL, 0.0, tq, tw, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_create, "def, v NULL (defaults, zero speeds)",
+       (ap_lin_create(TM, NULL, 0.0, tq, NULL, &oln), oln != NULL));
+  CASE(ap_lin_free, "NULL", (ap_lin_free(NULL), 1));
+  CASE(ap_lin_message, "NULL: a fixed text", ap_lin_message(NULL) && ap_lin_message(NULL)[0]);
+  CASE(ap_lin_operating_point, "L NULL", ap_lin_operating_point(NULL, 0.0) == AP_ERR_ARG);
+  CASE(ap_lin_q, "NULL", ap_lin_q(NULL) == NULL);
+  CASE(ap_lin_v, "NULL", ap_lin_v(NULL) == NULL);
+  CASE(ap_lin_linearize, "NULL", ap_lin_linearize(NULL) == AP_ERR_ARG);
+  CASE(ap_lin_nx, "NULL", ap_lin_nx(NULL) == 0);
+  CASE(ap_lin_nu, "NULL", ap_lin_nu(NULL) == 0);
+  CASE(ap_lin_state_name, "L NULL", ap_lin_state_name(NULL, 0) == NULL);
+  CASE(ap_lin_state_name, "i -1", ap_lin_state_name(LN, -1) == NULL);
+  CASE(ap_lin_state_name, "i 999", ap_lin_state_name(LN, 999) == NULL);
+  CASE(ap_lin_input_name, "L NULL", ap_lin_input_name(NULL, 0) == NULL);
+  CASE(ap_lin_input_name, "j 999", ap_lin_input_name(LN, 999) == NULL);
+  CASE(ap_lin_is_cyclic, "L NULL", ap_lin_is_cyclic(NULL, 0) == 0);
+  CASE(ap_lin_is_cyclic, "i 999", ap_lin_is_cyclic(LN, 999) == 0);
+  CASE(ap_lin_find_state, "L NULL", ap_lin_find_state(NULL, "x") == -1);
+  CASE(ap_lin_find_state, "name NULL", ap_lin_find_state(LN, NULL) == -1);
+  CASE(ap_lin_A, "NULL", ap_lin_A(NULL) == NULL);
+  CASE(ap_lin_A_error, "NULL", ap_lin_A_error(NULL) == NULL);
+  CASE(ap_lin_B, "NULL", ap_lin_B(NULL) == NULL);
+  CASE(ap_lin_rates, "NULL", ap_lin_rates(NULL) == NULL);
+  CASE(ap_lin_eigen, "L NULL", ap_lin_eigen(NULL, sel, 1, 0) == AP_ERR_ARG);
+  CASE(ap_lin_eigen, "not linearized", ap_lin_eigen(LN, sel, 1, 0) == AP_ERR_ARG);
+  CASE(ap_lin_get_eigen, "L NULL", ap_lin_get_eigen(NULL, &eg) == AP_ERR_ARG);
+  CASE(ap_lin_get_eigen, "out NULL", ap_lin_get_eigen(LN, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "fn NULL",
+       ap_lin_sweep_run(NULL, NULL, 2, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "n 0",
+       ap_lin_sweep_run(eig_fn, NULL, 0, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "p NULL",
+       ap_lin_sweep_run(eig_fn, NULL, 2, NULL, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "count 0",
+       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 0, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "ptol NaN",
+       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 3, NAN, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_run, "out NULL",
+       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 3, 1e-6, 0.0, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_free, "NULL", (ap_lin_sweep_free(NULL), 1));
+  CASE(ap_lin_sweep_speed, "L NULL", ap_lin_sweep_speed(NULL, sv, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "s NULL", ap_lin_sweep_speed(LN, NULL, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "count 0", ap_lin_sweep_speed(LN, sv, 0, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "out NULL", ap_lin_sweep_speed(LN, sv, 2, NULL, 0, 0, 1e-6, NULL) == AP_ERR_ARG);
+}
+
 static void all_cases(void) {
   cases_status_system();
   cases_core();
@@ -605,6 +788,9 @@ static void all_cases(void) {
   cases_builder();
   cases_body_queries();
   cases_scene();
+  cases_scene_runs();
+  cases_batch();
+  cases_lin();
 }
 
 /* ---- fixtures ------------------------------------------------------------------------------ */
@@ -629,7 +815,18 @@ static int fixtures(const char *root) {
   snprintf(SCENE_PATH, sizeof SCENE_PATH, "%s/examples/scenes/chaplygin_sleigh.yaml", root);
   int rc = ap_scene_load_string(SCENE, strlen(SCENE), "api.yaml", NULL, 0, &SC, m, sizeof m);
   if (rc != AP_OK) fprintf(stderr, "fixture scene: %s\n", m);
-  return rc == AP_OK;
+  if (rc != AP_OK || ap_scene_out_create(SC, &O) != AP_OK || ap_plan_create(&PL) != AP_OK ||
+      ap_plan_add_grid(PL, "bodies.sleigh.mass=1:2:3", m, sizeof m) != AP_OK)
+    return 0;
+  ap_batch_def bdef = ap_batch_def_default();
+  if (ap_batch_create(SCENE, strlen(SCENE), "api.yaml", NULL, 0, &bdef, &BT, m, sizeof m) != AP_OK) {
+    fprintf(stderr, "fixture batch: %s\n", m);
+    return 0;
+  }
+  double tq[4], tw[3];
+  bs_top_initial(tq, tw);
+  ap_lin_create(TM, NULL, 0.0, tq, tw, &LN);   /* a failed setup still gives a linearizer */
+  return LN != NULL;
 }
 
 /* ---- the functions the headers declare ---------------------------------------------------- */
@@ -754,6 +951,7 @@ int main(int argc, char **argv) {
          uncovered ? "no" : "yes");
   failed += uncovered;
   if (bs_failures()) failed++;
+  ap_scene_out_free(O), ap_plan_free(PL), ap_batch_free(BT), ap_lin_free(LN);
   ap_scene_free(SC), ap_sim_free(S), ap_builder_free(B);
   ap_data_free(BD), ap_data_free(TD), ap_data_free(SD);
   ap_model_free(BM), ap_model_free(TM), ap_model_free(SM);

@@ -42,6 +42,9 @@ int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int
 
 int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,
                          int rows, int cols) {
+  double z = 0.0;                      /* x * 0 is 0, or NaN when x is Inf or NaN: one pass */
+  for (size_t i = 0, len = (size_t)rows * (size_t)cols; i < len; i++) z += x[i] * 0.0;
+  if (z == 0.0) return AP_OK;
   for (int j = 0; j < cols; j++)
     for (int i = 0; i < rows; i++) {
       double xi = x[i + (size_t)j * rows];

@@ -194,6 +194,7 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   if (s->def.mode == AP_MODE_DAE) return setup_dae(s);
+  ap_drv_growth_cap(s, s->d->growth);
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
@@ -213,7 +214,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   }
   ap_sim *s = calloc(1, sizeof *s);
   size_t nk = (size_t)(m->n + m->k + m->b + (m->ev.phi ? m->nphi : 0));
-  double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
+  double *buf = s ? calloc(4 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
     if (msg && msg_len) snprintf(msg, msg_len, "system '%s': out of memory", m->name);
@@ -221,7 +222,8 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   }
   s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;
   s->stats.min_rcond = 1.0;
-  s->y = buf, s->ytry = buf + nk, s->q = buf + 2 * nk, s->v = s->q + m->n;
+  s->y = buf, s->ytry = buf + nk, s->yev = buf + 2 * nk, s->ydot = buf + 3 * nk;
+  s->q = buf + 4 * nk, s->v = s->q + m->n, s->ev_stamp = -1, s->growth_cap = INFINITY;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
     s->def = *def;

@@ -21,6 +21,13 @@ struct ap_sim {
   int n, k, b, ny;          /* ny = n + l (minimal), n + k (projected), n + k + b (DAE) */
   double t;                 /* time of the last accepted state */
   double *y, *ytry;         /* (n + k + b) stepper state, trial state */
+  double *yev, *ydot;       /* (n + k + b) the state of the last successful right-hand side
+                               and a derivative carried over a re-partition */
+  long ev_stamp;            /* pipeline stage count (d->cnt) right after that evaluation: the
+                               data still holds it while the count is unchanged */
+  double ev_t;              /* its time */
+  double growth_cap;        /* minimal mode: a stage whose basis growth exceeds this fails
+                               (recoverably): the step went too far on a frozen partition */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
   int rhs_status;           /* last failure of the right-hand side */
   char rhs_msg[512];
@@ -44,6 +51,10 @@ void ap_drv_load_state(ap_sim *s, double t, const double *y);
 int ap_drv_rhs(double t, const double *y, double *ydot, void *user);
 /* CVODE's projection hook (ap_proj_fn) for projected mode, user = ap_sim. */
 int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user);
+/* Minimal mode: set s->growth_cap for the next step from the basis growth g at its start: a
+ * stage beyond max(AP_DRV_GROWTH_CAP x switch_growth, 2 g) fails recoverably. */
+#define AP_DRV_GROWTH_CAP 4.0
+void ap_drv_growth_cap(ap_sim *s, double g);
 /* After an accepted step of a one-step or multistep method at t (s->y holds the new state):
  * coordinates onto their manifold, then the mode's own work (re-partition, projection,
  * residuals). May restart the stepper. */
