@@ -574,7 +574,8 @@ static void cases_scene(void) {
        ap_scene_initial_state(SC, q, NULL, msg, sizeof msg, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_initial_state, "report, msg NULL (optional)",
        ap_scene_initial_state(SC, q, v, NULL, 100, NULL, 100) == AP_OK);
-  CASE(ap_scene_check_time, "s NULL", ap_scene_check_time(NULL, 0.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_check_time, "s NULL",
+       ap_scene_check_time(NULL, 0.0, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_check_time, "msg NULL, length > 0 (optional)",
        ap_scene_check_time(SC, 0.0, NULL, 100) == AP_OK);
   CASE(ap_scene_output_count, "NULL", ap_scene_output_count(NULL) == 0);
@@ -635,8 +636,10 @@ static void cases_scene_runs(void) {
        ap_scene_constant("1 +", &E, msg, sizeof msg) == AP_ERR_ARG && msg[0]);
   CASE(ap_scene_constant, "msg NULL, length > 0 (optional)",
        ap_scene_constant("70*deg", &E, NULL, 100) == AP_OK);
-  CASE(ap_scene_get_linearize, "s NULL", ap_scene_get_linearize(NULL, &sl, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_scene_get_linearize, "out NULL", ap_scene_get_linearize(SC, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_get_linearize, "s NULL",
+       ap_scene_get_linearize(NULL, &sl, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_get_linearize, "out NULL",
+       ap_scene_get_linearize(SC, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_lin_free, "NULL", (ap_scene_lin_free(NULL), 1));
   CASE(ap_body_actuator_partials, "m NULL",
        ap_body_actuator_partials(NULL, BD, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
@@ -659,13 +662,17 @@ static void cases_batch(void) {
   ap_batch_def bd = ap_batch_def_default();
   CASE(ap_plan_create, "out NULL", ap_plan_create(NULL) == AP_ERR_ARG);
   CASE(ap_plan_free, "NULL", (ap_plan_free(NULL), 1));
-  CASE(ap_plan_add_grid, "p NULL", ap_plan_add_grid(NULL, "a=1:2:3", msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "p NULL",
+       ap_plan_add_grid(NULL, "a=1:2:3", msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_add_grid, "spec NULL", ap_plan_add_grid(PL, NULL, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_plan_add_grid, "spec without '='", ap_plan_add_grid(PL, "nonsense", msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_plan_add_grid, "msg NULL, length > 0", ap_plan_add_grid(PL, "x", NULL, 100) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "spec without '='",
+       ap_plan_add_grid(PL, "nonsense", msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_grid, "msg NULL, length > 0",
+       ap_plan_add_grid(PL, "x", NULL, 100) == AP_ERR_ARG);
   CASE(ap_plan_add_random, "p NULL",
        ap_plan_add_random(NULL, "a=uniform(0,1)", msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_plan_add_random, "spec NULL", ap_plan_add_random(PL, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_add_random, "spec NULL",
+       ap_plan_add_random(PL, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_set_samples, "p NULL", ap_plan_set_samples(NULL, 4, 1) == AP_ERR_ARG);
   CASE(ap_plan_set_samples, "samples 0", ap_plan_set_samples(PL, 0, 1) == AP_ERR_ARG);
   CASE(ap_plan_set_samples, "samples -5", ap_plan_set_samples(PL, -5, 1) == AP_ERR_ARG);
@@ -676,7 +683,8 @@ static void cases_batch(void) {
   CASE(ap_plan_path, "r 99", ap_plan_path(PL, 99) == NULL);
   CASE(ap_plan_value, "p NULL", ap_plan_value(NULL, 0, 0, &E, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_value, "i -1", ap_plan_value(PL, -1, 0, &E, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_plan_value, "i = count", ap_plan_value(PL, ap_plan_count(PL), 0, &E, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_plan_value, "i = count",
+       ap_plan_value(PL, ap_plan_count(PL), 0, &E, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_value, "r 5", ap_plan_value(PL, 0, 5, &E, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_value, "buf too short", ap_plan_value(PL, 0, 0, &E, msg, 3) == AP_ERR_ARG);
   CASE(ap_plan_value, "x, buf NULL (optional)", ap_plan_value(PL, 0, 0, NULL, NULL, 0) == AP_OK);
@@ -693,20 +701,25 @@ static void cases_batch(void) {
   CASE(ap_batch_create, "nsets -1",
        ap_batch_create(SCENE, n, "b", one, -1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_create, "sets[0] NULL",
-       ap_batch_create(SCENE, n, "b", no_sets, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
-  CASE(ap_batch_load, "path NULL", ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+       ap_batch_create(SCENE, n, "b", no_sets, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG &&
+           !obt);
+  CASE(ap_batch_load, "path NULL",
+       ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_load, "sets NULL, nsets 1",
        ap_batch_load(SCENE_PATH, NULL, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
-  CASE(ap_batch_load, "out NULL", ap_batch_load(SCENE_PATH, NULL, 0, &bd, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_load, "out NULL",
+       ap_batch_load(SCENE_PATH, NULL, 0, &bd, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_free, "NULL", (ap_batch_free(NULL), 1));
   CASE(ap_batch_ncols, "NULL", ap_batch_ncols(NULL) == 0);
   CASE(ap_batch_col_name, "b NULL", ap_batch_col_name(NULL, 0) == NULL);
   CASE(ap_batch_col_name, "j -1", ap_batch_col_name(BT, -1) == NULL);
   CASE(ap_batch_col_name, "j = ncols", ap_batch_col_name(BT, ap_batch_ncols(BT)) == NULL);
   CASE(ap_batch_check, "b NULL", ap_batch_check(NULL, one, 1, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_batch_check, "sets NULL, nsets 1", ap_batch_check(BT, NULL, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check, "sets NULL, nsets 1",
+       ap_batch_check(BT, NULL, 1, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_check, "nsets -1", ap_batch_check(BT, one, -1, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_batch_check, "sets[0] NULL", ap_batch_check(BT, no_sets, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_check, "sets[0] NULL",
+       ap_batch_check(BT, no_sets, 1, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_check_plan, "b NULL", ap_batch_check_plan(NULL, PL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_check_plan, "p NULL", ap_batch_check_plan(BT, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_run, "b NULL", ap_batch_run(NULL, 1, 1, one, vals, stat_, NULL) == AP_ERR_ARG);
@@ -717,11 +730,16 @@ static void cases_batch(void) {
   CASE(ap_batch_run, "status NULL", ap_batch_run(BT, 1, 1, one, vals, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_batch_run, "sets[0] NULL", ap_batch_run(BT, 1, 1, no_sets, vals, stat_, msgs) == AP_OK &&
        stat_[0] == AP_ERR_ARG);
-  CASE(ap_batch_run_plan, "b NULL", ap_batch_run_plan(NULL, PL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
-  CASE(ap_batch_run_plan, "p NULL", ap_batch_run_plan(BT, NULL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
-  CASE(ap_batch_run_plan, "first -1", ap_batch_run_plan(BT, PL, -1, 1, vals, stat_, NULL) == AP_ERR_ARG);
-  CASE(ap_batch_run_plan, "past the plan", ap_batch_run_plan(BT, PL, 2, 5, vals, stat_, NULL) == AP_ERR_ARG);
-  CASE(ap_batch_run_plan, "values NULL", ap_batch_run_plan(BT, PL, 0, 1, NULL, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "b NULL",
+       ap_batch_run_plan(NULL, PL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "p NULL",
+       ap_batch_run_plan(BT, NULL, 0, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "first -1",
+       ap_batch_run_plan(BT, PL, -1, 1, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "past the plan",
+       ap_batch_run_plan(BT, PL, 2, 5, vals, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan, "values NULL",
+       ap_batch_run_plan(BT, PL, 0, 1, NULL, stat_, NULL) == AP_ERR_ARG);
   CASE(ap_batch_messages_free, "messages NULL", (ap_batch_messages_free(3, NULL), 1));
   CASE(ap_batch_messages_free, "count -1", (ap_batch_messages_free(-1, msgs), 1));
 }
@@ -765,20 +783,27 @@ static void cases_lin(void) {
   CASE(ap_lin_sweep_run, "fn NULL",
        ap_lin_sweep_run(NULL, NULL, 2, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "n 0",
-       ap_lin_sweep_run(eig_fn, NULL, 0, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+       ap_lin_sweep_run(eig_fn, NULL, 0, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) ==
+           AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "p NULL",
        ap_lin_sweep_run(eig_fn, NULL, 2, NULL, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "count 0",
-       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 0, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
+       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 0, 1e-6, 0.0, &sw, msg, sizeof msg) ==
+           AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "ptol NaN",
        ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 3, NAN, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "out NULL",
-       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 3, 1e-6, 0.0, NULL, msg, sizeof msg) == AP_ERR_ARG);
+       ap_lin_sweep_run(eig_fn, NULL, 2, sweep_p, 3, 1e-6, 0.0, NULL, msg, sizeof msg) ==
+           AP_ERR_ARG);
   CASE(ap_lin_sweep_free, "NULL", (ap_lin_sweep_free(NULL), 1));
-  CASE(ap_lin_sweep_speed, "L NULL", ap_lin_sweep_speed(NULL, sv, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
-  CASE(ap_lin_sweep_speed, "s NULL", ap_lin_sweep_speed(LN, NULL, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
-  CASE(ap_lin_sweep_speed, "count 0", ap_lin_sweep_speed(LN, sv, 0, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
-  CASE(ap_lin_sweep_speed, "out NULL", ap_lin_sweep_speed(LN, sv, 2, NULL, 0, 0, 1e-6, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "L NULL",
+       ap_lin_sweep_speed(NULL, sv, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "s NULL",
+       ap_lin_sweep_speed(LN, NULL, 2, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "count 0",
+       ap_lin_sweep_speed(LN, sv, 0, NULL, 0, 0, 1e-6, &sw) == AP_ERR_ARG);
+  CASE(ap_lin_sweep_speed, "out NULL",
+       ap_lin_sweep_speed(LN, sv, 2, NULL, 0, 0, 1e-6, NULL) == AP_ERR_ARG);
 }
 
 static void all_cases(void) {
@@ -819,7 +844,8 @@ static int fixtures(const char *root) {
       ap_plan_add_grid(PL, "bodies.sleigh.mass=1:2:3", m, sizeof m) != AP_OK)
     return 0;
   ap_batch_def bdef = ap_batch_def_default();
-  if (ap_batch_create(SCENE, strlen(SCENE), "api.yaml", NULL, 0, &bdef, &BT, m, sizeof m) != AP_OK) {
+  rc = ap_batch_create(SCENE, strlen(SCENE), "api.yaml", NULL, 0, &bdef, &BT, m, sizeof m);
+  if (rc != AP_OK) {
     fprintf(stderr, "fixture batch: %s\n", m);
     return 0;
   }
