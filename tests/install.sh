@@ -45,14 +45,15 @@ cp "$src/examples/rolling_disk.c" "$tmp/prog.c"
 echo "install: examples/rolling_disk.c built outside the tree with those flags runs"
 
 appell="$root/bin/appell"
-ldd "$appell" | grep -q "libappell.so.0 => $tmp/root" ||
-  fail "the installed appell does not load the installed libappell.so.0: $(ldd "$appell" |
-        grep libappell || echo 'not found')"
+deps=$(ldd "$appell")   # whole, not piped into grep -q (pipefail would see ldd's SIGPIPE)
+loaded=$(grep libappell <<<"$deps" || true)
+[[ "$loaded" == *"libappell.so.0 => $tmp/root"* ]] ||
+  fail "the installed appell does not load the installed libappell.so.0: ${loaded:-not found}"
 version=$("$appell" --version) || fail "appell --version"
 [[ "$version" == "appell $(pkg-config --modversion appell)" ]] ||
   fail "appell --version says '$version', appell.pc says $(pkg-config --modversion appell)"
 OPENBLAS_NUM_THREADS=1 "$appell" check "$src/examples/scenes/rolling_disk.yaml" >/dev/null ||
   fail "appell check"
-echo "install: the installed appell ($version) loads $(ldd "$appell" | sed -n \
-  's/.*libappell.so.0 => \([^ ]*\).*/\1/p' | sed "s|$tmp|DESTDIR|") and checks a scene"
+echo "install: the installed appell ($version) loads $(sed -n \
+  's/.*libappell.so.0 => \([^ ]*\).*/\1/p' <<<"$loaded" | sed "s|$tmp|DESTDIR|") and checks a scene"
 echo "install: passed"

@@ -7,24 +7,26 @@
  * must equal their closed forms within the error bound reported with them (first-order
  * perturbation with E and LAPACK's bound), and within the absolute figure stated per test.
  *
- *  - Rolling disk (REFERENCES §4), three parameter sets, upright rolling at four speeds. With
- *    the chart (tilt, heading, spin) and heading-frame speeds (wx, wy, wz), w_a = wz - w tilt
- *    and w_n = -wy at heading 0 (axis along -y), so §4's linearized equations become
+ *  - Rolling disk (docs/references.md §4), three parameter sets, upright rolling at four
+ *    speeds. With the chart (tilt, heading, spin) and heading-frame speeds (wx, wy, wz),
+ *    w_a = wz - w tilt and w_n = -wy at heading 0 (axis along -y), so §4's linearized equations
+ *    become
  *    tilt' = wx, wx' = (m g r - (C + m r^2) w^2) / (A + m r^2) tilt + (C + m r^2) w / (A + m r^2) wz,
  *    wz' = w (1 - C / A) wx, wy' = 0 (w = v / r): A's non-cyclic block is checked entry by entry.
  *    Eigenvalues lambda^2 = (m g r - (C + m r^2) C w^2 / A) / (A + m r^2), 0, 0; the cyclic set
  *    is {x, y, heading, spin}; the sweep finds the critical speed sqrt(g r / 3) to 1e-10.
  *  - Rolling disk in a steady turn: the body model (tilt freed, Newton from 5 degrees off) and
  *    §4's equations as a math-level system have the same non-cyclic eigenvalues.
- *  - Hoffmann's pendulum (REFERENCES §6): equilibrium tan(theta*) = 2F/((m1 + 2 m2) g),
+ *  - Hoffmann's pendulum (docs/references.md §6): equilibrium tan(theta*) = 2F/((m1 + 2 m2) g),
  *    tan(phi*) = F/(m2 g); at it the small oscillations solve det(K - w^2 g) = 0 with
  *    K = diag(a1 H1, a2 H2), H1 = |((m1 + 2 m2) g, 2F)|, H2 = |(m2 g, F)| (the Hessian of
  *    V = -(m1 + 2 m2) g a1 cos(theta) - m2 g a2 cos(phi) - F (2 a1 sin(theta) + a2 sin(phi))),
  *    so A = [[0, I], [-g^-1 K, 0]] and B = [0; g^-1 e_theta] for a torque on theta. Both the
  *    hand-derived system (tests/refsys.c) and the body model with its loop closure (the example
  *    scene, two parameter sets) are checked.
- *  - Chaplygin sleigh (REFERENCES §2) moving straight at u: u' = a w^2, J w' = -m a u w give the
- *    eigenvalue -m a u / J (stable forwards, unstable backwards) besides 0.
+ *  - Chaplygin sleigh (docs/references.md §2) moving straight at u: u' = a w^2,
+ *    J w' = -m a u w give the eigenvalue -m a u / J (stable forwards, unstable backwards)
+ *    besides 0.
  * The sweep machinery on a synthetic spectrum, the scene section and the error paths are in
  * tests/test_lin_misc.c. */
 #include <math.h>
@@ -124,7 +126,7 @@ static ap_model *disk_model(const disk *p) {
 }
 
 /* Disk state in the convention of tests/test_body_disk.c at heading 0: lean theta from the
- * vertical (REFERENCES' theta), axis a = (0, cos theta, -sin theta), b_up = (0, sin theta,
+ * vertical (the reference's theta), axis a = (0, cos theta, -sin theta), b_up = (0, sin theta,
  * cos theta), body axes R = [e_x, -b_up, a]; angular velocity -thd e_x + wa b_up + wn a; the
  * centre's velocity from rolling (ap_body_complete_speeds). */
 static void disk_state(const ap_model *m, double th, double thd, double wa, double wn,
@@ -205,8 +207,8 @@ static void disk_critical(const disk *p) {
   ap_model_free(m);
 }
 
-/* REFERENCES §4's equations as a math-level system: q = (theta, alpha, beta), v = (theta', w_a,
- * w_n) with alpha' = w_a, beta' = w_n cyclic. */
+/* docs/references.md §4's equations as a math-level system: q = (theta, alpha, beta),
+ * v = (theta', w_a, w_n) with alpha' = w_a, beta' = w_n cyclic. */
 static int ref_metric(double t, const double *q, double *g, void *user) {
   const disk *p = user;
   double r2 = p->m * p->r * p->r;
