@@ -17,10 +17,9 @@
  *                      is its round-off model of the double values, itself an estimate);
  *   the real parts equal the double values to 1e-14 relative (complex division and square
  *   root round differently from the real ones by an ulp or two).
- * Then the fallback: a user constraint or user effect makes ap_core_has_cs false with a
- * message naming it, and the complex-step stage refuses with AP_ERR_UNSUPPORTED; a
- * math-level system has no complex-step data; a state function that gives no partial
- * derivatives is refused at evaluation. The source directory comes as argv[1]. */
+ * The models the complex-step build cannot evaluate (user callbacks, math-level systems) are
+ * tested with the linearizer's fallback in tests/test_lin_cs.c. The source directory comes as
+ * argv[1]. */
 #include <complex.h>
 #undef I
 #include <float.h>
@@ -34,7 +33,6 @@
 #include "analyze/analyze_int.h"
 #include "check.h"
 #include "core/core.h"
-#include "refsys.h"
 
 typedef double _Complex cplx;
 
@@ -263,137 +261,6 @@ static void probe_scene(const char *dir, const char *file) {
   ap_scene_free(sc);
 }
 
-/* ---- models the complex-step build cannot evaluate ------------------------------------------ */
-
-static int user_damping(double t, const double *q, const double *v, double *Q, void *user) {
-  (void)t, (void)q, (void)user;
-  Q[0] -= 0.1 * v[0];
-  return 0;
-}
-
-static int user_rows_fn(double t, const double *q, double *A, double *a0, void *user) {
-  (void)t, (void)q, (void)a0, (void)user;
-  A[0] = 1.0;   /* the pendulum's rate is 0: a trivial row */
-  return 0;
-}
-
-static int user_gamma_fn(double t, const double *q, const double *v, double *g, void *user) {
-  (void)t, (void)q, (void)v, (void)user;
-  g[0] = 0.0;
-  return 0;
-}
-
-/* tau = -3 angle, with (partials) or without (no_partials) df. */
-static int spring_fn(const ap_state_args *a, double *f, double *df, void *user) {
-  *f = -3.0 * a->x[0];
-  if (df && !user) df[0] = 0.0, df[1] = -3.0;
-  return 0;
-}
-
-/* A pendulum (rod on a revolute joint about x, gravity) with one extra element. */
-static ap_model *pendulum(int extra) {
-  ap_builder *b = NULL;
-  ap_model *m = NULL;
-  if (ap_builder_create("pendulum", &b) != AP_OK) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "rod", bd.mass = 1.0, bd.com[2] = -0.5;
-  bd.inertia[0] = bd.inertia[4] = bd.inertia[8] = 0.1;
-  int body = -1, joint = -1;
-  ap_builder_add_body(b, &bd, &body);
-  ap_joint_def jd = ap_joint_def_default();
-  jd.name = "hinge", jd.kind = AP_JOINT_REVOLUTE, jd.child = body;
-  jd.axis[0] = 1, jd.axis[1] = 0, jd.axis[2] = 0;
-  ap_builder_add_joint(b, &jd, &joint);
-  ap_effect_def g = ap_effect_def_default();
-  g.name = "gravity";
-  ap_builder_add_effect(b, &g, NULL);
-  ap_effect_def e = ap_effect_def_default();
-  ap_constraint_def c = ap_constraint_def_default();
-  switch (extra) {
-    case 1:
-      e.name = "drag", e.kind = AP_EFFECT_USER, e.generalized = user_damping;
-      ap_builder_add_effect(b, &e, NULL);
-      break;
-    case 2:
-      c.name = "lock", c.kind = AP_CON_USER, c.rows = 1, c.user_constraint = user_rows_fn;
-      c.user_gamma = user_gamma_fn;
-      ap_builder_add_constraint(b, &c, NULL);
-      break;
-    case 3:
-    case 4:
-      e.name = "spring", e.kind = AP_EFFECT_JOINT_FORCE, e.joint = joint, e.state_fn = spring_fn;
-      e.ninputs = 1, e.inputs[0].joint = joint, e.inputs[0].speed = 0, e.inputs[0].index = 0;
-      e.user = extra == 4 ? (void *)&e : NULL;   /* non-NULL: no partials */
-      ap_builder_add_effect(b, &e, NULL);
-      break;
-  }
-  if (ap_builder_compile(b, &m) != AP_OK) fprintf(stderr, "%s\n", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
-}
-
-static void fallbacks(void) {
-  static const char *const names[] = {"drag", "lock"};
-  for (int extra = 1; extra <= 2; extra++) {
-    ap_model *m = pendulum(extra);
-    AP_CHECK(m != NULL);
-    if (!m) continue;
-    char why[256] = "";
-    AP_CHECK_EQ_INT(ap_core_has_cs(m, why, sizeof why), 0);
-    AP_CHECK(strstr(why, names[extra - 1]) != NULL);
-    printf("fallback: %s\n", why);
-    ap_data_cs *dc = NULL;
-    AP_CHECK_EQ_INT(ap_data_create_cs(m, &dc), AP_OK);
-    dc->q[0] = 0.3, dc->v[0] = 0.2 + AP_CS_STEP * _Complex_I;
-    int rc = ap_fwd_position_cs(m, dc);
-    if (rc == AP_OK) rc = ap_fwd_velocity_cs(m, dc);
-    AP_CHECK_EQ_INT(rc, AP_ERR_UNSUPPORTED);
-    AP_CHECK(strstr(dc->msg, names[extra - 1]) != NULL);
-    printf("  refused: %s\n", dc->msg);
-    ap_data_free_cs(dc);
-    ap_model_free(m);
-  }
-  /* a state function with partials: d tau / d angle = -3 exactly; without: refused */
-  for (int extra = 3; extra <= 4; extra++) {
-    ap_model *m = pendulum(extra);
-    AP_CHECK(m != NULL);
-    if (!m) continue;
-    char why[256] = "";
-    AP_CHECK_EQ_INT(ap_core_has_cs(m, why, sizeof why), 1);
-    ap_data_cs *dc = NULL;
-    AP_CHECK_EQ_INT(ap_data_create_cs(m, &dc), AP_OK);
-    dc->basis = AP_BASIS_NONE;
-    dc->q[0] = 0.3 + AP_CS_STEP * _Complex_I, dc->v[0] = 0.2;
-    int rc = ap_fwd_position_cs(m, dc);
-    if (rc == AP_OK) rc = ap_fwd_velocity_cs(m, dc);
-    if (extra == 3) {
-      AP_CHECK_EQ_INT(rc, AP_OK);
-      /* Q = -m g l sin(angle) - 3 angle about x with the com at -0.5 z: dQ = -9.81 0.5 cos - 3 */
-      AP_CHECK_NEAR(cimag(dc->Q[0]) / AP_CS_STEP, -9.81 * 0.5 * cos(0.3) - 3.0, 1e-14);
-    } else {
-      AP_CHECK_EQ_INT(rc, AP_ERR_UNSUPPORTED);
-      AP_CHECK(strstr(dc->msg, "spring") && strstr(dc->msg, "partial"));
-      printf("  refused: %s\n", dc->msg);
-    }
-    ap_data_free_cs(dc);
-    ap_model_free(m);
-  }
-  /* a math-level system: no complex-step data */
-  rs_sleigh sp = {1.0, 1.0, 1.0};
-  ap_system_def def;
-  rs_sleigh_system(&sp, 1, &def);
-  ap_model *m = NULL;
-  char msg[256];
-  AP_CHECK_EQ_INT(ap_model_from_system(&def, &m, msg, sizeof msg), AP_OK);
-  ap_data_cs *dc = NULL;
-  AP_CHECK_EQ_INT(ap_core_has_cs(m, msg, sizeof msg), 0);
-  AP_CHECK(strstr(msg, "math-level") != NULL);
-  printf("fallback: %s\n", msg);
-  AP_CHECK_EQ_INT(ap_data_create_cs(m, &dc), AP_ERR_UNSUPPORTED);
-  AP_CHECK(dc == NULL);
-  ap_model_free(m);
-}
-
 int main(int argc, char **argv) {
   if (argc > 1) srcdir = argv[1];
   static const char *const examples[] = {
@@ -406,6 +273,5 @@ int main(int argc, char **argv) {
   static const char *const act[] = {"act_spring.yaml", "act_slider.yaml", "act_follow.yaml",
                                     "act_flywheel.yaml", "act_torque_t.yaml"};
   for (size_t i = 0; i < sizeof act / sizeof *act; i++) probe_scene("tests/scenes", act[i]);
-  fallbacks();
   return ap_check_finish("model_cs");
 }

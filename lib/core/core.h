@@ -194,8 +194,10 @@ void ap_core_copy_partition(const ap_data *src, ap_data_cs *dst);
  * most len bytes that names why (a math-level system, a user callback). */
 int ap_core_has_cs(const ap_model *m, char *msg, size_t len);
 
-/* Inside the complex-step build of a generic file, ap_data and ap_scratch name the mirrors. */
-#ifdef AP_SC_COMPLEX
+/* Inside the complex-step build of a generic file of lib/core and lib/model, ap_data and
+ * ap_scratch name the mirrors. (lib/analyze holds both kinds in one struct: its generic files
+ * define AP_SC_EXPLICIT_DATA and spell AP_SC(ap_data).) */
+#if defined(AP_SC_COMPLEX) && !defined(AP_SC_EXPLICIT_DATA)
 #define ap_data ap_data_cs
 #define ap_scratch ap_scratch_cs
 #endif
