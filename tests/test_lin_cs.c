@@ -22,7 +22,9 @@
  * user constraint is linearized by Ridders under AP_LIN_AUTO with ap_lin_fallback naming the
  * element, and refused (AP_ERR_UNSUPPORTED, named) with AP_LIN_COMPLEX_STEP; so is a state
  * function that gives no partial derivatives (found at evaluation); a math-level system falls
- * back too. The source directory comes as argv[1]. */
+ * back too. The command: `appell linearize` reports the method, `--derivatives ridders` and
+ * `complex-step` choose it, anything else is refused (exit 2). The source directory comes as
+ * argv[1]. */
 #include <complex.h>
 #undef I
 #include <dirent.h>
@@ -36,6 +38,7 @@
 
 #include "analyze/analyze_int.h"
 #include "check.h"
+#include "clitest.h"
 #include "refsys.h"
 
 static const char *srcdir = ".";
@@ -377,6 +380,31 @@ static void fallbacks(void) {
   ap_model_free(m);
 }
 
+/* ---- appell linearize --derivatives ----------------------------------------------------------- */
+
+static void command(void) {
+  int ok = ct_init("test_lin_cs") == 0;
+  AP_CHECK(ok);
+  if (!ok) return;
+  char scene_file[1200];
+  ct_source(scene_file, sizeof scene_file, "examples/scenes", "rolling_disk.yaml");
+  const char *dflt[] = {ct_bin, "linearize", scene_file, "--speed", "3", NULL};
+  AP_CHECK_EQ_INT(ct_run(dflt), 0);
+  AP_CHECK(ct_log_has("derivatives  complex step (exact to round-off)"));
+  const char *rid[] = {ct_bin, "linearize", scene_file, "--speed", "3", "--derivatives",
+                       "ridders", NULL};
+  AP_CHECK_EQ_INT(ct_run(rid), 0);
+  AP_CHECK(ct_log_has("derivatives  Ridders' extrapolated differences"));
+  const char *cs[] = {ct_bin, "linearize", scene_file, "--speed", "3", "--derivatives",
+                      "complex-step", NULL};
+  AP_CHECK_EQ_INT(ct_run(cs), 0);
+  AP_CHECK(ct_log_has("derivatives  complex step"));
+  const char *bad[] = {ct_bin, "linearize", scene_file, "--derivatives", "dual", NULL};
+  AP_CHECK_EQ_INT(ct_run(bad), 2);
+  AP_CHECK(ct_log_has("--derivatives complex-step or ridders, not 'dual'"));
+  ct_finish();
+}
+
 static int by_name(const void *a, const void *b) {
   return strcmp(*(char *const *)a, *(char *const *)b);
 }
@@ -401,5 +429,6 @@ int main(int argc, char **argv) {
     scene("tests/scenes", act[i], AP_LIN_EQUILIBRIUM);
   printf("largest |A_cs - A_R| / (E_R + E_cs) over every scene: %.3g\n", worst_all);
   fallbacks();
+  command();
   return ap_check_finish("lin_cs");
 }
