@@ -44,18 +44,24 @@ int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int
 int AP_SC(ap_core_check_finite)(const ap_model *m, ap_data *d, const char *what,
                                 const ap_sc *x, int rows, int cols) {
   ap_sc z = 0.0;                       /* x * 0 is 0, or NaN when x is Inf or NaN: one pass */
-  for (size_t i = 0, len = (size_t)rows * (size_t)cols; i < len; i++) z += x[i] * 0.0;
-  if (z == 0.0) return AP_OK;
+  double mx = 0.0;
+  for (size_t i = 0, len = (size_t)rows * (size_t)cols; i < len; i++) {
+    double a = SC_MAG(x[i]);
+    z += x[i] * 0.0, mx = a > mx ? a : mx;   /* and the magnitude (AP_HUGE) */
+  }
+  if (z == 0.0 && mx <= AP_HUGE) return AP_OK;
   for (int j = 0; j < cols; j++)
     for (int i = 0; i < rows; i++) {
       ap_sc xi = x[i + (size_t)j * rows];
-      if (SC_FINITE(xi)) continue;
+      if (SC_MAG(xi) <= AP_HUGE && SC_IM_FINITE(xi)) continue;
+      const char *why = SC_FINITE(xi) ? " (more than 1e150 in magnitude: too large to integrate)"
+                                      : "";
       if (cols == 1)
         AP_SC(ap_core_msg)(d, "system '%s': callback '%s' produced %g in entry %d at "
-                           "t = %.17g", m->name, what, SC_RE(xi), i, d->t);
+                           "t = %.17g%s", m->name, what, SC_RE(xi), i, d->t, why);
       else
         AP_SC(ap_core_msg)(d, "system '%s': callback '%s' produced %g in entry (%d, %d) at "
-                           "t = %.17g", m->name, what, SC_RE(xi), i, j, d->t);
+                           "t = %.17g%s", m->name, what, SC_RE(xi), i, j, d->t, why);
       return AP_ERR_NAN;
     }
   return AP_OK;

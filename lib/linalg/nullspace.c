@@ -149,7 +149,8 @@ static int small(int b, int k) { return imax(b, k) <= ap_la_small_limit(); }
 #define LA(call) (call) /* a LAPACK / BLAS call: compiled in the double build only */
 #else
 static int small(int b, int k) { return (void)b, (void)k, 1; }
-#define LA(call) (-1)   /* never reached: the complex-step build is always native */
+#define LA(call) 1      /* never reached: the complex-step build is always native (1, not -1:
+                          clang warns of other constants in && and ||) */
 #endif
 
 #include "linalg/householder.inc"

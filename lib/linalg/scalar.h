@@ -55,6 +55,7 @@ typedef double _Complex ap_sc;
 #define SC_MAG(x) fabs(creal(x))
 #define SC_SQRT(x) csqrt(x)
 #define SC_FINITE(x) (isfinite(creal(x)) && isfinite(cimag(x)))
+#define SC_IM_FINITE(x) isfinite(cimag(x))
 static inline ap_sc sc_abs_(ap_sc x) { return creal(x) < 0.0 ? -x : x; }
 #define SC_ABS(x) sc_abs_(x)
 #define SC_HYPOT(a, b) csqrt((a) * (a) + (b) * (b))
@@ -68,6 +69,7 @@ typedef double ap_sc;
 #define SC_MAG(x) fabs(x)
 #define SC_SQRT(x) sqrt(x)
 #define SC_FINITE(x) isfinite(x)
+#define SC_IM_FINITE(x) 1
 #define SC_ABS(x) fabs(x)
 #define SC_HYPOT(a, b) hypot((a), (b))
 #define SC_COS(x) cos(x)
