@@ -150,3 +150,12 @@ const char *ap_model_speed_name(const ap_model *m, int i) {
 const char *ap_model_constraint_name(const ap_model *m, int s) {
   return m && s >= 0 && s < m->b ? m->constraint_names[s] : "?";
 }
+
+int ap_core_has_cs(const ap_model *m, char *msg, size_t len) {
+  if (!m->ev.position_cs) {
+    snprintf(msg, len, "model '%s' is a math-level system: its callbacks are C functions of "
+             "doubles", m->name);
+    return 0;
+  }
+  return !m->ev.cs_blocker || m->ev.cs_blocker(m, msg, len) == 0;
+}

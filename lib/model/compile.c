@@ -376,6 +376,9 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->nphi = M->nloop + M->nquat;
   m->nhol = M->nloop;
   if (m->nphi > 0) m->ev.phi = ap_bm_phi;
+  m->ev.position_cs = ap_bm_position_cs, m->ev.velocity_cs = ap_bm_velocity_cs;
+  if (m->nphi > 0) m->ev.phi_cs = ap_bm_phi_cs;
+  m->ev.cs_blocker = ap_bm_cs_blocker;
   *out = m;
   return AP_OK;
 }
