@@ -776,6 +776,8 @@ static void cases_lin(void) {
   CASE(ap_lin_A_error, "NULL", ap_lin_A_error(NULL) == NULL);
   CASE(ap_lin_B, "NULL", ap_lin_B(NULL) == NULL);
   CASE(ap_lin_rates, "NULL", ap_lin_rates(NULL) == NULL);
+  CASE(ap_lin_method_used, "NULL", ap_lin_method_used(NULL) == AP_LIN_AUTO);
+  CASE(ap_lin_fallback, "NULL", ap_lin_fallback(NULL) && !ap_lin_fallback(NULL)[0]);
   CASE(ap_lin_eigen, "L NULL", ap_lin_eigen(NULL, sel, 1, 0) == AP_ERR_ARG);
   CASE(ap_lin_eigen, "not linearized", ap_lin_eigen(LN, sel, 1, 0) == AP_ERR_ARG);
   CASE(ap_lin_get_eigen, "L NULL", ap_lin_get_eigen(NULL, &eg) == AP_ERR_ARG);
