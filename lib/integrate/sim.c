@@ -213,6 +213,8 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
     s->gn_iwork = calloc(ap_la_iwork_size(s->n, nphi), sizeof *s->gn_iwork);
     if (!s->gn || !s->gn_iwork) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   }
+  /* CVODE's trial states lie off the constraints: redundant rows judged at accepted states */
+  ((ap_scratch *)s->d->internal)->judge_at_accepted = s->meth->backend == &ap_step_cvode;
   return ap_step_create(s->meth, s->ny, ap_drv_rhs, s, t0, s->y, &o, &s->st, s->msg,
                         sizeof s->msg);
 }
