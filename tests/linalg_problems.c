@@ -1,6 +1,7 @@
 /* Shared by test_linalg.c and test_linalg_paths.c (linalg_problems.h): the fixed-seed matrices,
  * plain-loop products, scratch arrays with guards, and the constraint problems (random A of a
  * chosen rank, consistent or inconsistent free terms). */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -94,4 +95,14 @@ problem random_problem(int b, int k, int r0) {
   }
   consistent_terms(&p);
   return p;
+}
+
+void both_paths(uint64_t state, void (*tests)(void)) {
+  const int limits[2] = {0, INT_MAX}; /* LAPACK / BLAS, native kernels */
+  for (int i = 0; i < 2; i++) {
+    int old = ap_la_set_small_limit(limits[i]);
+    linalg_rng = state;
+    tests();
+    ap_la_set_small_limit(old);
+  }
 }

@@ -69,4 +69,9 @@ void make_inconsistent(problem *p);
 /* Random A (b x k) of rank r0 = L R, with consistent free terms. */
 problem random_problem(int b, int k, int r0);
 
+/* Runs tests on the LAPACK/BLAS path (ap_la_set_small_limit(0)), then on the native small-size
+ * kernels (limit INT_MAX), each time from generator state `state`: both paths meet the same
+ * matrices and the same checks. The limit is restored after. */
+void both_paths(uint64_t state, void (*tests)(void));
+
 #endif

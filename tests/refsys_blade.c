@@ -170,14 +170,10 @@ void rs_sleigh_system(rs_sleigh *p, int explicit_bias, ap_system_def *def) {
   def->user = p;
 }
 
+/* The same blade state as the knife edge's: contact point, heading, speed along the blade. */
 void rs_sleigh_initial(double x0, double y0, double theta0, double u0, double w0, double q0[3],
                        double v0[3]) {
-  q0[0] = x0;
-  q0[1] = y0;
-  q0[2] = theta0;
-  v0[0] = u0 * cos(theta0);
-  v0[1] = u0 * sin(theta0);
-  v0[2] = w0;
+  rs_knife_initial(x0, y0, theta0, u0, w0, q0, v0);
 }
 
 /* Closed-form u, w, theta: u' = a w^2, J w' = -m a u w. */

@@ -9,7 +9,6 @@
  *
  * Every result is checked against its defining property (A B = 0, A b0 = -a0, Z^T Z = I, ...)
  * with plain loops here, not against the library. */
-#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -404,10 +403,8 @@ static void test_limit(void) {
   ap_la_set_small_limit(old);
 }
 
-/* Every test above, on the path the limit selects. */
-static void run_suite(int limit) {
-  int old = ap_la_set_small_limit(limit);
-  linalg_rng = LINALG_SEED; /* the same matrices on both paths */
+/* Every test above but test_limit, on one path. */
+static void one_path(void) {
   test_random();
   test_duplicate_rows();
   test_combination_row();
@@ -415,12 +412,10 @@ static void run_suite(int limit) {
   test_growth();
   test_rank_tolerance();
   test_singular();
-  ap_la_set_small_limit(old);
 }
 
 int main(void) {
   test_limit();
-  run_suite(0);       /* LAPACK / BLAS */
-  run_suite(INT_MAX); /* native kernels */
+  both_paths(LINALG_SEED, one_path);
   return ap_check_finish("linalg");
 }

@@ -344,19 +344,15 @@ static void test_scaling(void) {
     }
 }
 
-/* The tests of this file that run on one path, on the path the limit selects. */
-static void run_suite(int limit) {
-  int old = ap_la_set_small_limit(limit);
-  linalg_rng = LINALG_CHOL_STATE; /* the same matrices on both paths */
+/* The tests of this file that run on one path. */
+static void one_path(void) {
   test_chol();
   test_congruence();
   test_gemv();
-  ap_la_set_small_limit(old);
 }
 
 int main(void) {
-  run_suite(0);       /* LAPACK / BLAS */
-  run_suite(INT_MAX); /* native kernels */
+  both_paths(LINALG_CHOL_STATE, one_path);
   test_paths();
   test_no_rcond();
   test_scaling();
