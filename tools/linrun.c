@@ -251,7 +251,7 @@ static int sweep(run *r) {
   if (!csv && o->plot) snprintf(tmp, sizeof tmp, "%s.csv", o->plot), csv = tmp;
   if (csv && lin_write_sweep_csv(csv, o->sweep_path, &sw)) rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot &&
-      lin_plot(o->plot, csv, o->sweep_path, &sw, ap_scene_name(r->g.scene)) != 0)
+      lin_plot(o->plot, csv, o->sweep_path, &sw, ap_scene_name(r->g.scene), o) != 0)
     rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot) printf("%s\n", o->plot);
   ap_lin_sweep_free(&sw);
