@@ -221,11 +221,60 @@ static void test_scene_section(void) {
   }
 }
 
+/* ap_scene_lin_guess_load: the rolling disk's section sets spin_rate = -2 s (v = s m/s at
+ * r = 0.5), so the speeds are v0 + s dir with v0 = 0 (upright, no other rate), dir = the
+ * speeds at s = 1 (forward speed 1 m/s along x: vx = 1, spin 2 rad/s about the axis), and
+ * the scene's own spin_rate -6 gives s = 3; an override -4 gives 2, from text as from the
+ * file. Hoffmann's section has no speed: no direction, speed NaN. A missing file fails with
+ * its name and leaves nothing to free but the (empty) struct. */
+static void test_guess(void) {
+  char file[1200], msg[1024];
+  snprintf(file, sizeof file, "%s/examples/scenes/rolling_disk.yaml", srcdir);
+  ap_scene_lin_guess g;
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(file, NULL, 0, NULL, 0, &g, msg, sizeof msg), AP_OK);
+  AP_CHECK(g.dir != NULL && g.v0 != NULL && g.n == 6 && g.k == 5);
+  AP_CHECK_NEAR(g.speed, 3.0, 1e-14);
+  double nv0 = 0.0, ndir = 0.0, nres = 0.0;
+  for (int i = 0; g.dir && i < g.k; i++) {
+    nv0 = fmax(nv0, fabs(g.v0[i])), ndir += g.dir[i] * g.dir[i];
+    nres = fmax(nres, fabs(g.v[i] - g.v0[i] - g.speed * g.dir[i]));
+  }
+  AP_CHECK_NEAR(nv0, 0.0, 1e-15);
+  AP_CHECK_NEAR(ndir, 5.0, 1e-14);   /* vx = 1 and |w| = 2 */
+  AP_CHECK_NEAR(nres, 0.0, 1e-14);
+  AP_CHECK(g.sec.present && g.sec.nspeed == 1);
+  ap_lin *L = NULL;   /* the linearizer starts at v0 + s dir */
+  AP_CHECK_EQ_INT(ap_scene_lin_create(&g, NULL, &L), AP_OK);
+  AP_CHECK_EQ_INT(ap_lin_operating_point(L, g.speed), AP_OK);
+  for (int i = 0; L && i < g.k; i++) AP_CHECK_NEAR(ap_lin_v(L)[i], g.v[i], 1e-13);
+  ap_lin_free(L);
+  ap_scene_lin_guess_free(&g);
+  FILE *f = fopen(file, "rb");
+  static char text[8192];
+  size_t len = f ? fread(text, 1, sizeof text, f) : 0;
+  if (f) fclose(f);
+  const char *set[] = {"initial.disk.spin_rate=-4"};
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load("disk.yaml", text, len, set, 1, &g, msg, sizeof msg),
+                  AP_OK);
+  AP_CHECK_NEAR(g.speed, 2.0, 1e-14);
+  ap_scene_lin_guess_free(&g);
+  snprintf(file, sizeof file, "%s/examples/scenes/hoffmann.yaml", srcdir);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(file, NULL, 0, NULL, 0, &g, msg, sizeof msg), AP_OK);
+  AP_CHECK(g.dir == NULL && g.v0 == NULL && isnan(g.speed) && g.sec.about == AP_LIN_EQUILIBRIUM);
+  ap_scene_lin_guess_free(&g);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load("/nonexistent/bike.yaml", NULL, 0, NULL, 0, &g, msg,
+                                          sizeof msg), AP_ERR_ARG);
+  AP_CHECK(strstr(msg, "/nonexistent/bike.yaml") != NULL && g.scene == NULL && g.q == NULL);
+  ap_scene_lin_guess_free(&g);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(NULL, NULL, 0, NULL, 0, &g, msg, sizeof msg),
+                  AP_ERR_ARG);
+}
 
 int main(void) {
   find_srcdir();
   test_sweep();
   test_scene_section();
+  test_guess();
   test_errors();
   return ap_check_finish("lin_misc");
 }
