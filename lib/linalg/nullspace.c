@@ -149,7 +149,10 @@ static int small(int b, int k) { return imax(b, k) <= ap_la_small_limit(); }
 #define LA(call) (call) /* a LAPACK / BLAS call: compiled in the double build only */
 #else
 static int small(int b, int k) { return (void)b, (void)k, 1; }
-#define LA(call) (-1)   /* never reached: the complex-step build is always native */
+/* never reached: the complex-step build is always native. A function, not the constant -1:
+ * clang's -Wconstant-logical-operand (an error with -Werror) rejects `r > 0 && (-1)`. */
+static int la_native_only(void) { return -1; }
+#define LA(call) la_native_only()
 #endif
 
 #include "linalg/householder.inc"

@@ -126,6 +126,19 @@ static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double 
   return AP_OK;
 }
 
+/* After each effect: Q must stay finite and integrable (AP_HUGE), or this effect is named. */
+static int check_effect(const ap_model *m, ap_data *d, const ap_meff *ef, const double *Q,
+                        double t) {
+  for (int c = 0; c < m->k; c++)
+    if (!(fabs(Q[c]) <= AP_HUGE)) {
+      AP_BM_MSG(d, "model '%s': effect '%s' gives the generalized force %g on speed '%s' at "
+                "t = %.17g%s", m->name, ef->name, Q[c], ap_model_speed_name(m, c), t,
+                isfinite(Q[c]) ? " (more than 1e150 in magnitude: too large to integrate)" : "");
+      return AP_ERR_NAN;
+    }
+  return AP_OK;
+}
+
 int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
                   double *S, double *Q) {
   const ap_bmodel *M = ap_bm(m);
@@ -142,6 +155,7 @@ int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, cons
       case AP_EFFECT_JOINT_FORCE:
       case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, t, q, v, Q); break;
     }
+    if (rc == AP_OK) rc = check_effect(m, d, ef, Q, t);
     if (rc != AP_OK) return rc;
   }
   return AP_OK;

@@ -137,6 +137,14 @@ def test_a_bad_path_fails_before_any_run(tmp_path, disk):
     assert not list(tmp_path.iterdir())
 
 
+def test_bad_jobs_are_refused_as_arguments(disk):
+    # jobs=-1 raised SceneError('invalid batch definition'); 2.5 ran on 2 threads.
+    for bad in (-1, 2.5, "2"):
+        with pytest.raises(ValueError, match="jobs must be a whole number") as info:
+            appell.sweep(disk, grid={"bodies.disk.mass": [1, 2]}, set=SHORT, jobs=bad)
+        assert not isinstance(info.value, appell.SceneError)
+
+
 def test_progress_is_reported(disk):
     calls = []
     appell.sweep(disk, grid={"initial.disk.tilt": "60*deg:89*deg:8"}, set=SHORT,
