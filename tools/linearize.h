@@ -22,6 +22,7 @@ typedef struct lin_opts {
   int keep_cyclic;
   int has_yrange;          /* --yrange A:B: the plot's vertical range */
   double ymin, ymax;
+  int method;              /* --derivatives: ap_lin_method; 0 = AP_LIN_AUTO (the default) */
 } lin_opts;
 
 int lin_run(lin_opts *o);

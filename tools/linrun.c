@@ -40,6 +40,7 @@ static int create(run *r) {
   if (o->about >= 0) r->def.about = (ap_lin_about)o->about;
   if (o->free) r->def.free = (const char *const *)o->free;
   if (o->inputs) r->def.inputs = (const char *const *)o->inputs;
+  r->def.method = (ap_lin_method)o->method;
   int rc = ap_scene_lin_create(&r->g, &r->def, &r->L);
   if (rc != AP_OK) snprintf(r->msg, sizeof r->msg, "%s", ap_lin_message(r->L));
   return rc;
@@ -96,8 +97,15 @@ static void print_point(const run *r) {
     printf(" %s%s", ap_lin_state_name(L, i), ap_lin_is_cyclic(L, i) ? " (cyclic)" : "");
   printf("\nrates        (non-zero only for cyclic coordinates at a steady motion)\n");
   for (int i = 0; i < nx; i++) printf("  %-24s %14.6g\n", ap_lin_state_name(L, i), F[i]);
-  printf("state matrix A = dF/dx (row: rate of the state, column: the state); largest Ridders "
-         "error estimate %.3g (largest entry %.3g)\n", max_abs(E, (size_t)nx * nx),
+  if (ap_lin_method_used(L) == AP_LIN_COMPLEX_STEP)
+    printf("derivatives  complex step (exact to round-off)\n");
+  else if (ap_lin_fallback(L)[0])
+    printf("derivatives  Ridders' extrapolated differences: no complex step, %s\n",
+           ap_lin_fallback(L));
+  else
+    printf("derivatives  Ridders' extrapolated differences\n");
+  printf("state matrix A = dF/dx (row: rate of the state, column: the state); largest error "
+         "estimate %.3g (largest entry %.3g)\n", max_abs(E, (size_t)nx * nx),
          max_abs(A, (size_t)nx * nx));
   for (int i = 0; i < nx; i++) {
     printf("  %-24s", ap_lin_state_name(L, i));

@@ -1,9 +1,9 @@
 """appell.linearize: operating points, A and B, eigenvalues and speed sweeps from Python.
 
-References: the rolling disk's critical speed sqrt(g r / 3) for the uniform disk (REFERENCES.md,
-rolling disk: steady upright rolling), the Whipple bicycle's eigenvalues at 5 m/s (Meijaard et
-al. 2007, Table 2) and its mass matrix M (their §5: B's speed rows are M^-1 for a roll torque
-and a steer torque, exactly), the eigen-equation A x = lambda x, and `appell linearize`'s own
+References: the rolling disk's critical speed sqrt(g r / 3) for the uniform disk
+(docs/references.md §4, steady upright rolling), the Whipple bicycle's eigenvalues at 5 m/s
+(Meijaard et al. 2007, Table 2) and its mass matrix M (their §5: B's speed rows are M^-1 for a
+roll torque and a steer torque, exactly), the eigen-equation A x = lambda x, and `appell linearize`'s own
 CSV (the same library path: equal to the last digit)."""
 
 import math
