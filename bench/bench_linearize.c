@@ -3,7 +3,7 @@
  *
  * Cases:
  *   disk_point   rolling disk (m 1, r 0.5), upright at 3 m/s: operating point (Newton: only a
- *                check here), A (8 x 8, Ridders) and B, eigenvalues of the non-cyclic block
+ *                check here), A (8 x 8) and B, eigenvalues of the non-cyclic block
  *   disk_sweep   the same at 101 speeds from 0 to 5 m/s (continuation), tracked, and the
  *                critical speed located by root finding (about 10 more linearizations)
  *   bike_point   the Whipple bicycle (examples/scenes/bicycle.yaml and its linearize:
@@ -11,12 +11,16 @@
  *                eigenvalues of the roll/steer block (4 x 4)
  *   bike_sweep   the same at 101 speeds from 0 to 10 m/s, tracked, with the three
  *                characteristic speeds (v_d, weave, capsize) located by root finding
+ *   bike_point_ridders, bike_sweep_ridders   the same with Ridders' differences (the
+ *                fallback) instead of the default complex step, in the same run
  *   hoff_point   Hoffmann's pendulum as a body model with a loop closure (example scene):
  *                equilibrium by Newton from the scene's state, A (4 x 4), B, eigenvalues
  *   hoff_reduced the hand-derived Hoffmann system (tests/refsys.h), same work
  * Each is warmed up, then timed in `blocks` blocks of `reps` runs with the thread's CPU time
- * (the machine is shared); reported: median and spread (min..max) per run, and the number of
- * evaluations of the reduced equations (Appell solves) per run, from the data's counters.
+ * (the machine is shared; the load average is printed); A by the default method (the complex
+ * step) unless the name says Ridders; reported: median and spread (min..max) per run, and the
+ * number of evaluations of the reduced equations (Appell solves, real and complex-step) per
+ * run, from the data's counters.
  * The scene is loaded once, outside the timing (a run starts from the loaded model and the
  * guess). --only NAME runs one case (for valgrind --tool=callgrind --toggle-collect=run_once).
  * Usage: bench_linearize [--csv FILE] [--reps N] [--blocks N] [--only NAME]. Run with
@@ -103,7 +107,7 @@ long run_once(bcase *c, double *critical) {
     for (int i = 0; i < 3; i++) critical[i] = i < sw.npoints ? sw.points[i].p : NAN;
     ap_lin_sweep_free(&sw);
   }
-  evals = L->d->cnt.acceleration;
+  evals = L->d->cnt.acceleration + (L->ws_cs.d ? L->ws_cs.d->cnt.acceleration : 0);
   ap_lin_free(L);
   return evals;
 }
@@ -120,7 +124,7 @@ static void measure(bcase *c, int reps, int blocks, FILE *csv) {
     ns[b] = (now_ns() - t0) / reps;
   }
   qsort(ns, (size_t)blocks, sizeof *ns, cmp_double);
-  printf("%-13s %12.3f %12.3f %12.3f %10ld", c->name, ns[blocks / 2] * 1e-6, ns[0] * 1e-6,
+  printf("%-18s %12.3f %12.3f %12.3f %10ld", c->name, ns[blocks / 2] * 1e-6, ns[0] * 1e-6,
          ns[blocks - 1] * 1e-6, evals);
   if (c->sweep && c->ns == 0)
     printf("   critical speed %.15g (sqrt(g r/3) = %.15g)", crit[0], sqrt(9.81 * 0.5 / 3));
@@ -148,7 +152,12 @@ static void machine(void) {
   }
   if (f) fclose(f);
   buf[strcspn(buf, "\n")] = '\0';
-  printf("machine: %s, %d logical CPUs; thread CPU time\n", model, cpus);
+  double load[3] = {NAN, NAN, NAN};
+  f = fopen("/proc/loadavg", "r");
+  if (f && fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3) load[0] = NAN;
+  if (f) fclose(f);
+  printf("machine: %s, %d logical CPUs; thread CPU time; load average %.2f %.2f %.2f\n", model,
+         cpus, load[0], load[1], load[2]);
 }
 
 /* The bicycle from its scene and linearize: section (the guess and the speed direction). */
@@ -175,6 +184,11 @@ static void bike(const char *src, int reps, int blocks, FILE *csv) {
   measure(&c, reps, blocks, csv);
   c.name = "bike_sweep", c.sweep = 1;
   measure(&c, reps > 4 ? reps / 4 : 1, blocks, csv);
+  c.def.method = AP_LIN_RIDDERS;
+  c.name = "bike_point_ridders", c.sweep = 0;
+  measure(&c, reps, blocks, csv);
+  c.name = "bike_sweep_ridders", c.sweep = 1;
+  measure(&c, reps > 4 ? reps / 4 : 1, blocks, csv);
   ap_scene_lin_guess_free(&g);
 }
 
@@ -193,7 +207,7 @@ int main(int argc, char **argv) {
   machine();
   FILE *csv = csvname ? fopen(csvname, "w") : NULL;
   if (csv) fprintf(csv, "case,median_ms,min_ms,max_ms,appell_solves\n");
-  printf("%-13s %12s %12s %12s %10s\n", "case", "median (ms)", "min (ms)", "max (ms)", "solves");
+  printf("%-18s %12s %12s %12s %10s\n", "case", "median (ms)", "min (ms)", "max (ms)", "solves");
   /* the disk: upright, rolling along +x (axis along -y), speed parameter in m/s */
   bcase c = {"disk_point", disk(), ap_lin_def_default(), {0, 0, sqrt(0.5), sqrt(0.5), 0, 0},
              {0}, {1, 0, 0, 2, 0}, 0, 3.0, 5.0, {0}, 0};
