@@ -779,11 +779,18 @@ static void cases_lin(void) {
   CASE(ap_lin_create, "q NULL", ap_lin_create(TM, NULL, 0.0, NULL, tw, &oln) == AP_ERR_ARG && !oln);
   CASE(ap_lin_create, "t NaN", ap_lin_create(TM, NULL, NAN, tq, tw, &oln) == AP_ERR_ARG && !oln);
   CASE(ap_lin_create, "out NULL", ap_lin_create(TM, NULL, 0.0, tq, tw, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_create, "q NaN (a message in the linearizer)",
+       (tq[1] = NAN, ap_lin_create(TM, NULL, 0.0, tq, tw, &oln) == AP_ERR_ARG && oln &&
+                         strstr(ap_lin_message(oln), "nan")));
+  CASE(ap_lin_create, "v Inf (a message in the linearizer)",
+       (tw[0] = INFINITY, ap_lin_create(TM, NULL, 0.0, tq, tw, &oln) == AP_ERR_ARG && oln &&
+                              strstr(ap_lin_message(oln), "inf")));
   CASE(ap_lin_create, "def, v NULL (defaults, zero speeds)",
        (ap_lin_create(TM, NULL, 0.0, tq, NULL, &oln), oln != NULL));
   CASE(ap_lin_free, "NULL", (ap_lin_free(NULL), 1));
   CASE(ap_lin_message, "NULL: a fixed text", ap_lin_message(NULL) && ap_lin_message(NULL)[0]);
   CASE(ap_lin_operating_point, "L NULL", ap_lin_operating_point(NULL, 0.0) == AP_ERR_ARG);
+  CASE(ap_lin_operating_point, "s Inf", ap_lin_operating_point(LN, INFINITY) == AP_ERR_ARG);
   CASE(ap_lin_q, "NULL", ap_lin_q(NULL) == NULL);
   CASE(ap_lin_v, "NULL", ap_lin_v(NULL) == NULL);
   CASE(ap_lin_linearize, "NULL", ap_lin_linearize(NULL) == AP_ERR_ARG);

@@ -42,7 +42,11 @@ static int create(run *r) {
   if (o->inputs) r->def.inputs = (const char *const *)o->inputs;
   r->def.method = (ap_lin_method)o->method;
   int rc = ap_scene_lin_create(&r->g, &r->def, &r->L);
-  if (rc != AP_OK) snprintf(r->msg, sizeof r->msg, "%s", ap_lin_message(r->L));
+  const char *m = ap_lin_message(r->L);
+  if (rc != AP_OK && o->free && strncmp(m, "free: ", 6) == 0)   /* a name given by --free */
+    snprintf(r->msg, sizeof r->msg, "%s: --free: %s", o->scene, m + 6);
+  else if (rc != AP_OK)
+    snprintf(r->msg, sizeof r->msg, "%s", m);
   return rc;
 }
 

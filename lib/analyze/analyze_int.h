@@ -156,6 +156,8 @@ struct ap_lin {
   ap_lin_method used;       /* the method of the last linearization */
   char fallback[512];       /* why Ridders' method was used under AP_LIN_AUTO ("" otherwise) */
   char msg[512];
+  const char *bad_list;     /* "free" or "independent" when a name there is not a variable */
+  int bad_index;            /* its entry */
 };
 
 void ap_an_msg(ap_lin *L, const char *fmt, ...)

@@ -7,13 +7,16 @@
  * the speed keys at s = 0 and s = 1: the speeds v0 at speed 0 and dir = v(1) - v0 per unit.
  * The initial state is linear in the given rates (the dependent speeds solve A v + a0 = 0 at a
  * fixed q, and a projection is linear too), so the speeds at s are v0 + s dir, and the speed
- * of the scene's own rates is the least-squares s of v = v0 + s dir. Only the public API. */
+ * of the scene's own rates is the least-squares s of v = v0 + s dir. The public API, and the
+ * linearizer's record of a bad name in free: / independent: to locate it in the scene. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "analyze/analyze_int.h"
 #include "appell/scene.h"
+#include "scene/scene_int.h"
 
 #define MAX_KEY 512
 
@@ -123,11 +126,29 @@ ap_lin_def ap_scene_lin_def(const ap_scene_lin_guess *g) {
   return def;
 }
 
+/* A name of the section's free: or independent: list that is not a state variable: the
+ * message gets the entry's location in the scene (the linearizer's starts with "LIST: "). */
+static void locate_name(const ap_scene_lin_guess *g, const ap_lin_def *d, ap_lin *L) {
+  if (!L->bad_list) return;
+  int is_free = strcmp(L->bad_list, "free") == 0;
+  char *const *mine = is_free ? g->sec.free : g->sec.independent;
+  const char *const *used = is_free ? d->free : d->independent;
+  char at[400], tail[512];
+  size_t skip = strlen(L->bad_list) + 2;
+  if (!mine || used != (const char *const *)mine || strlen(L->msg) < skip ||
+      !sc_lin_entry_at(g->scene, L->bad_list, L->bad_index, at, sizeof at))
+    return;
+  snprintf(tail, sizeof tail, "%s", L->msg + skip);
+  snprintf(L->msg, sizeof L->msg, "%.200s: %.300s", at, tail);
+}
+
 int ap_scene_lin_create(const ap_scene_lin_guess *g, const ap_lin_def *def, ap_lin **out) {
   if (!out) return AP_ERR_ARG;
   *out = NULL;
   if (!g || !g->scene) return AP_ERR_ARG;
   ap_lin_def d = def ? *def : ap_scene_lin_def(g);
-  return ap_lin_create(ap_scene_model(g->scene), &d, g->t0, g->q,
-                       d.speed_dir && g->v0 ? g->v0 : g->v, out);
+  int rc = ap_lin_create(ap_scene_model(g->scene), &d, g->t0, g->q,
+                         d.speed_dir && g->v0 ? g->v0 : g->v, out);
+  if (rc == AP_ERR_ARG && *out) locate_name(g, &d, *out);
+  return rc;
 }
