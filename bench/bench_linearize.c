@@ -29,22 +29,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "analyze/analyze_int.h"
 #include "appell/appell.h"
+#include "benchutil.h"
 #include "refsys.h"
-
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
 
 static void check(int rc, const char *what, const ap_lin *L) {
   if (rc == AP_OK) return;
@@ -119,11 +108,11 @@ static void measure(bcase *c, int reps, int blocks, FILE *csv) {
   if (!ns) exit(1);
   for (int i = 0; i < (only ? 1 : 3); i++) evals = run_once(c, crit);   /* warm up */
   for (int b = 0; b < blocks; b++) {
-    double t0 = now_ns();
+    double t0 = bench_thread_ns();
     for (int i = 0; i < reps; i++) run_once(c, crit);
-    ns[b] = (now_ns() - t0) / reps;
+    ns[b] = (bench_thread_ns() - t0) / reps;
   }
-  qsort(ns, (size_t)blocks, sizeof *ns, cmp_double);
+  qsort(ns, (size_t)blocks, sizeof *ns, bench_cmp_double);
   printf("%-18s %12.3f %12.3f %12.3f %10ld", c->name, ns[blocks / 2] * 1e-6, ns[0] * 1e-6,
          ns[blocks - 1] * 1e-6, evals);
   if (c->sweep && c->ns == 0)
