@@ -308,10 +308,10 @@ int main(void) {
   check_ridders(&g, re0, im0, re5, im5);
   printf("Ridders' differences: eigenvalues within %.2g of Table 2\n", worst_eig);
   worst_eig = cs_eig;
-  printf("bicycle linearization (complex step): eigenvalues within %.2g of Table 2 (tolerance %.0e); M, C1, "
-         "K0, K2 within %.2g of §5 (tolerance %.0e); fits at 10 speeds within %.2g v^2 (K) and v (C); largest "
-         "error estimate in the 4 x 4 block %.2g\n", worst_eig, EIG_TOL, worst_mat, MAT_TOL,
-         worst_fit, worst_est);
+  printf("bicycle linearization (complex step): eigenvalues within %.2g of Table 2 (tolerance "
+         "%.0e); M, C1, K0, K2 within %.2g of §5 (tolerance %.0e); fits at 10 speeds within "
+         "%.2g v^2 (K) and v (C); largest error estimate in the 4 x 4 block %.2g\n", worst_eig,
+         EIG_TOL, worst_mat, MAT_TOL, worst_fit, worst_est);
   ap_lin_free(L);
   ap_scene_lin_guess_free(&g);
   return ap_check_finish("lin_bicycle");

@@ -5,8 +5,8 @@
  * round-off, where the model allows it; else with Ridders' method (ridders.c), first step
  * h0 max(1, |x0_j|), the round-off floor of its estimates from the noise of F measured at x0
  * (ap_an_noise: near a steady motion F is small while the terms it is made of are not, so a
- * noise relative to |F| would be far too small). Aerr holds the estimates. B = dF/dtau for a generalized force tau on
- * model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
+ * noise relative to |F| would be far too small). Aerr holds the estimates. B = dF/dtau for a
+ * generalized force tau on model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
  * the core's basis B_c and the factor of G = B_c^T g B_c left by the evaluation at x0, and at x0
  * the heading frames are the identity (du'/dtau = dv'/dtau); coordinate rows are zero.
  * Cyclic states: start from every coordinate state and drop a state while its column has a
