@@ -1,7 +1,10 @@
 /* The tree path of body models (lib/model/tree_*.c) against the dense body evaluator at the
  * same state: a0, h, Q, gamma, g x, A x + a0 and N v agree to round-off, and the tree's basis,
  * particular solutions and reduced metric satisfy A B = 0, A b0 = -a0, A w = gamma and
- * G_t = B_t^T g B_t with the dense A and g.
+ * G_t = B_t^T g B_t with the dense A and g. Then the core's structured pipeline
+ * (lib/core/structured.c) against ap_forward: v' and q' at speeds on the constraints, v from
+ * e' (minimal mode's v = B e' + b0), the projection of perturbed speeds, the kinetic energy and
+ * the constraint residual.
  *
  * Models: the car with N trailers and N rolling disks of bench_scaling, and a rig that walks
  * every element the tree path takes: knife edges that the body's own joint cannot satisfy (two
@@ -19,6 +22,7 @@
 #include "appell/appell.h"
 #include "check.h"
 #include "core/core.h"
+#include "core/structured.h"
 #include "model/tree_model.h"
 
 #define TOL 1e-12
@@ -236,6 +240,63 @@ static void dense_A(const ap_data *d, const double *x, const double *a0, double 
   }
 }
 
+/* The structured pipeline against ap_forward at speeds on the constraints. */
+static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap_data *dt,
+                           double t) {
+  int n = ap_model_n(m), k = ap_model_k(m), b = ap_model_b(m);
+  ap_ops ops;
+  ap_st *st = NULL;
+  ap_tree_ops(P, &ops);
+  AP_CHECK_EQ_INT(ap_st_create(m, &ops, &st), AP_OK);
+  double *v1 = calloc((size_t)(3 * k + 1), sizeof(double)), *v2 = v1 + k, *e = v2 + k;
+  for (int rep = 0; rep < 3; rep++) {
+    state(m, dt->q, dt->v);
+    dt->t = t + 0.3 * rep;
+    dt->basis = AP_BASIS_PARTITIONED, dt->speeds_from_e = 0;
+    AP_CHECK_EQ_INT(ap_st_partition(m, dt, st), AP_OK);
+    for (int j = 0; j < dt->l; j++) dt->e[j] = urand(), e[j] = dt->e[j];
+    ap_st_speeds(m, dt, st);                       /* v = B e' + b0: on the constraints */
+    for (int j = 0; j < dt->l; j++) AP_CHECK_NEAR(dt->v[dt->perm[dt->rank + j]], e[j], 0.0);
+    memcpy(dd->q, dt->q, sizeof(double) * (size_t)n);
+    memcpy(dd->v, dt->v, sizeof(double) * (size_t)k);
+    dd->t = dt->t, dd->basis = AP_BASIS_PARTITIONED, dd->speeds_from_e = 0;
+    AP_CHECK_EQ_INT(ap_partition(m, dd), AP_OK);
+    AP_CHECK_EQ_INT(ap_forward(m, dd), AP_OK);
+    int rc = ap_st_position(m, dt, st);
+    if (rc == AP_OK) rc = ap_st_velocity(m, dt, st);
+    if (rc == AP_OK) rc = ap_st_acceleration(m, dt, st);
+    AP_CHECK_EQ_INT(rc, AP_OK);
+    if (rc != AP_OK) fprintf(stderr, "%s\n", dt->msg);
+    double sv = fmax(1.0, max_abs(k, dd->vdot));
+    AP_CHECK_LE(diff(k, dt->vdot, dd->vdot), 1e-11 * sv);
+    AP_CHECK_LE(diff(n, dt->qdot, dd->qdot), 1e-12 * fmax(1.0, max_abs(n, dd->qdot)));
+    AP_CHECK_NEAR(ap_st_energy(dt, st, dt->v), ap_kinetic_energy(dd, dd->v),
+                  1e-12 * fmax(1.0, ap_kinetic_energy(dd, dd->v)));
+    AP_CHECK_LE(ap_st_residual(dt, st, dt->v), 1e-12 * fmax(1.0, max_abs(k, dt->v)));
+    /* minimal mode: v from e' */
+    dt->speeds_from_e = 1;
+    rc = ap_st_position(m, dt, st);
+    if (rc == AP_OK) rc = ap_st_velocity(m, dt, st);
+    if (rc == AP_OK) rc = ap_st_acceleration(m, dt, st);
+    AP_CHECK_EQ_INT(rc, AP_OK);
+    AP_CHECK_LE(diff(k, dt->vdot, dd->vdot), 1e-11 * sv);
+    dt->speeds_from_e = 0;
+    /* projection of perturbed speeds, and of a tangent */
+    for (int c = 0; c < k; c++) v1[c] = dt->v[c] + 0.01 * urand();
+    memcpy(v2, v1, sizeof(double) * (size_t)k);
+    double c1 = 0, c2 = 0;
+    AP_CHECK_EQ_INT(ap_st_project_here(m, dt, st, v1, &c1), AP_OK);
+    dd->basis = AP_BASIS_ORTHONORMAL;
+    AP_CHECK_EQ_INT(ap_project_speeds(m, dd, v2, &c2), AP_OK);
+    AP_CHECK_LE(diff(k, v1, v2), 1e-12 * fmax(1.0, max_abs(k, v2)));
+    AP_CHECK_NEAR(c1, c2, 1e-12 * fmax(1.0, c2));
+    AP_CHECK_LE(ap_st_residual(dt, st, v1), 1e-12 * fmax(1.0, max_abs(k, v1)));
+    (void)b;
+  }
+  free(v1);
+  ap_st_free(st);
+}
+
 static void check_model(const ap_model *m, const char *label, double t) {
   int n = ap_model_n(m), k = ap_model_k(m), b = ap_model_b(m);
   ap_tplan *P = NULL;
@@ -335,6 +396,7 @@ static void check_model(const ap_model *m, const char *label, double t) {
   }
   printf("%s: n %d, k %d, b %d, trees %d, rank %d, l %d\n", label, n, k, b, P->T.ntree, dt->rank,
          dt->l);
+  check_pipeline(m, P, dd, dt, t);
   free(B), free(x), free(dbl), free(ints);
   ap_data_free(dd), ap_data_free(dt);
   ap_tree_plan_free(P);

@@ -19,6 +19,7 @@
  *   gravity m g at the com; applied F at R p and T; spring +-F at its two points;
  *   joint damping -c v_i and user effects straight into Q. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "model/tree_model.h"
@@ -341,4 +342,53 @@ void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *q
     for (int r = 0; r < 4; r++)
       qdot[J->qidx[J->quat] + r] = N[r] * w[0] + N[r + 4] * w[1] + N[r + 8] * w[2];
   }
+}
+
+/* ---- the operators of the core's structured pipeline (core/structured.h) ------------------ */
+
+
+static int ops_position(const ap_model *m, ap_data *d, void *ws, int select) {
+  return ap_tree_position(m, d, ws, select);
+}
+static int ops_velocity(const ap_model *m, ap_data *d, void *ws) {
+  return ap_tree_velocity(m, d, ws);
+}
+static void ops_blocks(void *wsp, ap_sblocks *out) {
+  const ap_tree_ws *ws = wsp;
+  const ap_la_tree_work *W = &ws->W;
+  out->n = ws->P->T.ntree;
+  out->kofs = W->kofs, out->kidx = ws->P->kspeed;
+  out->lofs = W->lofs, out->lidx = W->lidx;
+  out->bofs = W->bofs, out->gofs = W->gofs;
+  out->B = W->B, out->G = W->G;
+}
+static void ops_gmul(void *ws, const double *x, double *y) { ap_tree_gmul(ws, x, y); }
+static void ops_amul(void *ws, const ap_data *d, const double *x, double *r) {
+  ap_tree_amul(ws, d, x, 1, r);
+}
+static void ops_nmul(void *wsp, const double *q, const double *v, double *qdot) {
+  const ap_tree_ws *ws = wsp;
+  ap_tree_nmul(ws->P, q, v, qdot);
+}
+
+
+/* One allocation: the struct, then the doubles, then the ints. */
+static void *ops_ws_create(const void *ctx, size_t *gcap) {
+  const ap_tplan *P = ctx;
+  size_t head = (sizeof(ap_tree_ws) + sizeof(double) - 1) / sizeof(double);
+  double *blk = calloc(head + P->nd + (P->ni * sizeof(int) + sizeof(double) - 1) / sizeof(double) + 1,
+                       sizeof(double));
+  if (!blk) return NULL;
+  ap_tree_ws *ws = (ap_tree_ws *)blk;
+  ap_tree_ws_init(P, blk + head, (int *)(blk + head + P->nd), ws);
+  *gcap = (size_t)P->T.k * (size_t)P->lmax;
+  return ws;
+}
+
+static void ops_ws_free(void *ws) { free(ws); }
+
+void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
+  ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
+              ops_amul, ops_nmul};
+  *ops = o;
 }

@@ -16,6 +16,7 @@
 #ifndef AP_MODEL_TREE_MODEL_H
 #define AP_MODEL_TREE_MODEL_H
 
+#include "core/structured.h"
 #include "linalg/tree.h"
 #include "model/model.h"
 
@@ -60,5 +61,7 @@ int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws);
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r);
 void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *qdot);
+/* The operators of the core's structured pipeline for this plan. */
+void ap_tree_ops(const ap_tplan *P, ap_ops *ops);
 
 #endif
