@@ -208,7 +208,7 @@ static void check_forest(forest *F, int verbose) {
   work_make(F, &w);
   ap_la_tree_work *W = &w.W;
   double growth = 0.0;
-  int rc = ap_la_tree_factor(&F->T, &F->g, W, 1, 1e-10, &growth, &bad);
+  int rc = ap_la_tree_factor(&F->T, &F->g, W, 1, NULL, 1e-10, &growth, &bad);
   AP_CHECK_EQ_INT(rc, AP_OK);
   if (rc != AP_OK) return;
   /* rank against LAPACK's pivoted QR of the dense A */
@@ -332,7 +332,7 @@ static void check_forest(forest *F, int verbose) {
     for (int q = 0; q < 6; q++) F->C[6 * p1 + q] = 2.0 * F->C[6 * p0 + q];
   }
   dense(F);
-  rc = ap_la_tree_factor(&F->T, &F->g, W, 0, 1e-10, &growth, &bad);
+  rc = ap_la_tree_factor(&F->T, &F->g, W, 0, NULL, 1e-10, &growth, &bad);
   if (b == rank || rc == AP_OK) {
     AP_CHECK_EQ_INT(rc, AP_OK);
     ap_la_tree_basis(&F->T, &F->g, W);
@@ -377,19 +377,19 @@ static void check_refusals(void) {
   work_make(&F, &w);
   double growth;
   int bad = -1;
-  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 1, 1e-10, &growth, &bad), AP_OK);
+  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 1, NULL, 1e-10, &growth, &bad), AP_OK);
   AP_CHECK_EQ_INT(w.W.rank[1], 1);   /* resolved by body 1's own speed */
   double keep[6];
   memcpy(keep, F.S + 18, sizeof keep);
   for (int q = 0; q < 6; q++) F.S[18 + q] = 0.0;   /* body 1's column: its row cannot use it */
-  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 0, 1e-10, &growth, &bad), AP_ERR_SINGULAR);
+  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 0, NULL, 1e-10, &growth, &bad), AP_ERR_SINGULAR);
   AP_CHECK_EQ_INT(bad, 1);
   /* chosen again: the row moves to body 0 */
-  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 1, 1e-10, &growth, &bad), AP_OK);
+  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 1, NULL, 1e-10, &growth, &bad), AP_OK);
   AP_CHECK_EQ_INT(w.W.rank[1], 0);
   AP_CHECK_EQ_INT(w.W.rank[0], 1);
   memcpy(F.S + 18, keep, sizeof keep);   /* back: the pushed row depends on body 1's speed */
-  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 0, 1e-10, &growth, &bad), AP_ERR_RANK);
+  AP_CHECK_EQ_INT(ap_la_tree_factor(&F.T, &F.g, &w.W, 0, NULL, 1e-10, &growth, &bad), AP_ERR_RANK);
   AP_CHECK_EQ_INT(bad, 1);
   free(w.dbl), free(w.ints);
 }

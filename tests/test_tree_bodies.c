@@ -293,6 +293,32 @@ static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap
     AP_CHECK_LE(ap_st_residual(dt, st, v1), 1e-12 * fmax(1.0, max_abs(k, v1)));
     (void)b;
   }
+  /* completing speeds from given ones: the same as the dense path when they determine the rest */
+  int *given = calloc((size_t)k, sizeof(int));
+  const char *gname[3] = {".x_dot", ".heading_dot", ".wz"};
+  for (int c = 0; c < k; c++)
+    for (int g = 0; g < 3; g++) {
+      const char *nm = ap_model_speed_name(m, c);
+      size_t L = strlen(nm), G = strlen(gname[g]);
+      if (L > G && strcmp(nm + L - G, gname[g]) == 0 && (g < 2 ? strncmp(nm, "car", 3) == 0 : 1))
+        given[c] = 1;
+    }
+  for (int c = 0; c < k; c++)   /* disks: all three angular speeds given */
+    if (strstr(ap_model_speed_name(m, c), "disk") && strstr(ap_model_speed_name(m, c), ".w"))
+      given[c] = 1;
+  int ng = 0;
+  for (int c = 0; c < k; c++) ng += given[c];
+  if (ng == k - b) {
+    state(m, dt->q, v1);
+    memcpy(v2, v1, sizeof(double) * (size_t)k);
+    memcpy(dd->q, dt->q, sizeof(double) * (size_t)n);
+    AP_CHECK_EQ_INT(ap_body_complete_speeds(m, dd, dd->q, given, v2), AP_OK);
+    ap_tree_ws *ws = st->ws;
+    AP_CHECK_EQ_INT(ap_tree_complete_speeds(m, dt, ws, given, v1), AP_OK);
+    AP_CHECK_LE(diff(k, v1, v2), 1e-12 * fmax(1.0, max_abs(k, v2)));
+    printf("  completed %d speeds from %d given\n", k - ng, ng);
+  }
+  free(given);
   free(v1);
   ap_st_free(st);
 }

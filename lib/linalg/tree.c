@@ -149,19 +149,22 @@ static void house_apply(int n, const double *v, double tau, double *y) {
 }
 
 /* Pivoted QR of D (n x nf, ld n) to choose the columns: perm gets the chosen column order,
- * the return value the rank (|R_jj| > tol). D is destroyed. */
-static int choose_columns(int n, int nf, double *D, double tol, int *perm) {
+ * the return value the rank (|R_jj| > tol). Columns flagged in avoid (may be NULL) are chosen
+ * only when no other column is left above tol. D is destroyed. */
+static int choose_columns(int n, int nf, double *D, double tol, int *perm, const int *avoid) {
   int r = 0;
   for (int c = 0; c < nf; c++) perm[c] = c;
   for (int j = 0; j < nf && j < n; j++) {
-    int best = j;
+    int best = -1;
     double bn = -1.0;
-    for (int c = j; c < nf; c++) {   /* the largest remaining column below row j */
-      double s = 0.0;
-      for (int i = j; i < n; i++) s += D[i + (size_t)c * n] * D[i + (size_t)c * n];
-      if (s > bn) bn = s, best = c;
-    }
-    if (!(sqrt(bn) > tol)) break;
+    for (int pass = 0; pass < 2 && best < 0; pass++)
+      for (int c = j; c < nf; c++) {   /* the largest remaining column below row j */
+        if (avoid && (avoid[perm[c]] != 0) != pass) continue;
+        double s = 0.0;
+        for (int i = j; i < n; i++) s += D[i + (size_t)c * n] * D[i + (size_t)c * n];
+        if (s > bn && sqrt(s) > tol) bn = s, best = c;
+      }
+    if (best < 0) break;
     if (best != j) {
       int ti = perm[j];
       perm[j] = perm[best], perm[best] = ti;
@@ -234,7 +237,7 @@ static int gather_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const ap_l
 /* Factor the rows at body i (module note). With select, the partition of the body is chosen
  * first and its slots allocated at *top. */
 static int factor_body(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W, int i,
-                       int select, double rtol, double *growth, int *top) {
+                       int select, const int *avoid, double rtol, double *growth, int *top) {
   int f0 = T->fofs[i], nf = T->fofs[i + 1] - f0, mr = T->maxrow, *perm = W->perm + f0;
   double *D = W->loc, *C = D + (size_t)mr * T->maxnf, *Dp = C + 6 * (size_t)mr, scale = 0.0;
   double rscale = 0.0;
@@ -244,7 +247,7 @@ static int factor_body(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree
     if (*top + n > T->cap) return AP_ERR_UNSUPPORTED;
     W->slot[i] = *top, W->nrow[i] = n, *top += n;
     memcpy(Dp, D, sizeof(double) * (size_t)n * nf);
-    W->rank[i] = choose_columns(n, nf, Dp, rtol * scale, perm);
+    W->rank[i] = choose_columns(n, nf, Dp, rtol * scale, perm, avoid ? avoid + f0 : NULL);
   }
   int r = W->rank[i], s0 = W->slot[i];
   for (int c = 0; c < nf; c++) memcpy(Dp + (size_t)c * n, D + (size_t)perm[c] * n,
@@ -325,11 +328,11 @@ static int assign_blocks(const ap_la_tree *T, ap_la_tree_work *W) {
 }
 
 int ap_la_tree_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
-                      int select, double rtol, double *growth, int *bad) {
+                      int select, const int *avoid, double rtol, double *growth, int *bad) {
   int top = 0, rc = AP_OK;
   *growth = 0.0, *bad = -1;
   for (int i = T->nb - 1; i >= 0 && rc == AP_OK; i--) {
-    rc = factor_body(T, g, W, i, select, rtol, growth, &top);
+    rc = factor_body(T, g, W, i, select, avoid, rtol, growth, &top);
     if (rc != AP_OK) *bad = i;
   }
   if (rc == AP_OK && select) rc = assign_blocks(T, W);

@@ -84,14 +84,16 @@ void ap_la_tree_work_init(const ap_la_tree *T, int lmax, double *dbl, int *ints,
                           ap_la_tree_work *W);
 
 /* Factor every body's rows, bottom-up. select = 1: choose the local partitions (pivoted QR,
- * rank by |R_jj| > rtol * scale of the body's row) and the blocks of e'; select = 0: keep them
- * (unpivoted QR of the chosen columns). growth = max |R11^-1 R12| over the bodies.
+ * rank by |R_jj| > rtol * scale of the body's rows) and the blocks of e'; avoid (k, by
+ * position; may be NULL) flags speeds to keep independent where the rows allow it; select = 0:
+ * keep the partition (unpivoted QR of the chosen columns; avoid unused). growth =
+ * max |R11^-1 R12| over the bodies.
  * Returns AP_OK; AP_ERR_SINGULAR (*bad = body) when a chosen pivot is tiny against its column
  * (frozen partition); AP_ERR_RANK (*bad = body) when rows pushed to the parent still depend on
  * the body's speeds (the partition no longer holds; select again); AP_ERR_UNSUPPORTED
  * (*bad = body) when the rows pushed up exceed the slots (cap) or a body's rows maxrow. */
 int ap_la_tree_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
-                      int select, double rtol, double *growth, int *bad);
+                      int select, const int *avoid, double rtol, double *growth, int *bad);
 
 /* The partition as the dense path states it: perm[0..rank-1] dependent speeds (bodies in
  * order), perm[rank..k-1] independent ones ascending (the order of e'). */

@@ -165,7 +165,7 @@ static void capacities(const ap_bmodel *M, ap_tplan *P) {
   size_t nb = (size_t)M->nj, k = (size_t)M->k, b = (size_t)M->b, niw = 0;
   size_t ndw = ap_la_tree_work_size(T, lmax, &niw);
   P->nd = P->shadow.scratch + 3 * nb + 6 * k + 13 * nb + 6 * b + 3 * 6 * nb + k + b + ndw;
-  P->ni = niw;
+  P->ni = niw + k;
 }
 
 int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why_len) {
@@ -231,5 +231,6 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
   ws->F = dbl, dbl += 6 * nb;
   ws->x = dbl, dbl += k;
   ws->rb = dbl, dbl += b;
+  ws->avoid = ints, ints += k;
   ap_la_tree_work_init(&P->T, P->lmax, dbl, ints, &ws->W);
 }

@@ -128,7 +128,8 @@ static int factor_status(const ap_model *m, ap_data *d, const ap_tplan *P, int r
   return AP_ERR_UNSUPPORTED;
 }
 
-int ap_tree_position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) {
+static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
+                    const int *avoid) {
   const ap_tplan *P = ws->P;
   const ap_bmodel *M = P->M;
   d->cnt.metric++;
@@ -148,7 +149,7 @@ int ap_tree_position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) 
   if (rc != AP_OK) return rc;
   double growth = 0.0;
   int bad = -1;
-  rc = ap_la_tree_factor(&P->T, &ws->g, &ws->W, select, d->rank_rtol, &growth, &bad);
+  rc = ap_la_tree_factor(&P->T, &ws->g, &ws->W, select, avoid, d->rank_rtol, &growth, &bad);
   if (rc != AP_OK) return factor_status(m, d, P, rc, bad);
   if (select) {
     ap_la_tree_partition(&P->T, &ws->W, d->perm, &d->rank);
@@ -157,6 +158,36 @@ int ap_tree_position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) 
   d->growth = growth;
   d->resid_a0 = ap_la_tree_solve(&P->T, &ws->g, &ws->W, NULL, d->a0, d->b0);
   ap_la_tree_basis(&P->T, &ws->g, &ws->W);
+  return AP_OK;
+}
+
+int ap_tree_position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) {
+  return position(m, d, ws, select, NULL);
+}
+
+/* The partition that keeps the given speeds independent where the rows allow it; then
+ * v = B e + b0 with e the given values (zero for a free speed the rows leave undetermined),
+ * checked against the given values (a given speed that came out dependent must agree). */
+int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
+                            double *v) {
+  const ap_tplan *P = ws->P;
+  int k = m->k;
+  for (int p = 0; p < k; p++) ws->avoid[p] = given[P->T.fidx[p]] != 0;
+  int rc = position(m, d, ws, 1, ws->avoid);
+  if (rc != AP_OK) return rc;
+  ap_la_tree_partition(&P->T, &ws->W, d->perm, &d->rank);
+  d->l = k - d->rank, d->redundant = m->b - d->rank, d->redundant_manifold = 0;
+  for (int j = 0; j < d->l; j++) d->e[j] = given[d->perm[d->rank + j]] ? v[d->perm[d->rank + j]] : 0.0;
+  double resid = ap_la_tree_solve(&P->T, &ws->g, &ws->W, d->e, d->a0, ws->x), worst = 0.0, sc = 1.0;
+  for (int c = 0; c < k; c++)
+    if (given[c]) worst = fmax(worst, fabs(ws->x[c] - v[c])), sc = fmax(sc, fabs(v[c]));
+  for (int s = 0; s < m->b; s++) sc = fmax(sc, fabs(d->a0[s]));
+  if (worst > 1e-9 * sc || resid > 1e-9 * sc) {
+    AP_BM_MSG(d, "model '%s': the given speeds leave the constraints violated by %.3g", m->name,
+              fmax(worst, resid));
+    return AP_ERR_INCONSISTENT;
+  }
+  memcpy(v, ws->x, sizeof(double) * (size_t)k);
   return AP_OK;
 }
 

@@ -42,6 +42,7 @@ typedef struct ap_tree_ws {
   double *U, *F;            /* (6 nb) temporaries */
   double *x;                /* (k) temporary */
   double *rb;               /* (b) temporary */
+  int *avoid;               /* (k) speeds to keep independent (ap_tree_complete_speeds) */
   ap_la_tree_work W;
 } ap_tree_ws;
 
@@ -57,6 +58,10 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws);
  * at d->v, then w. d->msg names the body or constraint on failure. */
 int ap_tree_position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select);
 int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws);
+/* ap_body_complete_speeds on the tree path: the speeds not given from the given ones (d->q
+ * set by the caller); the partition in d is replaced. */
+int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
+                            double *v);
 /* y = g x;  r = A x (+ a0 when with_a0);  qdot = N v. */
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r);
