@@ -315,6 +315,27 @@ static void check_forest(forest *F, int verbose) {
   for (int s = 0; s < b; s++) r[s] = a0[s];
   resid = ap_la_tree_solve(&F->T, &F->g, W, NULL, b ? r : NULL, u);
   for (int j = 0; j < l; j++) AP_CHECK_NEAR(u[perm[rank + j]], 0.0, 0.0);
+  /* multipliers: A^T lambda = r for r = A^T lambda* */
+  {
+    double *ls = malloc(sizeof(double) * (size_t)(2 * b + 1)), *lam = ls + b, *rr = malloc(sizeof(double) * (size_t)(2 * k + 1));
+    double *chk = rr + k;
+    for (int s = 0; s < b; s++) ls[s] = urand();
+    for (int c = 0; c < k; c++) {
+      rr[c] = 0.0;
+      for (int s = 0; s < b; s++) rr[c] += F->A[s + (size_t)c * b] * ls[s];
+    }
+    double rres = ap_la_tree_reactions(&F->T, &F->g, W, rr, lam, Fw);
+    for (int c = 0; c < k; c++) {
+      chk[c] = 0.0;
+      for (int s = 0; s < b; s++) chk[c] += F->A[s + (size_t)c * b] * lam[s];
+    }
+    double sr = fmax(1.0, max_abs(k, rr)) * scaleA * fmax(1.0, max_abs(b, lam));
+    AP_CHECK_LE(max_abs(k, rr) > 0 ? fabs(rres) : 0.0, TOL * sr * 10);
+    err = 0.0;
+    for (int c = 0; c < k; c++) err = fmax(err, fabs(chk[c] - rr[c]));
+    AP_CHECK_LE(err, TOL * sr * 10);
+    free(ls), free(rr);
+  }
   /* inconsistent free terms on redundant rows show in the residual */
   if (b > rank) {
     for (int s = 0; s < b; s++) r[s] = urand();

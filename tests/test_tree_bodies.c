@@ -273,6 +273,16 @@ static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap
     AP_CHECK_NEAR(ap_st_energy(dt, st, dt->v), ap_kinetic_energy(dd, dd->v),
                   1e-12 * fmax(1.0, ap_kinetic_energy(dd, dd->v)));
     AP_CHECK_LE(ap_st_residual(dt, st, dt->v), 1e-12 * fmax(1.0, max_abs(k, dt->v)));
+    /* reactions: the generalized constraint forces A^T lambda equal the dense path's */
+    AP_CHECK_EQ_INT(ap_st_reactions(m, dt, st), AP_OK);
+    AP_CHECK_EQ_INT(ap_fwd_reactions(m, dd), AP_OK);
+    for (int c = 0; c < k; c++) {
+      v1[c] = v2[c] = 0.0;
+      for (int s2 = 0; s2 < b; s2++)
+        v1[c] += dd->A[s2 + (size_t)c * b] * dt->lambda[s2], v2[c] += dd->A[s2 + (size_t)c * b] * dd->lambda[s2];
+    }
+    AP_CHECK_LE(diff(k, v1, v2), 1e-10 * fmax(1.0, max_abs(k, v2)));
+    if (dd->rank == b) AP_CHECK_LE(diff(b, dt->lambda, dd->lambda), 1e-9 * fmax(1.0, max_abs(b, dd->lambda)));
     /* minimal mode: v from e' */
     dt->speeds_from_e = 1;
     rc = ap_st_position(m, dt, st);

@@ -191,6 +191,15 @@ int ap_st_acceleration(const ap_model *m, ap_data *d, ap_st *st) {
   return AP_OK;
 }
 
+int ap_st_reactions(const ap_model *m, ap_data *d, ap_st *st) {
+  d->cnt.reactions++;
+  if (m->b == 0) return AP_OK;
+  st->ops->gmul(st->ws, d->vdot, st->tk1);               /* g v' + h - Q */
+  for (int i = 0; i < m->k; i++) st->tk1[i] += d->h[i] - d->Q[i];
+  st->ops->reactions(st->ws, st->tk1, d->lambda);
+  return ap_core_check_finite(m, d, "reactions (lambda)", d->lambda, m->b, 1);
+}
+
 /* ---- projection and diagnostics ------------------------------------------------------------ */
 
 int ap_st_project_here(const ap_model *m, ap_data *d, ap_st *st, double *v, double *change) {

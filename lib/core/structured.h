@@ -36,6 +36,8 @@ typedef struct ap_ops {
   void (*gmul)(void *ws, const double *x, double *y);                  /* y = g x */
   void (*amul)(void *ws, const ap_data *d, const double *x, double *r); /* r = A x + a0 */
   void (*nmul)(void *ws, const double *q, const double *v, double *qdot); /* q' = N v */
+  /* lambda (b) with A^T lambda = r (k), after the position stage */
+  void (*reactions)(void *ws, const double *r, double *lambda);
 } ap_ops;
 
 /* The core's part of a structured data: the model, the operators' workspace, the factors of
@@ -57,6 +59,9 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_position(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_acceleration(const ap_model *m, ap_data *d, ap_st *st);
+/* A^T lambda = g v' + h - Q; redundant rows get zero multipliers (the dense path's least squares
+ * spreads them: the forces on the bodies are the same). */
+int ap_st_reactions(const ap_model *m, ap_data *d, ap_st *st);
 /* v = B e' + b0 (partitioned basis). */
 void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st);
 /* v onto A v + a0 = 0, nearest in g, after the position stage; *change = g-norm of the step. */

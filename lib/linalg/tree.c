@@ -71,7 +71,7 @@ void ap_la_tree_inertia(const double *M13, const double *U, double *F) {
 size_t ap_la_tree_work_size(const ap_la_tree *T, int lmax, size_t *nint) {
   size_t nb = (size_t)T->nb, k = (size_t)T->k, cap = (size_t)T->cap, nf = (size_t)T->maxnf,
          nt = (size_t)T->ntree, lc = (size_t)(lmax > 0 ? lmax : 1), mr = (size_t)T->maxrow;
-  if (nint) *nint = 7 * k + 4 * nb + 4 * (nt + 1);
+  if (nint) *nint = 7 * k + 5 * nb + 4 * (nt + 1);
   return cap * nf + 6 * cap + k + cap * (nf + 6) + 2 * cap + 6 * nb + 2 * k * lc + 6 * nb * lc +
          mr * (2 * nf + 8) + nf * lc + 6 * lc + 64;
 }
@@ -93,6 +93,7 @@ void ap_la_tree_work_init(const ap_la_tree *T, int lmax, double *dbl, int *ints,
   W->nrow = ints, ints += nb;
   W->slot = ints, ints += nb;
   W->tpos = ints, ints += nb;
+  W->pin = ints, ints += nb;
   W->lofs = ints, ints += nt + 1;
   W->kofs = ints, ints += nt + 1;
   W->gofs = ints, ints += nt + 1;
@@ -195,7 +196,7 @@ static int choose_columns(int n, int nf, double *D, double tol, int *perm, const
  * (the rank decisions are relative to it); rscale: the rows' size. A row pushed up carries the
  * size of the rows it came from, not its own: a row that cancelled to round-off (a redundant
  * one) must not look independent against its own tiny norm. */
-static int gather_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const ap_la_tree_work *W,
+static int gather_rows(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
                        int i, double *D, double *C, double *scale, double *rscale) {
   int f0 = T->fofs[i], nf = T->fofs[i + 1] - f0, n = T->rofs[i + 1] - T->rofs[i];
   for (int a = T->cofs[i]; a < T->cofs[i + 1]; a++) {
@@ -214,6 +215,7 @@ static int gather_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const ap_l
   }
   for (int a = T->cofs[i]; a < T->cofs[i + 1]; a++) {   /* pushed rows keep their scale */
     int c = T->cidx[a];
+    W->pin[c] = j;
     for (int s = W->slot[c] + W->rank[c]; s < W->slot[c] + W->nrow[c]; s++, j++) {
       for (int q = 0; q < 6; q++) C[j + (size_t)q * n] = W->CX[6 * (size_t)s + q];
       for (int col = 0; col < nf; col++) D[j + (size_t)col * n] = 0.0;
@@ -497,4 +499,58 @@ void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double
       if (T->rdir[p] >= 0) s += x[T->fidx[T->fofs[i] + T->rdir[p]]];
       r[T->ridx[p]] = s + (a0 ? a0[T->ridx[p]] : 0.0);
     }
+}
+
+/* ---- multipliers ---------------------------------------------------------------------------- */
+
+/* Sweep up: with the wrench Fi of the rows already settled below body i (at o_i), its speeds
+ * need D_i^T mu = r_i - S_i^T Fi from the multipliers mu of its rows (own and pushed up from its
+ * children); rotated, R11^T nu1 = (r_i - S_i^T Fi)_dep and R12^T nu1 = (...)_ind (consistency),
+ * while nu2, the multipliers of the rows pushed on, are settled above. The parent receives
+ * X_i^T Fi + (C1 X_i)^T nu1. Sweep down: nu2 from the parent's multipliers of those rows (zero at
+ * the ground: the redundant rows carry no force), mu = Q nu, own rows' entries into lambda. */
+double ap_la_tree_reactions(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
+                            const double *r, double *lambda, double *Fw) {
+  double resid = 0.0, rl[6];
+  memset(Fw, 0, sizeof(double) * 6 * (size_t)T->nb);
+  for (int i = T->nb - 1; i >= 0; i--) {
+    int f0 = T->fofs[i], nf = T->fofs[i + 1] - f0, rk = W->rank[i], s0 = W->slot[i];
+    const int *perm = W->perm + f0;
+    double *Fi = Fw + 6 * (size_t)i, *nu = W->rq + s0;
+    for (int c = 0; c < nf && c < 6; c++) rl[c] = r[T->fidx[f0 + c]] - dot6(g->S + 6 * (size_t)(f0 + c), Fi);
+    for (int j = 0; j < rk; j++) {   /* R11^T nu1 = rhs_dep, forward */
+      double x = rl[perm[j]];
+      for (int p = 0; p < j; p++) x -= FROW(W, T, s0 + p)[j] * nu[p];
+      nu[j] = x / FROW(W, T, s0 + j)[j];
+    }
+    for (int c = rk; c < nf; c++) {   /* R12^T nu1 = rhs_ind */
+      double x = rl[perm[c]];
+      for (int p = 0; p < rk; p++) x -= FROW(W, T, s0 + p)[c] * nu[p];
+      resid = fmax(resid, fabs(x));
+    }
+    if (T->parent[i] < 0) continue;
+    double up[6];
+    memcpy(up, Fi, sizeof up);
+    transport_wrench(g->d + 3 * (size_t)i, up);
+    for (int j = 0; j < rk; j++)
+      for (int q = 0; q < 6; q++) up[q] += nu[j] * W->CX[6 * (size_t)(s0 + j) + q];
+    for (int q = 0; q < 6; q++) Fw[6 * (size_t)T->parent[i] + q] += up[q];
+  }
+  for (int i = 0; i < T->nb; i++) {
+    int f0 = T->fofs[i], n = W->nrow[i], rk = W->rank[i], s0 = W->slot[i], own = T->rofs[i + 1] - T->rofs[i];
+    double *mu = W->rq + s0;
+    for (int j = rk; j < n; j++) mu[j] = 0.0;   /* nu2: set by the parent below, or zero */
+    if (T->parent[i] >= 0)   /* the pushed rows are rows of the parent, from its row pin[i] */
+      for (int j = rk; j < n; j++) mu[j] = W->rq[W->slot[T->parent[i]] + W->pin[i] + j - rk];
+    for (int c = rk - 1; c >= 0; c--) {   /* mu = H_0 ... H_{r-1} nu */
+      double tau = W->tau[f0 + c], s = mu[c];
+      if (tau == 0.0) continue;
+      for (int q = c + 1; q < n; q++) s += FROW(W, T, s0 + q)[c] * mu[q];
+      s *= tau;
+      mu[c] -= s;
+      for (int q = c + 1; q < n; q++) mu[q] -= s * FROW(W, T, s0 + q)[c];
+    }
+    for (int j = 0; j < own; j++) lambda[T->ridx[T->rofs[i] + j]] = mu[j];
+  }
+  return resid;
 }

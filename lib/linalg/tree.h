@@ -59,6 +59,7 @@ typedef struct ap_la_tree_work {
   int *ecol;                /* (k, by position) its column in its tree's block B_t, or -1 */
   int *kpos, *pbody;        /* (k) position of each speed; body of each position */
   int *tpos;                /* (nb) place of each body in its tree's list */
+  int *pin;                 /* (nb) first row, among its parent's rows, of those it pushed */
   int *lofs, *lidx;         /* (ntree+1), (k): e' indices of tree t, ascending */
   int *kofs, *kidx;         /* (ntree+1), (k): positions (in fidx) of the speeds of tree t */
   int *gofs, *bofs;         /* (ntree+1): offsets of G_t (l_t x l_t) and B_t (k_t x l_t) */
@@ -122,6 +123,12 @@ void ap_la_tree_gmul(const ap_la_tree *T, const ap_la_tree_geom *g, const double
 /* r (b) = A x + a0 for the speeds x with twists U = J x (a0 may be NULL). */
 void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
                      const double *U, const double *a0, double *r);
+/* Multipliers lambda (b) with A^T lambda = r (k), r in the range of A^T (as g v' + h - Q at
+ * the solution of Appell's equations): the rows that reached the ground (redundant) get zero.
+ * Fw: 6 nb scratch. Returns the largest residual of the equations of the independent speeds
+ * (round-off when r is in the range). Uses the last factorization; overwrites rq. */
+double ap_la_tree_reactions(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
+                            const double *r, double *lambda, double *Fw);
 /* F = M_i U: the wrench at o_i of the momentum of a body (M13: mass, com offset, inertia). */
 void ap_la_tree_inertia(const double *M13, const double *U, double *F);
 

@@ -418,8 +418,13 @@ static void *ops_ws_create(const void *ctx, size_t *gcap) {
 
 static void ops_ws_free(void *ws) { free(ws); }
 
+static void ops_reactions(void *wsp, const double *r, double *lambda) {
+  ap_tree_ws *ws = wsp;
+  ap_la_tree_reactions(&ws->P->T, &ws->g, &ws->W, r, lambda, ws->F);
+}
+
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
   ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
-              ops_amul, ops_nmul};
+              ops_amul, ops_nmul, ops_reactions};
   *ops = o;
 }
