@@ -283,6 +283,44 @@ static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap
     }
     AP_CHECK_LE(diff(k, v1, v2), 1e-10 * fmax(1.0, max_abs(k, v2)));
     if (dd->rank == b) AP_CHECK_LE(diff(b, dt->lambda, dd->lambda), 1e-9 * fmax(1.0, max_abs(b, dd->lambda)));
+    /* body queries: states, point Jacobians, com accelerations at v' */
+    ap_tree_ws *tws = st->ws;
+    AP_CHECK_EQ_INT(ap_tree_body_eval(m, dt, tws), AP_OK);
+    AP_CHECK_EQ_INT(ap_body_eval(m, dd), AP_OK);
+    ap_tree_com_accel(tws, dt->vdot, -1, NULL);
+    double *Jw1 = calloc(12 * (size_t)k, sizeof(double)), *Jv1 = Jw1 + 3 * k, *Jw2 = Jv1 + 3 * k,
+           *Jv2 = Jw2 + 3 * k, qerr = 0, jerr = 0, aerr = 0, jmax = 1, amax = 1;
+    for (int bd = 0; bd < ap_model_body_count(m); bd++) {
+      ap_body_state sd;
+      ap_body_get_state(m, dd, bd, &sd);
+      kbody C = ap_kin_body(&P->shadow, tws->S, bd);
+      double vc[3], x[3], p0[3] = {0, 0, 0}, rw[3], rv[3], aw[3], av[3], a1[3], a2[3];
+      v3_copy(C.vo, vc);
+      v3_cross_add(C.w, C.rcom, vc);
+      for (int r = 0; r < 3; r++) {
+        qerr = fmax(qerr, fabs(C.o[r] - sd.pos[r]) + fabs(C.w[r] - sd.omega[r]) + fabs(vc[r] - sd.vel[r]));
+        x[r] = C.o[r] + C.rcom[r];
+      }
+      ap_tree_point_jacobian(tws, bd, C.o, Jw1, Jv1);
+      ap_body_point_jacobian(m, dd, bd, p0, Jw2, Jv2, rw, rv, aw, av);
+      jerr = fmax(jerr, fmax(diff(3 * k, Jw1, Jw2), diff(3 * k, Jv1, Jv2)));
+      jmax = fmax(jmax, max_abs(3 * k, Jv2));
+      /* com acceleration, dense: Jv(com) v' + av */
+      double pc[3];
+      m3t_mul_v(C.R, C.rcom, pc);
+      ap_body_point_jacobian(m, dd, bd, pc, Jw2, Jv2, rw, rv, aw, av);
+      for (int r = 0; r < 3; r++) {
+        a2[r] = av[r];
+        for (int c = 0; c < k; c++) a2[r] += Jv2[r + 3 * (size_t)c] * dd->vdot[c];
+      }
+      ap_tree_com_accel(tws, dt->vdot, bd, a1);
+      aerr = fmax(aerr, diff(3, a1, a2)), amax = fmax(amax, max_abs(3, a2));
+      (void)x;
+    }
+    AP_CHECK_LE(qerr, 1e-12);
+    AP_CHECK_LE(jerr, 1e-13 * jmax);
+    AP_CHECK_LE(aerr, 1e-11 * amax);
+    free(Jw1);
     /* minimal mode: v from e' */
     dt->speeds_from_e = 1;
     rc = ap_st_position(m, dt, st);

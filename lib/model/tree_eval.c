@@ -33,7 +33,7 @@ static double *con_time(const ap_tplan *P, const ap_tree_ws *ws, int ci) {
 /* ---- position ----------------------------------------------------------------------------- */
 
 /* Offsets, free columns, inertias and rheonomic twists of every tree body. */
-static void geometry(const ap_tplan *P, ap_tree_ws *ws) {
+void ap_tree_geometry(const ap_tplan *P, ap_tree_ws *ws) {
   const ap_bmodel *Ms = &P->shadow;
   const ap_la_tree *T = &P->T;
   for (int i = 0; i < T->nb; i++) {
@@ -139,7 +139,7 @@ static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
   int rc = ap_kin_position(&P->sm, d, d->t, d->q, ws->S);
   if (rc == AP_OK && M->nc) rc = ap_con_time(&P->sm, d, d->t, ws->S);
   if (rc != AP_OK) return rc;
-  geometry(P, ws);
+  ap_tree_geometry(P, ws);
   for (int i = 0; i < P->T.nb; i++)
     for (int p = P->T.rofs[i]; p < P->T.rofs[i + 1]; p++) row(P, ws, i, p, d->a0);
   rc = check_finite(m, d, "metric (body positions and inertias)", ws->g.M, 13 * (size_t)P->T.nb);
@@ -192,6 +192,15 @@ int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const
 }
 
 /* ---- velocity ----------------------------------------------------------------------------- */
+
+void ap_tree_twists_to_shadow(const ap_tplan *P, ap_tree_ws *ws, const double *v) {
+  ap_la_tree_twists(&P->T, &ws->g, v, ws->U);
+  for (int i = 0; i < P->T.nb; i++) {
+    kbody C = ap_kin_body(&P->shadow, ws->S, P->body[i]);
+    const double *U = ws->U + 6 * (size_t)i, *rho = ws->rho + 6 * (size_t)i;
+    for (int r = 0; r < 3; r++) C.Jw[r] = U[r] + rho[r], C.Jo[r] = U[3 + r] + rho[3 + r];
+  }
+}
 
 /* Inertial wrench of a body: f = m ac, t = rcom x f + Iw al + w x Iw w. */
 static void bias_wrench(const ap_bmodel *Ms, const double *S, int body, double *F) {
@@ -328,12 +337,7 @@ int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
   d->cnt.bias++;
   d->cnt.force += M->ne > 0;
   d->cnt.gamma += b > 0;
-  ap_la_tree_twists(&P->T, &ws->g, d->v, ws->U);
-  for (int i = 0; i < nb; i++) {   /* each body's full twist into the shadow's column */
-    kbody C = ap_kin_body(Ms, ws->S, P->body[i]);
-    const double *U = ws->U + 6 * (size_t)i, *rho = ws->rho + 6 * (size_t)i;
-    for (int r = 0; r < 3; r++) C.Jw[r] = U[r] + rho[r], C.Jo[r] = U[3 + r] + rho[3 + r];
-  }
+  ap_tree_twists_to_shadow(P, ws, d->v);
   ap_kin_velocity(Ms, d->v, ws->S);
   for (int i = 0; i < nb; i++) bias_wrench(Ms, ws->S, P->body[i], ws->F + 6 * (size_t)i);
   memset(d->h, 0, sizeof(double) * (size_t)k);

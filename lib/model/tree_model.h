@@ -66,6 +66,20 @@ int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r);
 void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *qdot);
+/* The geometry of the position stage from the shadow's kinematics (after ap_kin_position on
+ * the shadow); each body's full twist J v + rho into the shadow's column (after the geometry),
+ * ready for ap_kin_velocity on the shadow. */
+void ap_tree_geometry(const ap_tplan *P, ap_tree_ws *ws);
+void ap_tree_twists_to_shadow(const ap_tplan *P, ap_tree_ws *ws, const double *v);
+
+/* Body queries (tree_query.c). ap_body_eval on the tree path: positions, velocities, biases.
+ * The Jacobian of the world point x of a body (3 x k each, the body's ancestors' columns).
+ * com acceleration at v': call with body -1 once per v' (the twists), then per body. */
+int ap_tree_body_eval(const ap_model *m, ap_data *d, ap_tree_ws *ws);
+void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, double *Jw,
+                            double *Jv);
+void ap_tree_com_accel(ap_tree_ws *ws, const double *vdot, int body, double *a);
+
 /* The operators of the core's structured pipeline for this plan. */
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops);
 
