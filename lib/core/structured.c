@@ -127,6 +127,7 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.partitions++;
   int rc = st->ops->position(m, d, st->ws, 1);
   if (rc != AP_OK) return rc;
+  st->chosen = 1;
   rc = judge(m, d, d->resid_a0, d->a0, m->b, "a0");
   if (rc == AP_OK && d->redundant > 0)
     ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
@@ -136,7 +137,8 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
 
 int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.position++;
-  int select = d->basis == AP_BASIS_ORTHONORMAL;   /* projected mode: any valid partition */
+  /* projected mode (and no basis): any valid partition; minimal mode: the one chosen */
+  int select = d->basis != AP_BASIS_PARTITIONED || !st->chosen;
   int rc = st->ops->position(m, d, st->ws, select);
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;

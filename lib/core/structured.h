@@ -38,6 +38,8 @@ typedef struct ap_ops {
   void (*nmul)(void *ws, const double *q, const double *v, double *qdot); /* q' = N v */
   /* lambda (b) with A^T lambda = r (k), after the position stage */
   void (*reactions)(void *ws, const double *r, double *lambda);
+  /* the model's evaluator scratch inside ws (the data's ev scratch on this path) */
+  double *(*ev_scratch)(void *ws);
 } ap_ops;
 
 /* The core's part of a structured data: the model, the operators' workspace, the factors of
@@ -49,6 +51,7 @@ typedef struct ap_st {
   double *Gf;                 /* (gcap) Cholesky factors of the blocks of G */
   double *tk1, *tk2, *tb;     /* (k), (k), (b) */
   double *tl, *te;            /* (k), (k) */
+  int chosen;                 /* a partition was chosen (ap_st_partition) */
 } ap_st;
 
 int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out);

@@ -129,7 +129,7 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
     for (int i = 0; i < J->ndrivable; i++)
       if (J->drive[i]) last = i;
     J->nv = last + 1;   /* the driven speeds keep their places; free ones add nothing */
-    for (int i = 0; i < 6; i++) J->vidx[i] = -1;
+    for (int i = 0; i < J->nv; i++) J->vidx[i] = -1;
   }
   P->M = M;
   P->shadow = *M;

@@ -427,8 +427,10 @@ static void ops_reactions(void *wsp, const double *r, double *lambda) {
   ap_la_tree_reactions(&ws->P->T, &ws->g, &ws->W, r, lambda, ws->F);
 }
 
+static double *ops_ev_scratch(void *wsp) { return ((ap_tree_ws *)wsp)->S; }
+
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
   ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
-              ops_amul, ops_nmul, ops_reactions};
+              ops_amul, ops_nmul, ops_reactions, ops_ev_scratch};
   *ops = o;
 }

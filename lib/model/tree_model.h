@@ -31,6 +31,7 @@ typedef struct ap_tplan {
   ap_bmodel shadow;         /* no speeds, one twist column */
   ap_mjoint *sjoints;       /* the shadow's joints: free speeds removed from the columns */
   ap_model sm;              /* an ap_model around the shadow (names, messages) */
+  ap_ops ops;               /* the operators (ap_tree_ops), the model's m->ops */
   size_t nd, ni;            /* workspace: doubles, ints */
 } ap_tplan;
 
