@@ -11,7 +11,7 @@
  * trusted).
  *
  * For every problem, every Appell mode (minimal, projected, DAE) and every stepper (bs3,
- * dopri5, verner6, fehlberg8, adams, bdf at rtol = atol = 1e-3 ... 1e-12; rk4 over fixed steps
+ * dopri5, verner6, fehlberg8, dop853, adams, bdf at rtol = atol = 1e-3 ... 1e-12; rk4 over fixed steps
  * T / (10 m), m = 2, 4, ..., 4096) one run integrates from t = 0 to T, stopping exactly at
  * NOUT = 10 equally spaced output times, and records
  *   err    the largest position error (m) over the outputs against the exact solution
@@ -447,8 +447,8 @@ static void measure(const wp_problem *pr, const ap_model *m, const wp_run *r, in
 /* ---- the sweep ------------------------------------------------------------------------------ */
 
 static const char *const adaptive_methods[] = {"bs3", "dopri5", "verner6", "fehlberg8",
-                                               "adams", "bdf"};
-#define NADAPT 6
+                                               "dop853", "adams", "bdf"};
+#define NADAPT 7
 #define NTOL 10     /* 1e-3 ... 1e-12 */
 #define NFIX 12     /* rk4: h = T / (NOUT m), m = 2 ... 4096 */
 

@@ -264,8 +264,10 @@ ap_model *bs_turntable_model(rs_turntable *p) {
   return finish(b, good);
 }
 
-ap_model *bs_skate_model(const rs_knife *p) {
-  ap_builder *b = builder("skate");
+ap_model *bs_skate_model(const rs_knife *p) { return bs_skate_model_blades(p, 1); }
+
+ap_model *bs_skate_model_blades(const rs_knife *p, int blades) {
+  ap_builder *b = builder(blades > 1 ? "two blades" : "skate");
   if (!b) return NULL;
   double I[3] = {0.5 * p->J + 0.1, 0.5 * p->J + 0.05, p->J}, ey[3] = {0, 1, 0};
   int good = bs_add_body(b, "skate", p->m, NULL, I) == 0;
@@ -273,10 +275,13 @@ ap_model *bs_skate_model(const rs_knife *p) {
   j.kind = AP_JOINT_PLANAR, j.child = 0;
   ap_quat_from_axis_angle(ey, p->alpha, j.parent_frame.quat);   /* x down the slope */
   good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "skate joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "blade", c.kind = AP_CON_KNIFE_EDGE, c.body = 0;
-  c.direction[1] = -1.0;   /* refsys row: [sin phi, -cos phi, 0] */
-  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "blade");
+  static const char *names[2] = {"blade", "blade2"};
+  for (int i = 0; i < blades && i < 2; i++) {   /* the second: the same blade again */
+    ap_constraint_def c = ap_constraint_def_default();
+    c.name = names[i], c.kind = AP_CON_KNIFE_EDGE, c.body = 0;
+    c.direction[1] = -1.0;   /* refsys row: [sin phi, -cos phi, 0] */
+    good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), names[i]);
+  }
   good = good && gravity(b, p->grav);
   return finish(b, good);
 }
@@ -350,7 +355,9 @@ ap_model *bs_hoffmann_tree(const rs_hoffmann *p, int slide, double y_line) {
   return finish(b, good);
 }
 
-ap_model *bs_hoffmann_primitive(const rs_hoffmann *p) {
+ap_model *bs_hoffmann_primitive(const rs_hoffmann *p) { return bs_hoffmann_primitive_n(p, 1); }
+
+ap_model *bs_hoffmann_primitive_n(const rs_hoffmann *p, int hinges) {
   ap_builder *b = builder("Hoffmann primitive");
   if (!b) return NULL;
   int up, lo, good = upper_rod(b, p, &up, &lo);
@@ -361,12 +368,28 @@ ap_model *bs_hoffmann_primitive(const rs_hoffmann *p) {
   ap_quat_from_matrix(Ryzx, j.parent_frame.quat);
   ap_quat_from_matrix(Ryzx, j.child_frame.quat);
   good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "lower joint");
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = "hinge", c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
-  c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
-  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "hinge");
+  static const char *names[2] = {"hinge", "hinge2"};
+  for (int i = 0; i < hinges && i < 2; i++) {   /* the second: the same hinge again */
+    ap_constraint_def c = ap_constraint_def_default();
+    c.name = names[i], c.kind = AP_CON_COINCIDENT, c.body = lo, c.body2 = up, c.axes = 6u;
+    c.point[2] = p->a2, c.point2[2] = -2 * p->a1;
+    good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), names[i]);
+  }
   good = good && hoffmann_effects(b, p, lo);
   return finish(b, good);
+}
+
+void bs_hoffmann_primitive_state(const rs_hoffmann *p, double th, double psi, double thd,
+                                 double psd, double q[4], double v[4]) {
+  double ph = th + psi, phd = thd + psd;
+  /* revolute about x: body z axis at angle th from the world z; the upper rod's lower end at
+   * 2 a1 (sin th, -cos th) in (y, z) (the body point (0, 0, -2 a1)) */
+  double yh = 2 * p->a1 * sin(th), zh = -2 * p->a1 * cos(th);
+  double yhd = 2 * p->a1 * cos(th) * thd, zhd = 2 * p->a1 * sin(th) * thd;
+  /* the lower rod's point (0, 0, a2) is at the hinge: origin = hinge - a2 (-sin ph, cos ph) */
+  q[0] = th, q[1] = yh + p->a2 * sin(ph), q[2] = zh - p->a2 * cos(ph), q[3] = ph;
+  v[0] = thd, v[1] = yhd + p->a2 * cos(ph) * phd, v[2] = zhd + p->a2 * sin(ph) * phd;
+  v[3] = phd;
 }
 
 int bs_hoffmann_sliding_state(const ap_model *m, double q[2], double v[2], double *change) {
@@ -384,4 +407,41 @@ int bs_hoffmann_sliding_state(const ap_model *m, double q[2], double v[2], doubl
   ap_data_free(d);
   if (change) *change = moved;
   return rc == AP_OK ? complete(m, NULL, q, given, v) : rc;
+}
+
+/* ---- Chaplygin's ball ----------------------------------------------------------------------- */
+
+ap_model *bs_chaplygin_ball_model(double mass, double a, const double I[3]) {
+  ap_builder *b = builder("Chaplygin ball");
+  if (!b) return NULL;
+  ap_body_def d = ap_body_def_default();
+  d.name = "ball", d.mass = mass, d.shape.kind = AP_SHAPE_SPHERE, d.shape.radius = a;
+  for (int i = 0; i < 3; i++) d.inertia[4 * i] = I[i];   /* centre of mass at the centre */
+  int good = root_body(b, &d, AP_JOINT_PLANE_CONTACT);
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "roll", c.body = 0;
+  good = good && ok(b, ap_builder_add_constraint(b, &c, NULL), "roll");
+  good = good && gravity(b, 9.81);
+  return finish(b, good);
+}
+
+int bs_chaplygin_ball_state(const ap_model *m, ap_data *d, const double p[4], const double w[3],
+                            double q[6], double v[5]) {
+  const int given[5] = {0, 0, 1, 1, 1};
+  double nn = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]);
+  q[0] = 0.2, q[1] = -0.1;
+  for (int i = 0; i < 4; i++) q[2 + i] = p[i] / nn;
+  v[0] = v[1] = 0.0, v[2] = w[0], v[3] = w[1], v[4] = w[2];
+  return complete(m, d, q, given, v);
+}
+
+void bs_chaplygin_ball_momentum(double mass, double a, const double I[3], const double q[6],
+                                const double v[5], double K[3]) {
+  double R[9], wb[3], Iw[3];
+  ap_quat_to_matrix(q + 2, R);   /* body -> world, column-major */
+  for (int i = 0; i < 3; i++)    /* body components of w: R^T w */
+    wb[i] = R[3 * i] * v[2] + R[3 * i + 1] * v[3] + R[3 * i + 2] * v[4];
+  for (int i = 0; i < 3; i++) Iw[i] = I[i] * wb[i];
+  for (int i = 0; i < 3; i++) K[i] = R[i] * Iw[0] + R[i + 3] * Iw[1] + R[i + 6] * Iw[2];
+  K[0] += -mass * a * v[1], K[1] += mass * a * v[0];   /* m (G - P) x v_G = m a e_z x v_G */
 }

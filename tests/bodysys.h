@@ -114,6 +114,9 @@ ap_model *bs_turntable_model(rs_turntable *p);
 /* Planar joint on a plane inclined by p->alpha about y (x down the slope), knife edge across
  * the body's y; q = (x, y, heading) as rs_knife's. */
 ap_model *bs_skate_model(const rs_knife *p);
+/* The same with blades = 2: the knife edge written twice ("blade", "blade2"), one redundant
+ * row; the motion is the skate's. */
+ap_model *bs_skate_model_blades(const rs_knife *p, int blades);
 
 /* Planar joint, centre of mass p->a ahead of the blade along the body's x, knife edge. */
 ap_model *bs_sleigh_model(const rs_sleigh *p);
@@ -130,9 +133,36 @@ ap_model *bs_hoffmann_tree(const rs_hoffmann *p, int slide, double y_line);
 /* Primitive: the upper rod on a revolute (theta), the lower rod on a planar joint in the
  * world y-z plane (y, z, phi), the hinge as coincident points along y and z (two loop rows). */
 ap_model *bs_hoffmann_primitive(const rs_hoffmann *p);
+/* The same with hinges = 2: the hinge written twice ("hinge", "hinge2"): two redundant loop
+ * rows (velocity rows of A and rows of phi). */
+ap_model *bs_hoffmann_primitive_n(const rs_hoffmann *p, int hinges);
+
+/* The primitive model's state (theta, y, z, phi) and rates from the tree's (theta, psi =
+ * phi - theta) and theirs: the lower rod's planar coordinates where the hinge closes. */
+void bs_hoffmann_primitive_state(const rs_hoffmann *p, double th, double psi, double thd,
+                                 double psd, double q[4], double v[4]);
 
 /* The sliding tree assembled from the rough guess (theta, psi) = (0.5, -0.5) by
  * ap_body_project_q (*change: how far it moved, may be NULL), theta' = 1 and psi' completed. */
 int bs_hoffmann_sliding_state(const ap_model *m, double q[2], double v[2], double *change);
+
+/* ---- Chaplygin's ball ------------------------------------------------------------------- */
+
+/* A sphere of radius a and mass m whose centre of mass is at its centre but whose principal
+ * moments I (body axes) differ, on the plane-contact joint, rolling without slip under
+ * gravity: model "Chaplygin ball", q = (x, y, quaternion), v = (vx, vy, w) (world). Exact
+ * invariants: the energy, and the angular momentum about the contact point P, as a vector in
+ * the world, K = I_G w + m (G - P) x v_G (no moment about P: gravity acts through the centre
+ * above P, the reaction at P; and P moves parallel to G). */
+ap_model *bs_chaplygin_ball_model(double mass, double a, const double I[3]);
+
+/* Orientation p (normalized here), angular velocity w (world); the centre at (0.2, -0.1), its
+ * velocity completed from rolling at t = 0. d may be NULL. */
+int bs_chaplygin_ball_state(const ap_model *m, ap_data *d, const double p[4], const double w[3],
+                            double q[6], double v[5]);
+
+/* K (world) at (q, v): R I R^T w + m a e_z x v_G. */
+void bs_chaplygin_ball_momentum(double mass, double a, const double I[3], const double q[6],
+                                const double v[5], double K[3]);
 
 #endif

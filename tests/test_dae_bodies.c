@@ -72,21 +72,6 @@ static void disk_steady(const ap_model *m, const bs_disk *p, double th, double O
   disk_state(m, 0.4, th, 0.0, 0.0, wa, wn, q, v);
 }
 
-/* The hinge example from the tree state (theta, psi) and rates: the lower rod's planar
- * coordinates (y, z, phi) where the hinge closes. */
-static void hoffmann_hinge_state(const rs_hoffmann *p, double th, double psi, double thd,
-                                 double psd, double *q, double *v) {
-  double ph = th + psi, phd = thd + psd;
-  /* revolute about x: body z axis at angle th from the world z; the upper rod's lower end at
-   * 2 a1 (sin th, -cos th) in (y, z) (the body point (0, 0, -2 a1)) */
-  double yh = 2 * p->a1 * sin(th), zh = -2 * p->a1 * cos(th);
-  double yhd = 2 * p->a1 * cos(th) * thd, zhd = 2 * p->a1 * sin(th) * thd;
-  /* the lower rod's point (0, 0, a2) is at the hinge: origin = hinge - a2 (-sin ph, cos ph) */
-  q[0] = th, q[1] = yh + p->a2 * sin(ph), q[2] = zh - p->a2 * cos(ph), q[3] = ph;
-  v[0] = thd, v[1] = yhd + p->a2 * cos(ph) * phd, v[2] = zhd + p->a2 * sin(ph) * phd;
-  v[3] = phd;
-}
-
 /* ---- the cross-check ------------------------------------------------------------------------- */
 
 typedef struct cc_result { double dq, dv, phi; } cc_result;
@@ -177,7 +162,7 @@ static void test_crosscheck_all(void) {
 
   rs_hoffmann hp2 = {1.0, 1.5, 0.5, 0.4, 0.1, 0.08, 9.81, 2.0};   /* tests/test_dae.c */
   m = bs_hoffmann_primitive(&hp2);
-  hoffmann_hinge_state(&hp2, 0.3, -0.5, 0.5, 0.6, q, v);
+  bs_hoffmann_primitive_state(&hp2, 0.3, -0.5, 0.5, 0.6, q, v);
   r = crosscheck("hoffmann_hinge", m, q, v, 1.0, 1);
   AP_CHECK_LE(r.phi, bound(1.6));
   ap_model_free(m);
@@ -232,7 +217,7 @@ static void test_consistent_initialization(void) {
   AP_CHECK_LE(initial_residual("hoffmann_sliding", m, q, v), 1e-13);
   ap_model_free(m);
   m = bs_hoffmann_primitive(&hp);
-  hoffmann_hinge_state(&hp, 0.3, -0.5, 0.5, 0.6, q, v);
+  bs_hoffmann_primitive_state(&hp, 0.3, -0.5, 0.5, 0.6, q, v);
   AP_CHECK_LE(initial_residual("hoffmann_hinge", m, q, v), 1e-13);
   ap_model_free(m);
 }

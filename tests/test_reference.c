@@ -38,9 +38,9 @@
 
 static const ap_mode modes[] = {AP_MODE_MINIMAL, AP_MODE_PROJECTED};
 static const char *const mode_names[] = {"minimal", "projected"};
-static const char *const methods[] = {"dopri5", "verner6", "fehlberg8"};
+static const char *const methods[] = {"dopri5", "verner6", "fehlberg8", "dop853"};
 #define N_MODES 2
-#define N_METHODS 3
+#define N_METHODS 4
 
 static double now(void) {
   struct timespec ts;

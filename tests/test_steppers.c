@@ -161,10 +161,11 @@ static void grow(trees *T, const double *A, int order, int first, int left, int 
   }
 }
 
-/* Largest p <= pmax such that b satisfies all conditions up to order p; *res gets the
- * largest residual over orders <= p and *next the largest at order p + 1. */
-static int rk_order(int s, const double *A, const double *b, int pmax, double *res,
-                    double *next) {
+/* Largest p <= pmax such that b satisfies all conditions b . Phi(t) = theta^|t| / gamma(t)
+ * up to order p (theta = 1: the method's weights; theta < 1: a dense output's weights at
+ * theta); *res gets the largest residual over orders <= p and *next the largest at p + 1. */
+static int rk_order_at(int s, const double *A, const double *b, int pmax, double theta,
+                       double *res, double *next) {
   static trees T;
   int kids[16], p = 0;
   T.nt = 0, T.s = s;
@@ -176,7 +177,7 @@ static int rk_order(int s, const double *A, const double *b, int pmax, double *r
     for (int t = start; t < T.nt; t++) {
       double sum = 0.0;
       for (int i = 0; i < s; i++) sum += b[i] * T.phi[t][i];
-      worst = fmax(worst, fabs(sum - 1.0 / T.gamma[t]));
+      worst = fmax(worst, fabs(sum - pow(theta, order) / T.gamma[t]));
     }
     if (worst > 1e-12) {
       *next = worst;
@@ -187,8 +188,19 @@ static int rk_order(int s, const double *A, const double *b, int pmax, double *r
   return p;
 }
 
+static int rk_order(int s, const double *A, const double *b, int pmax, double *res,
+                    double *next) {
+  return rk_order_at(s, A, b, pmax, 1.0, res, next);
+}
+
+/* Order of the embedded solution d: one below the method's, but 5 for DOP853 (its error
+ * estimate combines embeddings of orders 5 and 3). */
+static int embedded_order(const ap_step_method *m) {
+  return strcmp(m->name, "dop853") == 0 ? 5 : m->order - 1;
+}
+
 static void check_tables(void) {
-  printf("order conditions (table handed to ARKODE):\n");
+  printf("order conditions (table handed to ARKODE; dop853: to our own stepper):\n");
   for (int i = 0; i < ap_step_method_count(); i++) {
     const ap_step_method *m = ap_step_method_get(i);
     double A[MAXS * MAXS], b[MAXS], c[MAXS], d[MAXS], res, next, dres, dnext, rowsum = 0.0;
@@ -207,7 +219,39 @@ static void check_tables(void) {
     AP_CHECK_EQ_INT(q, m->order);
     AP_CHECK_LE(rowsum, 1e-14);
     AP_CHECK(next > 1e-8);   /* order p + 1 fails clearly: the claimed order is sharp */
-    if (m->adaptive) AP_CHECK_EQ_INT(pd, m->order - 1);   /* the embedding, one lower */
+    if (m->adaptive) AP_CHECK_EQ_INT(pd, embedded_order(m));   /* the embedding */
+  }
+}
+
+/* DOP853 (stepper_rk.c) beyond ap_step_butcher: the dense-output stages 14 ... 16 and their
+ * row sums, the order-3 embedding, and the continuous extension: its weights w(theta) satisfy
+ * every condition of order <= 7 at theta (w(theta) . Phi(t) = theta^|t| / gamma(t)) and fail
+ * order 8 inside the step. */
+static void check_dop853_tables(void) {
+  double A[MAXS * MAXS], c[MAXS], b3[MAXS], w[MAXS], res, next, rowsum = 0.0;
+  int s;
+  AP_CHECK_EQ_INT(ap_step_rk_tables(MAXS, &s, A, c, b3, 1.0, w), AP_OK);
+  AP_CHECK_EQ_INT(s, 16);
+  for (int r = 0; r < s; r++) {
+    double sum = 0.0;
+    for (int j = 0; j < s; j++) sum += A[r * s + j];
+    rowsum = fmax(rowsum, fabs(sum - c[r]));
+  }
+  int p3 = rk_order(s, A, b3, 5, &res, &next);
+  printf("  dop853    16 stages with dense output: max|c - A 1| %.1e; order-3 embedding: order "
+         "%d (order 4 fails by %.1e)\n", rowsum, p3, next);
+  AP_CHECK_LE(rowsum, 1e-14);
+  AP_CHECK_EQ_INT(p3, 3);
+  int p1 = rk_order(s, A, w, 9, &res, &next);     /* theta = 1: the step itself */
+  AP_CHECK_EQ_INT(p1, 8);
+  static const double thetas[] = {0.1, 0.3, 0.5, 0.7, 0.9};
+  for (int i = 0; i < 5; i++) {
+    AP_CHECK_EQ_INT(ap_step_rk_tables(MAXS, &s, A, c, b3, thetas[i], w), AP_OK);
+    int p = rk_order_at(s, A, w, 8, thetas[i], &res, &next);
+    printf("            dense output at theta %.1f: order %d (residual %.1e; order %d fails "
+           "by %.1e)\n", thetas[i], p, res, p + 1, next);
+    AP_CHECK_EQ_INT(p, 7);
+    AP_CHECK(next > 1e-9);
   }
 }
 
@@ -218,7 +262,7 @@ static void check_tables(void) {
 static int fixed_range(const char *name) {
   static const struct { const char *name; int n0; } r[] = {
       {"heun2", 1000}, {"bs3", 192},     {"rk4", 270},
-      {"dopri5", 135}, {"verner6", 135}, {"fehlberg8", 24}};
+      {"dopri5", 135}, {"verner6", 135}, {"fehlberg8", 24}, {"dop853", 18}};
   for (size_t i = 0; i < sizeof r / sizeof r[0]; i++)
     if (strcmp(r[i].name, name) == 0) return r[i].n0;
   return 0;
@@ -250,6 +294,60 @@ static void check_fixed_orders(void) {
     double p = fit_order(m->name, method_error, m);
     printf("  -> fitted order %.2f (claimed %d)\n", p, m->order);
     AP_CHECK_NEAR(p, m->order, 0.3);
+  }
+}
+
+/* dop853's local slopes over the half period, N = 12 ... 204 (for docs/steppers.md: the
+ * fitted order depends on the range; printed, not asserted). */
+static void report_dop853_slopes(void) {
+  const ap_step_method *m = ap_step_method_find("dop853");
+  double T = PERIOD / 2, prev = 0.0;
+  printf("dop853 at fixed steps over [0, T/2], local slopes between N and N + 8:\n ");
+  for (int n = 12; n <= 204; n += 8) {
+    double e = fixed_error(m, T, n);
+    if (n > 12) printf(" %d:%.1f", n - 8, log(prev / e) / log((double)n / (n - 8)));
+    if ((n - 12) % 96 == 88) printf("\n ");
+    prev = e;
+  }
+  printf("\n");
+}
+
+/* Dense output: one fixed step h from the exact state at t0 = 1 (past pericentre), then
+ * ap_step_dky at t0 + h/2 against the exact solution; the local error of an interpolant of
+ * order r is O(h^(r+1)). Fitted over h = 0.4 / sqrt2^j, j = 1 ... 5 (DOP853's errors 4e-9 ...
+ * 7e-14, far above round-off; its local slopes still rise towards 8 over this range). Printed for every ERK method (docs/steppers.md), asserted for
+ * dop853, whose continuous extension has order 7. */
+static double dense_error(const ap_step_method *m, double h, double *step_err) {
+  ap_step_opts o = opts(0.0, h);
+  ap_stepper *s = NULL;
+  double t0 = 1.0, y[4], ym[4], t = t0;
+  kepler k = {0};
+  kepler_exact(t0, y);
+  if (ap_step_create(m, 4, kepler_rhs, &k, t0, y, &o, &s, NULL, 0) != AP_OK) return NAN;
+  int rc = ap_step_one(s, t0 + h, &t, y);
+  if (rc == AP_OK) rc = ap_step_dky(s, t0 + 0.5 * h, ym);
+  ap_step_free(s);
+  *step_err = err_at(t, y);
+  return rc == AP_OK ? err_at(t0 + 0.5 * h, ym) : NAN;
+}
+
+static void check_dense_order(void) {
+  printf("dense output, local error at the middle of one step h from the exact state "
+         "(Kepler, t0 = 1; h = 0.28 ... 0.071):\n");
+  for (int i = 0; i < ap_step_method_count(); i++) {
+    const ap_step_method *m = ap_step_method_get(i);
+    if (m->backend == &ap_step_cvode) continue;
+    double h[5], e[5], es[5];
+    printf("  %-9s", m->name);
+    for (int j = 0; j < 5; j++) {
+      h[j] = 0.4 / pow(2.0, 0.5 * (j + 1));
+      e[j] = dense_error(m, h[j], &es[j]);
+      printf("  %.2e", e[j]);
+    }
+    double p = slope(5, h, e) - 1.0;
+    printf("  -> dense output order %.2f (the step's local error: order %.2f)\n", p,
+           slope(5, h, es) - 1.0);
+    if (strcmp(m->name, "dop853") == 0) AP_CHECK_NEAR(p, 7.0, 0.3);
   }
 }
 
@@ -396,7 +494,7 @@ static void check_fixed_counts(void) {
 static void check_reset(void) {
   for (int i = 0; i < ap_step_method_count(); i++) {
     const ap_step_method *m = ap_step_method_get(i);
-    int fixed = m->backend == &ap_step_arkode;
+    int fixed = m->backend == &ap_step_arkode || m->backend == &ap_step_rk;
     ap_step_opts o = opts(1e-10, fixed ? PERIOD / 256 : 0.0);
     double ya[4], yb[4], t = 0.0, tb = 0.0, ts[2] = {PERIOD / 2, PERIOD};
     kepler k = {0};
@@ -416,6 +514,51 @@ static void check_reset(void) {
     AP_CHECK_LE(diff, fixed ? 1e-14 : 1e-6);
     if (!fixed) AP_CHECK_LE(err_at(PERIOD, yb), 1e-6);
     ap_step_free(s);
+  }
+}
+
+/* ap_step_restart (a change of coordinates on the same trajectory): DOP853 handed the exact
+ * f(t, y) continues exactly as if uninterrupted (same step sizes, same result bit for bit, no
+ * extra evaluation); ap_step_reset costs one evaluation (f at the new start) and otherwise
+ * gives the same steps. Other methods restart as with ap_step_reset. */
+static void check_restart(void) {
+  for (int i = 0; i < ap_step_method_count(); i++) {
+    const ap_step_method *m = ap_step_method_get(i);
+    if (!m->adaptive || m->order < 5) continue;   /* heun2, bs3: too many steps at 1e-9 */
+    int own = m->backend == &ap_step_rk;
+    double ts[2] = {PERIOD / 2, PERIOD}, ya[4], yb[4], yc[4], f[4], t = 0.0, tc = 0.0;
+    ap_step_stats sa, sb, sc;
+    kepler k = {0};
+    AP_CHECK_EQ_INT(run(m, opts(1e-9, 0.0), &k, 2, ts, ya, &sa), AP_OK);
+    ap_stepper *s = NULL, *r = NULL;
+    kepler_exact(0.0, yb), kepler_exact(0.0, yc);
+    AP_CHECK_EQ_INT(ap_step_create(m, 4, kepler_rhs, &k, 0.0, yb, &(ap_step_opts){1e-9, 1e-11,
+                    0, 0, 0, 10000000L, NULL}, &s, NULL, 0), AP_OK);
+    AP_CHECK_EQ_INT(ap_step_create(m, 4, kepler_rhs, &k, 0.0, yc, &(ap_step_opts){1e-9, 1e-11,
+                    0, 0, 0, 10000000L, NULL}, &r, NULL, 0), AP_OK);
+    if (!s || !r) continue;
+    while (t < ts[0]) AP_CHECK_EQ_INT(ap_step_one(s, ts[0], &t, yb), AP_OK);
+    while (tc < ts[0]) AP_CHECK_EQ_INT(ap_step_one(r, ts[0], &tc, yc), AP_OK);
+    kepler_rhs(t, yb, f, &k);
+    AP_CHECK_EQ_INT(ap_step_restart(s, t, yb, f), AP_OK);
+    AP_CHECK_EQ_INT(ap_step_reset(r, tc, yc), AP_OK);
+    while (t < ts[1]) AP_CHECK_EQ_INT(ap_step_one(s, ts[1], &t, yb), AP_OK);
+    while (tc < ts[1]) AP_CHECK_EQ_INT(ap_step_one(r, ts[1], &tc, yc), AP_OK);
+    ap_step_get_stats(s, &sb), ap_step_get_stats(r, &sc);
+    double db = 0.0, dc = 0.0;
+    for (int j = 0; j < 4; j++) db = fmax(db, fabs(yb[j] - ya[j])), dc = fmax(dc, fabs(yc[j] - ya[j]));
+    printf("  %-9s restart at T/2: steps %ld, evaluations %ld (uninterrupted %ld, %ld; with "
+           "reset %ld, %ld), |y - y_uninterrupted| %.1e (reset %.1e)\n", m->name, sb.steps,
+           sb.rhs_evals, sa.steps, sa.rhs_evals, sc.steps, sc.rhs_evals, db, dc);
+    AP_CHECK_LE(err_at(PERIOD, yb), 1e-6);
+    if (own) {
+      AP_CHECK(memcmp(ya, yb, sizeof ya) == 0);   /* bit for bit */
+      AP_CHECK_EQ_INT(sb.steps, sa.steps);
+      AP_CHECK_EQ_INT(sb.rhs_evals, sa.rhs_evals);
+      AP_CHECK(memcmp(ya, yc, sizeof ya) == 0);   /* reset: the same f recomputed */
+      AP_CHECK_EQ_INT(sc.rhs_evals, sa.rhs_evals + 1);
+    }
+    ap_step_free(s), ap_step_free(r);
   }
 }
 
@@ -464,8 +607,8 @@ static void check_failures(void) {
 }
 
 /* The state after a failed step is the last accepted one, and the message says what failed. */
-static void check_failed_state(void) {
-  const ap_step_method *m = ap_step_method_find("dopri5");
+static void check_failed_state(const char *name, const char *flag) {
+  const ap_step_method *m = ap_step_method_find(name);
   ap_step_opts o = opts(1e-9, 0.0);
   kepler k = {0};
   ap_stepper *s = NULL;
@@ -477,8 +620,8 @@ static void check_failed_state(void) {
   k.fail_at = k.calls + 3, k.fail_code = -2;
   AP_CHECK_EQ_INT(ap_step_one(s, PERIOD, &t, y), AP_ERR_CALLBACK);
   AP_CHECK(t == tl && memcmp(y, yl, sizeof y) == 0);
-  AP_CHECK(strstr(ap_step_message(s), "dopri5") != NULL);
-  AP_CHECK(strstr(ap_step_message(s), "ARK_RHSFUNC_FAIL") != NULL);
+  AP_CHECK(strstr(ap_step_message(s), name) != NULL);
+  AP_CHECK(strstr(ap_step_message(s), flag) != NULL);
   printf("message after f < 0: %s\n", ap_step_message(s));
   AP_CHECK_EQ_INT(ap_step_one(s, PERIOD, &t, y), AP_OK);   /* and it can go on */
   AP_CHECK(t > tl);
@@ -524,15 +667,20 @@ static void check_args(void) {
 
 int main(void) {
   check_tables();
+  check_dop853_tables();
   check_fixed_orders();
+  report_dop853_slopes();
+  check_dense_order();
   check_cvode_sweep();
   report_raw_erkstep();
   check_adaptive();
   check_fixed_counts();
   check_reset();
+  check_restart();
   check_dky();
   check_failures();
-  check_failed_state();
+  check_failed_state("dopri5", "ARK_RHSFUNC_FAIL");
+  check_failed_state("dop853", "returned -2");
   check_args();
   return ap_check_finish("steppers");
 }

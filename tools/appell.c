@@ -14,6 +14,8 @@
 #include "cli.h"
 
 int cmd_bench(int argc, char **argv);   /* tools/bench.c */
+int cmd_linearize(int argc, char **argv);   /* tools/linearize.c */
+int cmd_sweep(int argc, char **argv);   /* tools/sweep.c */
 
 static const char usage[] =
     "usage: appell COMMAND [OPTIONS]\n"
@@ -25,6 +27,8 @@ static const char usage[] =
     "  check SCENE   validate a scene and print its structure (n, k, b, rank, l, ...)\n"
     "  plot CSV      draw columns of a CSV file with gnuplot into a PNG or SVG file\n"
     "  bench SCENE   work-precision sweep of a scene against its own tight reference\n"
+    "  linearize SCENE  operating point, linearization, eigenvalues, speed sweeps\n"
+    "  sweep SCENE   run a scene over grids or random samples of its values, one CSV row a run\n"
     "\n"
     "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
     "3 numerical failure, 1 internal error or failed write, 128 + N stopped by signal N.\n"
@@ -142,8 +146,10 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "check") == 0) return finish(cmd_check(argc - 1, argv + 1));
   if (strcmp(cmd, "plot") == 0) return finish(cmd_plot(argc - 1, argv + 1));
   if (strcmp(cmd, "bench") == 0) return finish(cmd_bench(argc - 1, argv + 1));
-  static const char *const cmds[] = {"run", "check", "plot", "bench"};
-  const char *s = cli_suggest(cmd, cmds, 4);
+  if (strcmp(cmd, "linearize") == 0) return finish(cmd_linearize(argc - 1, argv + 1));
+  if (strcmp(cmd, "sweep") == 0) return finish(cmd_sweep(argc - 1, argv + 1));
+  static const char *const cmds[] = {"run", "check", "plot", "bench", "linearize", "sweep"};
+  const char *s = cli_suggest(cmd, cmds, 6);
   fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,
           s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
   return EXIT_INPUT;

@@ -68,5 +68,7 @@ int cli_out_failed(cli_out *o);
  * failed write is reported. Returns the exit code. */
 int cli_out_close(cli_out *o, int code);
 const char *cli_out_name(const cli_out *o);   /* the path, or "standard output" */
+/* The subcommand its messages name ("run" unless set; appell sweep sets "sweep"). */
+void cli_out_command(const char *name);
 
 #endif

@@ -151,10 +151,15 @@ static int fail(const char *fmt, ...)
 #endif
     ;
 
+/* The subcommand named in messages (appell sweep writes its table through these too). */
+static const char *command = "run";
+
+void cli_out_command(const char *name) { command = name; }
+
 static int fail(const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
-  fputs("appell run: ", stderr);
+  fprintf(stderr, "appell %s: ", command);
   vfprintf(stderr, fmt, ap);
   fputc('\n', stderr);
   va_end(ap);
@@ -220,8 +225,8 @@ static void remove_stale(const cli_out *o) {
     snprintf(file, sizeof file, "%s/%s", dir, n);
     if (lstat(file, &st) != 0 || !S_ISREG(st.st_mode) || st.st_uid != geteuid()) continue;
     if (unlink(file) == 0)
-      fprintf(stderr, "appell run: removed %s, left by an earlier run (process %ld) that was "
-              "killed\n", file, pid);
+      fprintf(stderr, "appell %s: removed %s, left by an earlier run (process %ld) that was "
+              "killed\n", command, file, pid);
   }
   if (d) closedir(d);
 }
@@ -271,12 +276,12 @@ int cli_out_close(cli_out *o, int code) {
   o->f = NULL;
   if (o->kind == CLI_OUT_STDOUT) clearerr(stdout);   /* reported here, not again at exit */
   if (o->err && o->err != EPIPE)
-    fprintf(stderr, "appell run: writing %s failed: %s%s\n", cli_out_name(o), strerror(o->err),
+    fprintf(stderr, "appell %s: writing %s failed: %s%s\n", command, cli_out_name(o), strerror(o->err),
             o->kind == CLI_OUT_FILE ? " (the partial file is removed)" : "");
   if (o->err && code == EXIT_OK) code = o->err == EPIPE ? 128 + SIGPIPE : EXIT_INTERNAL;
   if (o->kind != CLI_OUT_FILE) return code;
   if (code == EXIT_OK && rename(o->tmp, o->path) != 0) {
-    fprintf(stderr, "appell run: cannot rename %s to %s: %s\n", o->tmp, o->path,
+    fprintf(stderr, "appell %s: cannot rename %s to %s: %s\n", command, o->tmp, o->path,
             strerror(errno));
     code = EXIT_INTERNAL;
   }

@@ -31,9 +31,10 @@ import sys
 
 LEVELS = [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10]
 SHOW = [1e-4, 1e-6, 1e-8, 1e-10]
-STEPPERS = ["bs3", "dopri5", "verner6", "fehlberg8", "rk4", "adams", "bdf"]
-COLOR = {m: i + 1 for i, m in enumerate(STEPPERS)}
+STEPPERS = ["bs3", "dopri5", "verner6", "fehlberg8", "dop853", "rk4", "adams", "bdf"]
+COLOR = {m: i + 1 for i, m in enumerate(s for s in STEPPERS if s != "dop853")}
 COLOR["ida"] = 8
+COLOR["dop853"] = 9
 PROBLEMS = ["knife_edge", "sleigh", "turntable", "turntable_var", "rotating_line",
             "rolling_disk"]
 TITLES = {

@@ -19,3 +19,4 @@ set linetype 5 lc rgb "#9467bd" lw 1.5 pt 7 ps 0.6
 set linetype 6 lc rgb "#8c564b" lw 1.5 pt 7 ps 0.6
 set linetype 7 lc rgb "#e377c2" lw 1.5 pt 7 ps 0.6
 set linetype 8 lc rgb "#17becf" lw 1.5 pt 7 ps 0.6
+set linetype 9 lc rgb "#000000" lw 1.5 pt 7 ps 0.6

@@ -8,7 +8,9 @@
 #include "appell/system.h"
 #include "appell/sim.h"
 #include "appell/body.h"
+#include "appell/analyze.h"
 #include "appell/scene.h"
+#include "appell/batch.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

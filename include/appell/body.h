@@ -43,6 +43,41 @@ typedef int (*ap_time_fn)(double t, double f[3], void *user);
 typedef int (*ap_wrench_fn)(double t, double force[3], double torque[3], void *user);
 
 /* ------------------------------------------------------------------------------------------ */
+/* Functions of the state: joint forces, joint torques and motor set-points that read joint    */
+/* coordinates and speeds.                                                                     */
+
+/* Most inputs one state function may declare. */
+#define AP_STATE_MAX_INPUTS 16
+
+/* One scalar of the state that a state function reads: coordinate `index` (speed = 0) or speed
+ * `index` (speed = 1) of joint `joint`, in the joint kind's local order (table under "Joints"
+ * below: a revolute joint's angle is coordinate 0, its rate speed 0). Driven coordinates and
+ * speeds are not in the state and cannot be inputs. */
+typedef struct ap_state_input {
+  int joint;               /* joint id */
+  int speed;               /* 0: a coordinate, 1: a speed */
+  int index;               /* local index within the joint */
+} ap_state_input;
+
+/* What a state function receives. x holds the declared inputs, gathered from q and v in the
+ * order declared; q and v are the whole state, but the function must read only what it
+ * declared (the partial derivatives, and what the model evaluates for it, cover only that). */
+typedef struct ap_state_args {
+  double t;
+  const double *x;         /* nx declared inputs */
+  int nx;
+  const double *q, *v;     /* n coordinates, k speeds */
+} ap_state_args;
+
+/* A scalar F(t, x) of time and the declared inputs: write *f. When df is not NULL also write
+ * the exact partial derivatives df[0] = dF/dt and df[1 + i] = dF/dx_i (i < nx): they are what
+ * a linearization needs (a C function of doubles cannot be differentiated from outside; the
+ * scene layer fills them from its Taylor jets, a C user by hand), and what
+ * ap_body_actuator_partials returns through the chain rule. df is NULL in ordinary evaluations.
+ * Return codes as ap_time_fn. */
+typedef int (*ap_state_fn)(const ap_state_args *a, double *f, double *df, void *user);
+
+/* ------------------------------------------------------------------------------------------ */
 /* Bodies and shapes.                                                                          */
 
 /* Convex shapes, centred at the body origin with their symmetry axis along body z. Only the
@@ -222,8 +257,27 @@ typedef enum ap_effect_kind {
   AP_EFFECT_JOINT_DAMPING = 2, /* generalized force -damping v_i on every speed of `joint` */
   AP_EFFECT_APPLIED = 3,   /* force and torque (world axes) at `point` of `body`: the constants
                               force, torque, or wrench(t) when given */
-  AP_EFFECT_USER = 4       /* user callback adding to Q (k entries) */
+  AP_EFFECT_USER = 4,      /* user callback adding to Q (k entries) */
+  AP_EFFECT_JOINT_FORCE = 5, /* generalized force tau on speed `speed` of `joint`: Q_i += tau, a
+                              torque (N m) on an angular speed, a force (N) on a linear one,
+                              acting on the child and reacting on the parent along the joint's
+                              motion (its power is tau v_i). tau = state_fn(t, x) when given,
+                              else value_fn(t) f[0] when given, else `value` */
+  AP_EFFECT_MOTOR = 6      /* PD motor on speed `speed` of `joint` with set-point s = state_fn,
+                              value_fn or value as above:
+                                AP_MOTOR_RATE   tau = kd (s - v_i)
+                                AP_MOTOR_ANGLE  tau = kp (s - q_i) + kd (s' - v_i), q_i the
+                                                joint coordinate whose rate is v_i; s' = f[1] of
+                                                value_fn, 0 otherwise
+                              then |tau| <= max_effort (saturated: tau = +-max_effort); Q_i += tau
+                              as for AP_EFFECT_JOINT_FORCE */
 } ap_effect_kind;
+
+typedef enum ap_motor_mode {
+  AP_MOTOR_RATE = 0,       /* holds the speed at the set-point (rad/s or m/s) (default) */
+  AP_MOTOR_ANGLE = 1       /* holds the coordinate at the set-point (rad or m): revolute,
+                              prismatic, planar x y heading, free x y z, plane contact x y */
+} ap_motor_mode;
 
 typedef struct ap_effect_def {
   const char *name;        /* default "effect<id>" */
@@ -241,7 +295,21 @@ typedef struct ap_effect_def {
   double torque[3];        /* applied (N m) */
   ap_wrench_fn wrench;     /* applied: overrides force and torque when given */
   ap_force_fn generalized; /* user: add to Q (the array holds the other effects' sum) */
-  void *user;              /* passed to wrench and generalized */
+  /* Joint forces and motors. The speed must not be driven. */
+  int speed;               /* local index of the speed within `joint`; default 0 */
+  double value;            /* joint force: tau (N m or N); motor: set-point; default 0 */
+  ap_time_fn value_fn;     /* tau or set-point as f[0] of a function of time; default NULL */
+  ap_state_fn state_fn;    /* tau or set-point as a function of the state (wins over
+                              value_fn); default NULL */
+  int ninputs;             /* state_fn: how many inputs it reads, <= AP_STATE_MAX_INPUTS */
+  ap_state_input inputs[AP_STATE_MAX_INPUTS]; /* state_fn: what it reads, in the order of x */
+  ap_motor_mode motor;     /* default AP_MOTOR_RATE */
+  double kp;               /* motor, AP_MOTOR_ANGLE: N m/rad or N/m, >= 0; default 0 */
+  double kd;               /* motor: N m s/rad or N s/m, >= 0; default 0 (a rate motor needs
+                              kd > 0) */
+  double max_effort;       /* motor: |tau| <= max_effort (N m or N), > 0; default HUGE_VAL (no
+                              limit) */
+  void *user;              /* passed to wrench, generalized, value_fn and state_fn */
 } ap_effect_def;
 
 AP_API ap_effect_def ap_effect_def_default(void);
@@ -306,6 +374,14 @@ AP_API int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body,
 AP_API int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *potential);
 /* How many times effect `effect` was evaluated with this data. */
 AP_API long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect);
+/* A joint force or motor effect at the data's (t, q, v): it adds *tau to Q[*col]. The exact
+ * partial derivatives of tau (each output may be NULL): dtau_dq (n entries), dtau_dv (k),
+ * dtau_dt, from the state function's df (it is called with df), the value function's f[1] and
+ * f[2] and the PD law; while the motor saturates they are zero. Runs no kinematics (these effects
+ * read q and v only). AP_ERR_ARG for another kind of effect; a failing callback's code. */
+AP_API int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *col,
+                                     double *tau, double *dtau_dq, double *dtau_dv,
+                                     double *dtau_dt);
 /* Put q on its manifold: unit quaternions and loop closures (Gauss-Newton, minimum-norm
  * steps) at time d->t. *change (may be NULL) receives the size of the correction. The
  * drivers call the same after each accepted step; call it to assemble an initial state. */

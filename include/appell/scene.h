@@ -15,6 +15,7 @@
 
 #include <stddef.h>
 
+#include "appell/analyze.h"
 #include "appell/export.h"
 #include "appell/sim.h"
 #include "appell/status.h"
@@ -87,6 +88,27 @@ AP_API int ap_scene_residual(ap_scene *s, double t, const double *q, const doubl
  * prescribed non-zero speeds or moving ground; the energy drift then measures the error. */
 AP_API int ap_scene_conserves_energy(const ap_scene *s);
 
+/* Outputs of one run, for many runs of one scene at once. ap_scene_output_row, ap_scene_energy
+ * and ap_scene_residual evaluate in the scene's own data and remember the previous row (angle
+ * unwrapping, E(t0)), so they serve one simulation at a time and their memory carries over to
+ * the next run. An ap_scene_out keeps that state for one run: any number of them may evaluate
+ * rows of one scene from different threads at once (the scene and its model are only read;
+ * ap_scene_initial_state and ap_sim_create only read them too). The scene must outlive them. */
+typedef struct ap_scene_out ap_scene_out;
+
+AP_API int ap_scene_out_create(const ap_scene *s, ap_scene_out **out);
+/* The row of ap_scene_output_row (ap_scene_output_count values, column 0 = t) at the
+ * simulation's current state; the first row after creation sets E(t0) and the angles. */
+AP_API int ap_scene_out_row(ap_scene_out *o, ap_sim *sim, double *row);
+/* ap_scene_energy in the run's own data. */
+AP_API int ap_scene_out_energy(ap_scene_out *o, double t, const double *q, const double *v,
+                               double *E);
+AP_API void ap_scene_out_free(ap_scene_out *o);
+
+/* The value of a constant expression of the scene grammar ("70*deg", "pi/2", "1e-3"); on
+ * failure AP_ERR_ARG and msg says what is wrong with the text. */
+AP_API int ap_scene_constant(const char *text, double *x, char *msg, size_t msg_len);
+
 /* The scene's elements, for listings (appell check). */
 typedef enum ap_scene_section {
   AP_SCENE_BODIES = 0,
@@ -101,6 +123,30 @@ AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
 /* The scene's name (name: key, default the file name without directory and extension). */
 AP_API const char *ap_scene_name(const ap_scene *s);
+
+/* The scene's linearize: section (docs/linearize.md): how to find its operating point and what
+ * to report. The guess of the operating point is the scene's initial state with the overrides
+ * `sets` applied (reload the scene with them); the speed parameter s sets each initial rate
+ * speed_keys[i] to speed_coef[i] * s. Name lists are NULL-terminated (NULL when absent). */
+typedef struct ap_scene_lin {
+  int present;             /* the scene has a linearize: section */
+  ap_lin_about about;      /* default AP_LIN_STEADY */
+  int nsets;
+  char **sets;             /* "initial.<joint>.<key>=<value>" from linearize.initial */
+  int nspeed;
+  char **speed_keys;       /* "initial.<joint>.<key>" from linearize.speed */
+  double *speed_coef;      /* their coefficients */
+  char **free, **independent, **inputs, **states;
+  int drop_cyclic;         /* default 1 */
+  double sweep_from, sweep_to;
+  int sweep_count;         /* 0: no sweep given */
+} ap_scene_lin;
+
+/* Read the linearize: section (an absent section gives present = 0 and the defaults). The
+ * result owns its arrays: ap_scene_lin_free. */
+AP_API int ap_scene_get_linearize(const ap_scene *s, ap_scene_lin *out, char *msg,
+                                  size_t msg_len);
+AP_API void ap_scene_lin_free(ap_scene_lin *l);
 
 #ifdef __cplusplus
 }

@@ -19,7 +19,7 @@ enum {
   AP_ERR_ARG = -1,            /* invalid argument or definition */
   AP_ERR_NOMEM = -2,          /* allocation failed */
   AP_ERR_CALLBACK = -3,       /* a user callback returned < 0 */
-  AP_ERR_NAN = -4,            /* a callback produced NaN or Inf */
+  AP_ERR_NAN = -4,            /* a callback or a step produced NaN, Inf or a value past 1e150 */
   AP_ERR_SINGULAR = -5,       /* singular or indefinite matrix (G, R11, g) */
   AP_ERR_INCONSISTENT = -6,   /* constraint rows that contradict each other */
   AP_ERR_RANK = -7,           /* the constraints leave no free speed, or the rank changed */

@@ -68,7 +68,12 @@ typedef struct ap_scratch {
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
 } ap_scratch;
 
-/* Check that x[0..len-1] is finite; otherwise write a message naming the callback and entry. */
+/* Largest magnitude a model quantity may have: the steppers' error norms square the state's
+ * derivatives, and past 1e154 the square overflows (the step size, then the time, become NaN). */
+#define AP_HUGE 1e150
+
+/* Check that x[0..len-1] is finite and at most AP_HUGE in magnitude; otherwise write a message
+ * naming the callback, the entry and the value. */
 int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,
                          int rows, int cols);
 

@@ -9,6 +9,7 @@
  * (v, h, Q, gamma, w), acceleration (G, Phi, Cholesky, e'', v', q'), then reactions if asked
  * (A^T lambda = g v' + h - Q). Stages that nothing needs are skipped: no constraints means no
  * QR and B = I; no force callback means Q = 0. Nothing here allocates. */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -42,16 +43,24 @@ int ap_core_callback_status(const ap_model *m, ap_data *d, const char *what, int
 
 int ap_core_check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,
                          int rows, int cols) {
+  double z = 0.0, mx = 0.0;            /* x * 0 is 0, or NaN when x is Inf or NaN: one pass */
+  for (size_t i = 0, len = (size_t)rows * (size_t)cols; i < len; i++) {
+    double a = fabs(x[i]);
+    z += x[i] * 0.0, mx = a > mx ? a : mx;   /* and the magnitude (AP_HUGE) */
+  }
+  if (z == 0.0 && mx <= AP_HUGE) return AP_OK;
   for (int j = 0; j < cols; j++)
     for (int i = 0; i < rows; i++) {
       double xi = x[i + (size_t)j * rows];
-      if (isfinite(xi)) continue;
+      if (fabs(xi) <= AP_HUGE) continue;
+      const char *why = isfinite(xi) ? " (more than 1e150 in magnitude: too large to integrate)"
+                                     : "";
       if (cols == 1)
-        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry %d at t = %.17g",
-                    m->name, what, xi, i, d->t);
+        ap_core_msg(d, "system '%s': callback '%s' produced %g in entry %d at t = %.17g%s",
+                    m->name, what, xi, i, d->t, why);
       else
         ap_core_msg(d, "system '%s': callback '%s' produced %g in entry (%d, %d) at "
-                    "t = %.17g", m->name, what, xi, i, j, d->t);
+                    "t = %.17g%s", m->name, what, xi, i, j, d->t, why);
       return AP_ERR_NAN;
     }
   return AP_OK;
@@ -458,12 +467,53 @@ int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) 
   return rc == AP_OK ? ap_core_project_here(m, d, v, change) : rc;
 }
 
+/* a + sum x_i y_i with the products' and the sums' rounding errors carried along (fma and
+ * Neumaier's compensation): the result is as accurate as if computed in twice the precision,
+ * then rounded. A constraint residual is a small difference of large terms. */
+static double dot_compensated(int len, const double *x, int incx, const double *y, double a,
+                              double *mag) {
+  double sum = a, c = 0.0, m = fabs(a);
+  for (int i = 0; i < len; i++) {
+    double p = x[(size_t)i * incx] * y[i], pe = fma(x[(size_t)i * incx], y[i], -p);
+    double t = sum + p;
+    c += fabs(sum) >= fabs(p) ? (sum - t) + p : (p - t) + sum;
+    c += pe;
+    sum = t, m += fabs(p);
+  }
+  if (mag) *mag = m;
+  return sum + c;
+}
+
+/* The correction that takes v onto A v + a0 = 0, nearest in g, computed from the residual
+ * r = A v + a0 alone (so a state on the constraints is not touched, and the rounding of the
+ * correction is relative to the correction, not to v):
+ *
+ *     d0 = particular solution of A d0 = -r (the basis stage's factorization),
+ *     d  = d0 - B G^-1 B^T g d0      (remove d0's g-projection onto the null space of A).
+ *
+ * v <- v + d. Rows whose residual is within the round-off of their own terms
+ * (|r_s| <= 4 eps sum |A_sj v_j| + |a0_s|) count as satisfied; when all are, v is left as is. */
 int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *change) {
   ap_scratch *s = SCRATCH(d);
-  int k = m->k, l = d->l, rc;
-  for (int i = 0; i < k; i++) s->tk1[i] = v[i] - d->b0[i];   /* tk1 = v - b0 */
-  ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g (v - b0) */
-  ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g (v - b0) */
+  int k = m->k, l = d->l, b = m->b, rc, any = 0;
+  if (change) *change = 0.0;
+  if (b == 0) return AP_OK;
+  double *r = s->work + ap_la_work_size(b, k) - (size_t)b;  /* the last b doubles of work */
+  for (int i = 0; i < b; i++) {
+    double mag = 0.0;
+    r[i] = -dot_compensated(k, d->A + i, b, v, d->a0[i], &mag);
+    if (fabs(r[i]) > 4.0 * DBL_EPSILON * mag) any = 1;
+  }
+  if (!any) return AP_OK;
+  double resid = 0.0;
+  if (d->basis == AP_BASIS_ORTHONORMAL)
+    rc = ap_la_orth_particular(b, k, d->rank, s->F, s->jpvt, s->Qf, r, s->tk1, &resid, s->work);
+  else
+    rc = ap_la_partition_particular(b, k, d->rank, d->perm, s->F, s->tau, r, s->tk1, &resid,
+                                    s->work);
+  if (rc != AP_OK) return rc;
+  ap_la_gemv(k, k, d->g, s->tk1, s->tk2);                    /* tk2 = g d0 */
+  ap_la_gemv_t(k, l, d->B, s->tk2, s->tl);                   /* tl = B^T g d0 */
   ap_la_congruence(k, l, d->g, d->B, d->G, s->gB);
   rc = ap_la_chol(l, d->G, NULL, s->work, s->iwork);
   if (rc != AP_OK) {
@@ -472,11 +522,10 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
     return AP_ERR_SINGULAR;
   }
   ap_la_chol_solve(l, d->G, s->tl);
-  ap_la_gemv(k, l, d->B, s->tl, s->tk2);                     /* tk2 = B e */
+  ap_la_gemv(k, l, d->B, s->tl, s->tk2);                     /* tk2 = B G^-1 B^T g d0 */
   for (int i = 0; i < k; i++) {
-    double vi = d->b0[i] + s->tk2[i];
-    s->tk1[i] = vi - v[i];                                   /* correction */
-    v[i] = vi;
+    s->tk1[i] -= s->tk2[i];                                  /* the correction d */
+    v[i] += s->tk1[i];
   }
   ap_la_gemv(k, k, d->g, s->tk1, s->tk2);
   double c2 = 0.0;

@@ -8,7 +8,7 @@ const char *ap_strerror(int status) {
     case AP_ERR_ARG: return "invalid argument or definition";
     case AP_ERR_NOMEM: return "out of memory";
     case AP_ERR_CALLBACK: return "a user callback reported failure";
-    case AP_ERR_NAN: return "a callback produced NaN or Inf";
+    case AP_ERR_NAN: return "a value became NaN, Inf or too large to integrate";
     case AP_ERR_SINGULAR: return "singular or indefinite matrix";
     case AP_ERR_INCONSISTENT: return "inconsistent constraints";
     case AP_ERR_RANK: return "the constraints leave no free speed, or their rank changed";

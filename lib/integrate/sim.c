@@ -25,6 +25,7 @@
 
 #include "appell/body.h"
 #include "integrate/sim_int.h"
+#include "linalg/linalg.h"
 
 int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...) {
        va_list ap;
@@ -71,6 +72,10 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (!s->meth->adaptive && !(def->h_fixed > 0))
     return ap_drv_fail(s, AP_ERR_ARG, "method '%s' needs a positive h_fixed (got %g)",
                          s->meth->name, def->h_fixed);
+  if (!(def->h_init >= 0 && def->h_init <= HUGE_VAL) ||
+      !(def->h_max >= 0 && def->h_max <= HUGE_VAL))
+    return ap_drv_fail(s, AP_ERR_ARG, "h_init and h_max must be >= 0 (0: none; got %g, %g)",
+                       def->h_init, def->h_max);
   if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||
       !(def->init_tol > 0))
     return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
@@ -79,7 +84,8 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
   return AP_OK;
 }
 
-static int check_initial(ap_sim *s, const double *q0, const double *v0) {
+static int check_initial(ap_sim *s, double t0, const double *q0, const double *v0) {
+  if (!isfinite(t0)) return ap_drv_fail(s, AP_ERR_ARG, "the initial time t0 is %g", t0);
   for (int i = 0; i < s->n; i++)
     if (!isfinite(q0[i]))
       return ap_drv_fail(s, AP_ERR_ARG, "initial coordinate '%s' is %g",
@@ -119,12 +125,15 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   d->t = t0;
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
   memcpy(s->v, v0, sizeof(double) * (size_t)s->k);
-  if (s->def.mode != AP_MODE_DAE) {   /* rank, and which redundancy is structural */
-    int rc = ap_partition(s->m, d);
-    if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
-  }
+  if (s->m->b == 0 && s->def.mode != AP_MODE_MINIMAL) return AP_OK;
+  /* Rank, redundant rows and which redundancy is structural, in every mode: inconsistent rows
+   * are refused with their names; consistent ones are dropped (the partition, the orthonormal
+   * basis and the DAE's kept rows make the same choice) and named in the warning. */
+  int rc = ap_partition(s->m, d);
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   if (s->m->b == 0) return AP_OK;
-  int rc = ap_fwd_position(s->m, d);
+  if (d->rank < s->m->b) snprintf(s->warning, sizeof s->warning, "%s", d->msg);
+  rc = ap_fwd_position(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                       d->msg);
   double resid = ap_constraint_residual(d, s->v), size = sqrt(2 * ap_kinetic_energy(d, s->v));
@@ -142,34 +151,27 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
 }
 
 /* DAE mode: y = (q, v, lambda, mu), y' = (q', v', 0, 0), from the Appell solve at t0 (mu = 0:
- * on the exact solution the GGL multipliers vanish). */
+ * on the exact solution the GGL multipliers vanish; lambda: dae.c solves for the multipliers of
+ * the independent rows it keeps). */
 static int setup_dae(ap_sim *s) {
   ap_data *d = s->d;
-  int rc = ap_fwd_reactions(s->m, d);
-  if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   int nalg = s->b + (s->m->ev.phi ? s->m->nphi : 0);
   s->ny = s->n + s->k + nalg;
   double *yp = s->ytry;
   memset(s->y + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
-  memcpy(s->y + s->n + s->k, d->lambda, sizeof(double) * (size_t)s->b);
   memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
-  /* First step: IDA's own guess from |y'| is far too small at tight tolerances, and an index-2
-   * Newton iteration fails there (its matrix conditions like 1/h^2). Use the BDF1 local error
-   * h^2 |q''| / 2 = rtol |q| + atol with q'' ~ N v' from the Appell solve. */
-  double qmax = 0.0, amax = 0.0;
-  for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(s->y[i]));
-  for (int i = 0; i < s->k; i++) amax = fmax(amax, fabs(d->vdot[i]));
-  double h0 = s->def.h_init;
-  if (!(h0 > 0) && amax > 0)
-    h0 = sqrt(2.0 * (s->def.rtol * fmax(1.0, qmax) + s->def.atol) / amax);
+  double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, s->y, d->vdot);
   ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL};
-  return ap_dae_create(s->m, d, s->t, s->y, yp, &o, &s->dae, s->msg, sizeof s->msg);
+  int rc = ap_dae_create(s->m, d, s->t, s->y, yp, &o, s->def.rank_rtol, &s->dae, s->msg,
+                         sizeof s->msg);
+  if (rc == AP_OK) ap_dae_state(s->dae, s->y);
+  return rc;
 }
 
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
-  int rc = check_initial(s, q0, v0);
+  int rc = check_initial(s, t0, q0, v0);
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
   if (rc != AP_OK) return rc == AP_ERR_NOMEM ? ap_drv_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
@@ -194,11 +196,23 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   if (s->def.mode == AP_MODE_DAE) return setup_dae(s);
+  ap_drv_growth_cap(s, s->d->growth);
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
                     s->def.h_init, s->def.h_max, s->def.max_steps, NULL};
-  if (s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) o.proj = ap_drv_proj;
+  int nphi = s->m->ev.phi && s->m->ev.project_q ? s->m->nphi : 0;
+  if (ap_step_native_projection(s->meth) &&
+      ((s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) || nphi > 0)) {
+    o.proj = ap_drv_proj;
+    s->native_q = nphi > 0;
+  }
+  if (s->native_q) {                   /* gn_project_q's scratch */
+    size_t n = (size_t)s->n, np = (size_t)nphi;
+    s->gn = calloc(2 * np * n + np + ap_la_work_size(s->n, nphi) + n, sizeof *s->gn);
+    s->gn_iwork = calloc(ap_la_iwork_size(s->n, nphi), sizeof *s->gn_iwork);
+    if (!s->gn || !s->gn_iwork) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  }
   return ap_step_create(s->meth, s->ny, ap_drv_rhs, s, t0, s->y, &o, &s->st, s->msg,
                         sizeof s->msg);
 }
@@ -213,14 +227,17 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   }
   ap_sim *s = calloc(1, sizeof *s);
   size_t nk = (size_t)(m->n + m->k + m->b + (m->ev.phi ? m->nphi : 0));
-  double *buf = s ? calloc(2 * nk + (size_t)m->n + (size_t)m->k, sizeof *buf) : NULL;
+  size_t nphi = (size_t)(m->ev.phi ? m->nphi : 0);
+  double *buf = s ? calloc(4 * nk + (size_t)m->n + (size_t)m->k + nphi, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
     return AP_ERR_NOMEM;
   }
   s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;
   s->stats.min_rcond = 1.0;
-  s->y = buf, s->ytry = buf + nk, s->q = buf + 2 * nk, s->v = s->q + m->n;
+  s->y = buf, s->ytry = buf + nk, s->yev = buf + 2 * nk, s->ydot = buf + 3 * nk;
+  s->q = buf + 4 * nk, s->v = s->q + m->n, s->ev_stamp = -1, s->growth_cap = INFINITY;
+  s->phi = s->v + m->k;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
     s->def = *def;
@@ -241,6 +258,8 @@ void ap_sim_free(ap_sim *s) {
   ap_step_free(s->st);
   ap_dae_free(s->dae);
   ap_data_free(s->d);
+  free(s->gn);
+  free(s->gn_iwork);
   free(s->y);
   free(s);
 }
@@ -248,9 +267,10 @@ void ap_sim_free(ap_sim *s) {
 /* ---- advancing ----------------------------------------------------------------------------- */
 
 int ap_sim_advance(ap_sim *s, double tout) {
-  if (!(tout >= s->t))
-    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is before t = %.17g", tout,
-                         s->t);
+  if (s->failed) return s->failed;              /* s->msg still says why */
+  if (!(tout >= s->t) || !isfinite(tout))
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is not a finite time at or "
+                       "after t = %.17g", tout, s->t);
   for (long steps = 0; s->t < tout; steps++) {
     int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
     if (stop) {
@@ -266,10 +286,10 @@ int ap_sim_advance(ap_sim *s, double tout) {
     if (s->dae) {
       int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
       if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
+      rc = ap_drv_after_step_dae(s, t);
+      if (rc != AP_OK) return s->failed = rc;   /* IDA went on; this run cannot */
       s->t = t;
       memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-      rc = ap_drv_after_step_dae(s, t);
-      if (rc != AP_OK) return rc;
       continue;
     }
     int rc = ap_step_one(s->st, tout, &t, s->ytry);

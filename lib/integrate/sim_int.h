@@ -21,12 +21,26 @@ struct ap_sim {
   int n, k, b, ny;          /* ny = n + l (minimal), n + k (projected), n + k + b (DAE) */
   double t;                 /* time of the last accepted state */
   double *y, *ytry;         /* (n + k + b) stepper state, trial state */
+  double *yev, *ydot;       /* (n + k + b) the state of the last successful right-hand side
+                               and a derivative carried over a re-partition */
+  long ev_stamp;            /* pipeline stage count (d->cnt) right after that evaluation: the
+                               data still holds it while the count is unchanged */
+  double ev_t;              /* its time */
+  double growth_cap;        /* minimal mode: a stage whose basis growth exceeds this fails
+                               (recoverably): the step went too far on a frozen partition */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
+  double *phi;              /* (nphi) DAE mode: scratch for phi(q) after a step */
   int rhs_status;           /* last failure of the right-hand side */
+  int failed;               /* DAE mode: a check after an IDA step failed; every later advance
+                               returns it (IDA has moved past the state kept in y) */
   char rhs_msg[512];
   ap_sim_stats stats;
   char msg[512];
-  char warning[512];        /* the first warning, "" when none */
+  char warning[1024];       /* redundant rows dropped at t0, then the first condition warning */
+  int cond_warned;
+  int native_q;             /* CVODE BDF projects q inside its step (ap_drv_proj) */
+  double *gn;               /* native_q: Phi_q, Phi_q^T (nphi x n), phi (nphi), work */
+  int *gn_iwork;
   ap_sim_poll_fn poll;      /* called before every internal step (ap_sim_set_poll), or NULL */
   void *poll_user;
 };
@@ -42,13 +56,24 @@ int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...)
 void ap_drv_load_state(ap_sim *s, double t, const double *y);
 /* The stepper's right-hand side (ap_rhs_fn) with user = ap_sim. */
 int ap_drv_rhs(double t, const double *y, double *ydot, void *user);
-/* CVODE's projection hook (ap_proj_fn) for projected mode, user = ap_sim. */
+/* CVODE BDF's projection hook (ap_proj_fn), user = ap_sim: q onto its manifold (body models)
+ * and, in projected mode, v onto the constraints. */
 int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user);
+/* Minimal mode: set s->growth_cap for the next step from the basis growth g at its start: a
+ * stage beyond max(AP_DRV_GROWTH_CAP x switch_growth, 2 g) fails recoverably. */
+#define AP_DRV_GROWTH_CAP 4.0
+void ap_drv_growth_cap(ap_sim *s, double g);
 /* After an accepted step of a one-step or multistep method at t (s->y holds the new state):
  * coordinates onto their manifold, then the mode's own work (re-partition, projection,
  * residuals). May restart the stepper. */
 int ap_drv_after_step(ap_sim *s, double t);
-/* After an accepted IDA step (DAE mode): checks and residuals only. */
+/* IDA's first step from (q, v'): IDA's own guess from |y'| is far too small at tight
+ * tolerances; the BDF1 local error h^2 |q''| / 2 = rtol |q| + atol at IDA's tolerances
+ * (ap_dae_rtol) with q'' ~ N v' from the Appell solve gives it. 0 when v' = 0. */
+double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
+/* After an accepted IDA step (DAE mode; the state in s->ytry): checks and residuals, and with
+ * redundant rows a new choice of kept rows when the old one degraded (IDA restarts then, and
+ * s->ytry gets its multipliers). */
 int ap_drv_after_step_dae(ap_sim *s, double t);
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 int ap_drv_evaluate_current(ap_sim *s);

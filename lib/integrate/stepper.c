@@ -27,8 +27,8 @@
 #define AP_STEP_ATOL 1e-9
 #define AP_STEP_MAX_STEPS 100000L
 
-/* table = ARKODE ERK table id (ARKODE_ERK_NONE: classic RK4 built in stepper_arkode.c), or
- * the CVODE linear multistep family. */
+/* table = ARKODE ERK table id (ARKODE_ERK_NONE: classic RK4 built in stepper_arkode.c), the
+ * CVODE linear multistep family, or 0 for our own DOP853 (stepper_rk.c). */
 static const ap_step_method methods[] = {
     {"heun2", "Heun-Euler 2(1) explicit RK pair, 2 stages (ARKODE)", 2, 1,
      ARKODE_HEUN_EULER_2_1_2, &ap_step_arkode},
@@ -40,6 +40,8 @@ static const ap_step_method methods[] = {
      ARKODE_VERNER_8_5_6, &ap_step_arkode},
     {"fehlberg8", "Fehlberg 8(7) explicit RK pair, 13 stages (ARKODE)", 8, 1,
      ARKODE_FEHLBERG_13_7_8, &ap_step_arkode},
+    {"dop853", "Dormand-Prince 8(5,3) explicit RK pair, FSAL, dense output of order 7 (Appell)",
+     8, 1, 0, &ap_step_rk},
     {"rk4", "classic Runge-Kutta 4, fixed step opts.h_fixed (ARKODE)", 4, 0,
      ARKODE_ERK_NONE, &ap_step_arkode},
     {"adams", "variable-order Adams-Moulton 1-12, fixed-point iteration (CVODE)", 12, 1,
@@ -119,6 +121,14 @@ int ap_step_reset(ap_stepper *s, double t, const double *y) {
     return say(s->msg, sizeof s->msg, AP_ERR_ARG, "%s: reset to a non-finite state at t = %g",
                s->meth->name, t);
   return s->meth->backend->reset(s, t, y);
+}
+
+int ap_step_restart(ap_stepper *s, double t, const double *y, const double *ydot) {
+  if (s->meth->backend != &ap_step_rk) return ap_step_reset(s, t, y);
+  if (!isfinite(t) || !all_finite(s->n, y) || (ydot && !all_finite(s->n, ydot)))
+    return say(s->msg, sizeof s->msg, AP_ERR_ARG, "%s: restart at a non-finite state at "
+               "t = %g", s->meth->name, t);
+  return ap_step_rk_restart(s, t, y, ydot);
 }
 
 static void copy_out(const ap_stepper *s, double *t, double *y) {

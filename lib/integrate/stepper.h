@@ -88,6 +88,12 @@ int ap_step_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, d
  * where the method allows, the current step size. */
 int ap_step_reset(ap_stepper *s, double t, const double *y);
 
+/* Continue at (t, y), the same trajectory in other coordinates (a change of partition): like
+ * ap_step_reset, but the step size and error-controller history carry over, and ydot
+ * (n, or NULL) = f(t, y) when the caller knows it, so that a first-same-as-last method need
+ * not evaluate f again. Only our own backend (stepper_rk.c) has it; the others reset. */
+int ap_step_restart(ap_stepper *s, double t, const double *y, const double *ydot);
+
 /* Take one internal step, never past tstop (the step is shortened to land on tstop exactly).
  * tstop must lie after the current time (forward integration only).
  * On return *t is the time reached and y (n) the solution there. Returns AP_OK, or a negative
@@ -116,6 +122,17 @@ int ap_step_butcher(const ap_step_method *meth, int max_s, int *s, int *q, doubl
  * SUNDIALS type appears here. */
 extern const ap_step_backend ap_step_arkode;
 extern const ap_step_backend ap_step_cvode;
+extern const ap_step_backend ap_step_rk;
+
+/* stepper_rk.c (DOP853): ap_step_butcher's answer (the 12 stages and the FSAL stage, b of
+ * order 8, d the order-5 embedding), and for tests the whole 16-stage table (A row-major, c),
+ * the order-3 embedding b3 and the weights w of the dense output at theta in [0, 1]
+ * (u(theta) = y + h sum_j w_j k_j). */
+int ap_step_rk_butcher(const ap_step_method *meth, int max_s, int *s, int *q, double *A,
+                       double *b, double *c, double *d);
+int ap_step_rk_restart(ap_stepper *s, double t, const double *y, const double *ydot);
+int ap_step_rk_tables(int max_s, int *s, double *A, double *c, double *b3, double theta,
+                      double *w);
 
 struct ap_stepper {
   const ap_step_method *meth;

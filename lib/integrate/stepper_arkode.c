@@ -79,6 +79,8 @@ static ARKodeButcherTable method_table(const ap_step_method *meth) {
 
 int ap_step_butcher(const ap_step_method *meth, int max_s, int *s, int *q, double *A,
                     double *b, double *c, double *d) {
+  if (meth && meth->backend == &ap_step_rk)   /* our own DOP853 (stepper_rk.c) */
+    return ap_step_rk_butcher(meth, max_s, s, q, A, b, c, d);
   if (!meth || meth->backend != &ap_step_arkode) return AP_ERR_UNSUPPORTED;
   ARKodeButcherTable B = method_table(meth);
   if (!B) return AP_ERR_NOMEM;

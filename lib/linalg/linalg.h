@@ -129,4 +129,43 @@ int ap_la_small_limit(void);
  * only while no other thread runs these routines. */
 int ap_la_set_small_limit(int n);
 
+/* ---- complex-step variants (linalg/scalar.h) ----------------------------------------------- */
+
+/* The same routines on double _Complex values for complex-step derivatives: same arguments and
+ * meaning with double replaced by double _Complex for every value array (A, a0, F, tau, B, b0,
+ * gamma, w, G, L, x, y, work, ...), while rank, growth, resid and rcond stay double and come from
+ * real parts. Always the native kernels, at every size (no LAPACK: its complex routines
+ * conjugate, which is not analytic). Scratch: ap_la_work_size(b, k) elements of double _Complex,
+ * ap_la_iwork_size(b, k) ints. rcond must be NULL (AP_ERR_ARG otherwise): condition estimates
+ * come from the double routine at the real part. pivot_select_cs decides on the real part of A
+ * with the double routine; lstsq_At_cs runs the steps of the double routine natively. */
+int ap_la_pivot_select_cs(int b, int k, const double _Complex *A, double rtol, int *perm,
+                          int *rank, double _Complex *work, int *iwork);
+int ap_la_partition_basis_cs(int b, int k, int r, const int *perm, const double _Complex *A,
+                             const double _Complex *a0, double _Complex *F, double _Complex *tau,
+                             double _Complex *B, double _Complex *b0, double *growth,
+                             double *rcond, double *resid, double _Complex *work, int *iwork);
+int ap_la_partition_particular_cs(int b, int k, int r, const int *perm,
+                                  const double _Complex *F, const double _Complex *tau,
+                                  const double _Complex *gamma, double _Complex *w,
+                                  double *resid, double _Complex *work);
+int ap_la_orth_basis_cs(int b, int k, const double _Complex *A, const double _Complex *a0,
+                        double rtol, int *rank, double _Complex *F, double _Complex *tau,
+                        int *jpvt, double _Complex *Qf, double _Complex *Z,
+                        double _Complex *b0, double *resid, double _Complex *work, int *iwork);
+int ap_la_orth_particular_cs(int b, int k, int rank, const double _Complex *F, const int *jpvt,
+                             const double _Complex *Qf, const double _Complex *gamma,
+                             double _Complex *w, double *resid, double _Complex *work);
+int ap_la_chol_cs(int l, double _Complex *G, double *rcond, double _Complex *work, int *iwork);
+void ap_la_chol_solve_cs(int l, const double _Complex *L, double _Complex *x);
+void ap_la_congruence_cs(int k, int l, const double _Complex *g, const double _Complex *B,
+                         double _Complex *G, double _Complex *gB);
+int ap_la_lstsq_At_cs(int b, int k, const double _Complex *A, const double _Complex *rhs,
+                      double rtol, double _Complex *lambda, double *resid,
+                      double _Complex *work, int *iwork);
+void ap_la_gemv_cs(int m, int n, const double _Complex *M, const double _Complex *x,
+                   double _Complex *y);
+void ap_la_gemv_t_cs(int m, int n, const double _Complex *M, const double _Complex *x,
+                     double _Complex *y);
+
 #endif

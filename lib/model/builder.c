@@ -51,6 +51,8 @@ ap_effect_def ap_effect_def_default(void) {
   def.body = AP_NONE;
   def.body2 = AP_GROUND;
   def.joint = AP_NONE;
+  def.motor = AP_MOTOR_RATE;
+  def.max_effort = HUGE_VAL;
   return def;
 }
 

@@ -298,6 +298,8 @@ static int check_effect(ap_builder *b, int i) {
     case AP_EFFECT_USER:
       if (!d->generalized) FAIL("effect '%s': a user effect needs the generalized callback", nm);
       return AP_OK;
+    case AP_EFFECT_JOINT_FORCE:
+    case AP_EFFECT_MOTOR: return AP_OK;   /* ap_act_compile, once the joints are laid out */
   }
   FAIL("effect '%s': unknown kind %d", nm, (int)d->kind);
 }
@@ -402,6 +404,9 @@ static int compile_all(ap_builder *b, ap_bmodel *M) {
     rc = check_effect(b, i);
     snprintf(M->effs[i].name, sizeof M->effs[i].name, "%s", b->effs[i].name);
     M->effs[i].def = b->effs[i].def;
+    if (rc == AP_OK && (b->effs[i].def.kind == AP_EFFECT_JOINT_FORCE ||
+                        b->effs[i].def.kind == AP_EFFECT_MOTOR))
+      rc = ap_act_compile(b, M, &M->effs[i]);
   }
   for (int j = 0; j < M->nj; j++)
     M->lscale = fmax(M->lscale, fmax(v3_norm(M->joints[j].ppf), v3_norm(M->joints[j].pcf)));

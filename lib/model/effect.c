@@ -8,6 +8,7 @@
  *   joint damping   Q_i -= c v_i for every free speed of the joint
  *   applied         F, T (constants or wrench(t)) at a body point
  *   user            the callback adds to a zeroed k-vector
+ *   joint force     Q_i += tau on one joint speed, motors likewise (actuator.c)
  * Each evaluation increments the effect's counter in the data's scratch (only listed effects
  * run: a model without springs never touches spring code). */
 #include <string.h>
@@ -125,6 +126,19 @@ static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double 
   return AP_OK;
 }
 
+/* After each effect: Q must stay finite and integrable (AP_HUGE), or this effect is named. */
+static int check_effect(const ap_model *m, ap_data *d, const ap_meff *ef, const double *Q,
+                        double t) {
+  for (int c = 0; c < m->k; c++)
+    if (!(fabs(Q[c]) <= AP_HUGE)) {
+      AP_BM_MSG(d, "model '%s': effect '%s' gives the generalized force %g on speed '%s' at "
+                "t = %.17g%s", m->name, ef->name, Q[c], ap_model_speed_name(m, c), t,
+                isfinite(Q[c]) ? " (more than 1e150 in magnitude: too large to integrate)" : "");
+      return AP_ERR_NAN;
+    }
+  return AP_OK;
+}
+
 int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
                   double *S, double *Q) {
   const ap_bmodel *M = ap_bm(m);
@@ -138,7 +152,10 @@ int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, cons
       case AP_EFFECT_JOINT_DAMPING: joint_damping(M, &ef->def, v, Q); break;
       case AP_EFFECT_APPLIED: rc = applied(m, d, ef, t, S, Q); break;
       case AP_EFFECT_USER: rc = user_effect(m, d, ef, t, q, v, S, Q); break;
+      case AP_EFFECT_JOINT_FORCE:
+      case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, t, q, v, Q); break;
     }
+    if (rc == AP_OK) rc = check_effect(m, d, ef, Q, t);
     if (rc != AP_OK) return rc;
   }
   return AP_OK;
@@ -172,8 +189,11 @@ double ap_eff_potential(const ap_bmodel *M, double *S) {
  * plane-contact body), after ap_kin_velocity at the same state. Gravity and applied forces on
  * its bodies count; a spring counts at the end in the subtree (nothing when both are); joint
  * damping inside the subtree is internal, and on the root's plane-contact joint it is the
- * horizontal force -c (vx, vy) plus torques. A user effect's generalized force cannot be
- * attributed to bodies: AP_ERR_UNSUPPORTED. */
+ * horizontal force -c (vx, vy) plus torques. Joint forces and motors are left out: between
+ * bodies of the subtree they are internal, and on the root's plane-contact joint they are a
+ * horizontal force (vx, vy) or a pure torque, which the contact force (it reads only F[2],
+ * the normal) does not need; F[0], F[1] do not include them. A user effect's generalized
+ * force cannot be attributed to bodies: AP_ERR_UNSUPPORTED. */
 int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *v, int root,
                          double *F) {
   F[0] = F[1] = F[2] = 0.0;
@@ -223,6 +243,8 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
         break;
       }
       case AP_EFFECT_USER: return AP_ERR_UNSUPPORTED;
+      case AP_EFFECT_JOINT_FORCE:
+      case AP_EFFECT_MOTOR: break;   /* see above */
     }
   }
   return AP_OK;

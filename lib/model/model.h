@@ -81,6 +81,11 @@ typedef struct ap_mcon {
 typedef struct ap_meff {
   char name[64];
   ap_effect_def def;
+  /* joint forces and motors (actuator.c), resolved at compile */
+  int col;                    /* global index of the speed acted on */
+  int qcol;                   /* AP_MOTOR_ANGLE: global index of its coordinate; else -1 */
+  int in_idx[AP_STATE_MAX_INPUTS];  /* state_fn inputs: global index in q or v ... */
+  int in_v[AP_STATE_MAX_INPUTS];    /* ... of v when 1 */
 } ap_meff;
 
 typedef struct ap_bmodel {
@@ -290,6 +295,15 @@ int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, cons
                   double *S, double *Q);
 /* Potential energy of the gravity and spring effects, after ap_kin_position. */
 double ap_eff_potential(const ap_bmodel *M, double *S);
+
+/* ---- joint forces and motors (actuator.c) ----------------------------------------------- */
+
+/* Validate a joint force or motor effect and resolve its indices into ef (after the joints
+ * and coordinates are laid out). Fails through the builder's message. */
+int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef);
+/* Q[ef->col] += tau at (t, q, v). */
+int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
+                 const double *v, double *Q);
 
 /* ---- evaluator (evaluate.c) ------------------------------------------------------------- */
 

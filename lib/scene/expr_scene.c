@@ -4,9 +4,11 @@
  * ap_scene_initial_state).
  *
  * sc_check_exprs evaluates every expression of t in the scene (joint drives, the ground's
- * omega and velocity, prescribed speeds, applied forces and torques) at t with both time
- * derivatives; of those not finite it reports the one written first in the file, at its node
- * (sc_expr_check). It only reads the scene: any thread may call it (ap_scene_check_time).
+ * omega and velocity, prescribed speeds, applied forces and torques, joint torques and forces,
+ * motor set-points) at t with both time derivatives; of those not finite it reports the one
+ * written first in the file, at its node (sc_expr_check). It only reads the scene: any
+ * thread may call it (ap_scene_check_time). Expressions of the state are checked at the
+ * initial state by sc_check_state_exprs (state.c).
  * sc_check_start runs the pipeline (ap_forward, orthonormal basis) at (t0, q0, v0); when that
  * gives a value that is not finite (other failures are left to the simulation, which reports
  * them as before) but works with every speed 0, the speeds overflow, and the message goes to
@@ -50,6 +52,7 @@ int sc_check_exprs(sc_ctx *c, const sc_scene *s, double t) {
       consider(&s->effs[e].force[i], t, &first);
       consider(&s->effs[e].torque[i], t, &first);
     }
+  for (int e = 0; e < s->ne; e++) consider(&s->effs[e].value, t, &first);   /* joint effects */
   return first ? sc_expr_check(c, first, t) : AP_OK;
 }
 

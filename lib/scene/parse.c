@@ -15,7 +15,7 @@
 
 static const char *const top_keys[] = {"name", "description", "bodies", "joints", "constraints",
                                        "effects", "ground", "initial", "simulation", "output",
-                                       NULL};
+                                       "linearize", NULL};
 static const char *const body_keys[] = {"mass", "com", "inertia", "shape", NULL};
 static const char *const shape_keys[] = {"kind", "radius", "tube", "semi_axes", "flat_tol",
                                          NULL};
@@ -381,5 +381,6 @@ int sc_parse_scene(sc_ctx *c, sc_scene *s) {
   const sc_node *d = sc_map_get(s->root, "description");
   if (d && sc_expect(c, d, SC_SCALAR)) return AP_ERR_ARG;
   if (parse_bodies(c, s) || parse_joints(c, s) || sc_parse_con_eff(c, s)) return AP_ERR_ARG;
-  return sc_parse_run(c, s);
+  if (sc_parse_run(c, s)) return AP_ERR_ARG;
+  return sc_parse_linearize(c, s);
 }

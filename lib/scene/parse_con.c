@@ -25,12 +25,17 @@ static const char *const con_keys[][8] = {
     {"kind", "body", "point", "body2", "point2", "axes", NULL},
     {"kind", "body", "point", "body2", "point2", "direction", NULL},
     {"kind", "body", "point", "body2", "point2", "direction", NULL}};
-static const char *const eff_kinds[] = {"gravity", "spring", "joint_damping", "applied", NULL};
-static const char *const eff_keys[][9] = {
+/* The first four in the order of ap_effect_kind; then the joint effects (parse_act.c). */
+static const char *const eff_kinds[] = {"gravity", "spring", "joint_damping", "applied",
+                                        "joint_torque", "joint_force", "motor", NULL};
+static const char *const eff_keys[][10] = {
     {"kind", "g", NULL},
     {"kind", "body", "point", "body2", "point2", "stiffness", "damping", "rest_length", NULL},
     {"kind", "joint", "damping", NULL},
-    {"kind", "body", "point", "force", "torque", NULL}};
+    {"kind", "body", "point", "force", "torque", NULL},
+    {"kind", "joint", "speed", "torque", NULL},
+    {"kind", "joint", "speed", "force", NULL},
+    {"kind", "joint", "speed", "rate", "angle", "position", "kp", "kd", "max", NULL}};
 
 /* ---- ground ----------------------------------------------------------------------------- */
 
@@ -244,10 +249,12 @@ static int parse_eff(sc_ctx *c, sc_scene *s, const sc_node *key, const sc_node *
   int kind = 0;
   if (sc_expect(c, n, SC_MAP)) return AP_ERR_ARG;
   if (!sc_map_get(n, "kind"))
-    return sc_err(c, n, "the effect needs a kind (gravity, spring, joint_damping or applied)");
+    return sc_err(c, n, "the effect needs a kind (gravity, spring, joint_damping, applied, "
+                  "joint_torque, joint_force or motor)");
   if (sc_get_enum(c, n, "kind", eff_kinds, &kind)) return AP_ERR_ARG;
-  e->def.kind = (ap_effect_kind)kind;
   if (sc_check_keys(c, n, eff_keys[kind])) return AP_ERR_ARG;
+  if (kind > AP_EFFECT_APPLIED) return sc_parse_joint_effect(c, s, n, e, kind - 4);
+  e->def.kind = (ap_effect_kind)kind;
   return parse_eff_fields(c, s, n, e);
 }
 

@@ -31,11 +31,13 @@ void sc_scene_clear(sc_scene *s) {
     sc_expr_free(&s->cons[c].ground.omega);
     for (int i = 0; i < 2; i++) sc_expr_free(&s->cons[c].ground.vel[i]);
   }
-  for (int e = 0; e < s->ne; e++)
+  for (int e = 0; e < s->ne; e++) {
     for (int i = 0; i < 3; i++) {
       sc_expr_free(&s->effs[e].force[i]);
       sc_expr_free(&s->effs[e].torque[i]);
     }
+    sc_expr_free(&s->effs[e].value);
+  }
   sc_expr_free(&s->ground.omega);
   for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
   free(s->bodies);
@@ -155,6 +157,7 @@ int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene
 
 const ap_model *ap_scene_model(const ap_scene *sc) { return sc ? sc->m : NULL; }
 const ap_data *sc_scene_output_data(const ap_scene *sc) { return sc ? sc->d : NULL; }
+const sc_scene *sc_scene_parsed(const ap_scene *sc) { return sc ? &sc->s : NULL; }
 const char *ap_scene_name(const ap_scene *sc) { return sc ? sc->s.name : NULL; }
 
 void ap_scene_get_run(const ap_scene *sc, ap_scene_run *run) {
@@ -167,6 +170,7 @@ int ap_scene_initial_state(ap_scene *sc, double *q0, double *v0, char *report,
   sc_ctx c = {sc->s.file, "", AP_OK};
   int rc = sc_check_exprs(&c, &sc->s, sc->s.run.t0);
   if (rc == AP_OK) rc = sc_initial_state(&c, &sc->s, sc->m, q0, v0, report, report_len);
+  if (rc == AP_OK) rc = sc_check_state_exprs(&c, &sc->s, sc->m, sc->s.run.t0, q0, v0);
   if (rc == AP_OK) rc = sc_check_start(&c, &sc->s, sc->m, q0, v0);
   if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
   return rc;
@@ -240,7 +244,9 @@ int ap_scene_conserves_energy(const ap_scene *sc) {
     const ap_effect_def *d = &s->effs[e].def;
     if (d->kind == AP_EFFECT_JOINT_DAMPING && d->damping != 0.0) return 0;
     if (d->kind == AP_EFFECT_SPRING && d->damping != 0.0) return 0;
-    if (d->kind == AP_EFFECT_APPLIED) return 0;
+    if (d->kind == AP_EFFECT_APPLIED || d->kind == AP_EFFECT_JOINT_FORCE ||
+        d->kind == AP_EFFECT_MOTOR)
+      return 0;
   }
   return 1;
 }
@@ -286,14 +292,16 @@ const char *ap_scene_element_kind(const ap_scene *sc, ap_scene_section sec, int 
   static const char *const shapes[] = {"none", "point", "sphere", "ellipsoid", "disk", "torus"};
   static const char *const cons[] = {"rolling", "knife_edge", "prescribed_speed", "user",
                                      "coincident", "point_on_line", "point_on_plane"};
-  static const char *const effs[] = {"gravity", "spring", "joint_damping", "applied", "user"};
+  static const char *const effs[] = {"gravity", "spring", "joint_damping", "applied", "user",
+                                     "joint_force", "motor"};
   if (!sc || i < 0 || i >= ap_scene_count(sc, sec)) return NULL;
   switch (sec) {
     case AP_SCENE_BODIES:
       return sc->s.bodies[i].def.shape.kind ? shapes[sc->s.bodies[i].def.shape.kind] : "no shape";
     case AP_SCENE_JOINTS: return sc_joint_kind_name(sc->s.joints[i].def.kind);
     case AP_SCENE_CONSTRAINTS: return cons[sc->s.cons[i].def.kind];
-    case AP_SCENE_EFFECTS: return effs[sc->s.effs[i].def.kind];
+    case AP_SCENE_EFFECTS:
+      return sc->s.effs[i].is_torque ? "joint_torque" : effs[sc->s.effs[i].def.kind];
     case AP_SCENE_CHANNELS: return "channel";
   }
   return NULL;

@@ -198,6 +198,8 @@ typedef struct sc_eff {
   ap_effect_def def;
   sc_expr force[3], torque[3];
   int timed;               /* some component depends on t: use the wrench callback */
+  sc_expr value;           /* joint_torque, joint_force: the value; motor: the set-point */
+  int is_torque;           /* written as joint_torque (an AP_EFFECT_JOINT_FORCE) */
 } sc_eff;
 
 /* Output channels (bit mask). */
@@ -235,9 +237,33 @@ typedef struct sc_scene {
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
 int sc_parse_con_eff(sc_ctx *c, sc_scene *s);
+/* Joint effects (parse_act.c): the scene kinds joint_torque, joint_force, motor. */
+enum { SC_EFF_TORQUE = 0, SC_EFF_FORCE = 1, SC_EFF_MOTOR = 2 };
+int sc_parse_joint_effect(sc_ctx *c, sc_scene *s, const sc_node *n, sc_eff *e, int which);
+/* A value node into e and the definition: a number (d->value), an expression of t
+ * (d->value_fn) or of the state too (d->state_fn and d->inputs); the caller sets user = e. */
+int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effect_def *d);
+
+/* Names of the state in expressions (state.c): JOINT.NAME (and BODY.NAME) for every joint
+ * coordinate and speed; name i is slot i of an expression's variables. */
+typedef struct sc_state_names {
+  int count;
+  char **names;            /* count names, then NULL */
+  ap_state_input *refs;    /* what name i reads */
+  int *driven;             /* 1: name i is a driven coordinate or speed (not in the state) */
+} sc_state_names;
+int sc_state_names_build(const sc_scene *s, sc_state_names *t);
+void sc_state_names_free(sc_state_names *t);
+/* The ap_state_fn of a scene expression of the state (user = its sc_expr). */
+int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
+/* Every expression of the state finite at (t, q, v); else a message at its node. */
+int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
+                         const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
+/* The linearize: section (linearize.c): keys, types and joint names checked at load. */
+int sc_parse_linearize(sc_ctx *c, const sc_scene *s);
 void sc_scene_clear(sc_scene *s);
 int sc_find_body(const sc_scene *s, const char *name);   /* -1 if none */
 int sc_find_joint(const sc_scene *s, const char *name);  /* -1 if none */
@@ -269,6 +295,8 @@ int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
 /* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
  * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
 const ap_data *sc_scene_output_data(const ap_scene *sc);
+/* The parsed scene behind an ap_scene (scene_run.c evaluates rows of it per run). */
+const sc_scene *sc_scene_parsed(const ap_scene *sc);
 
 /* ---- building and initial state (build.c, init.c) ------------------------------------- */
 

@@ -1,0 +1,327 @@
+/* The chart of the configuration about a reference point, and the heading frames of the speeds.
+ *
+ * Body models: one chart coordinate per speed (index c = speed c). A scalar joint coordinate is
+ * its offset from the reference, q_i = q_ref,i + delta_c. A unit quaternion p (angular speeds
+ * w in parent joint frame axes, p' = 1/2 [0; w] (x) p) gets Euler-like angles about the
+ * reference, heading a, tilt b, spin c:
+ *
+ *     R = Rz(a) Rd(b) R_ref Rn(c),    d = unit(e_z x n0), n0 = R_ref n,
+ *
+ * with n a body axis (the spin axis: body z for a body symmetric about it, else the most
+ * horizontal body axis at the reference) and Rd a turn about the horizontal axis d. Turning
+ * the whole body about the parent z axis changes a alone and spinning it about n changes c
+ * alone, exactly: a heading or a spin that moves at a steady motion is a true cyclic coordinate
+ * (a rotation vector mixes tilt and spin at second order, which falsifies the eigenvalues of a
+ * rolling disk). The angular velocity is w = a' e_z + b' Rz(a) d + c' Rz(a) Rd(b) n0, so in the
+ * heading frame u_w = Rz(a)^T w = M(b) (a', b', c') with M = [e_z, d, cos b n0 + sin b d x n0],
+ * regular since n0 is never near vertical. Math-level systems: q = q_ref + delta, and the chart
+ * rates are q' = N v (the core's qdot).
+ *
+ * Heading frames: a joint with a heading (planar: its heading coordinate; ball, free, plane
+ * contact: a) has its speeds along parent x and y taken in the frame turned by the heading
+ * offset h: (u_x, u_y) = Rz(h)^T (v_x, v_y), for the linear and the angular pair. Then
+ * u' = S v' + S' v gives u_x' = c v_x' + s v_y' + h' u_y, u_y' = -s v_x' + c v_y' - h' u_x. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "analyze/analyze_int.h"
+#include "model/layout.h"
+
+/* ---- building -------------------------------------------------------------------------- */
+
+static char *dup_str(const char *a, const char *b) {
+  size_t len = strlen(a) + strlen(b) + 1;
+  char *s = malloc(len);
+  if (s) snprintf(s, len, "%s%s", a, b);
+  return s;
+}
+
+/* The heading frame of a joint: heading chart index h, pairs of speeds (-1 entries skip). */
+static void add_frame(an_chart *ch, int h, int p0, int p1, int p2, int p3) {
+  if (h < 0) return;
+  an_frame *f = &ch->frame[ch->nframe];
+  f->npair = 0;
+  if (p0 >= 0 && p1 >= 0) f->pair[f->npair][0] = p0, f->pair[f->npair][1] = p1, f->npair++;
+  if (p2 >= 0 && p3 >= 0) f->pair[f->npair][0] = p2, f->pair[f->npair][1] = p3, f->npair++;
+  if (f->npair == 0) return;
+  f->h = h;
+  ch->nframe++;
+}
+
+static int chart_joint(const ap_model *m, const ap_jlayout *J, an_chart *ch) {
+  static const char *const rot[3] = {".heading", ".tilt", ".spin"};
+  for (int i = 0; i < J->ndrivable; i++) {
+    if (J->vidx[i] < 0) continue;
+    ch->qof[J->vidx[i]] = J->qidx[i];
+    ch->names[J->vidx[i]] = dup_str(ap_model_coord_name(m, J->qidx[i]), "");
+    if (!ch->names[J->vidx[i]]) return AP_ERR_NOMEM;
+  }
+  const int *v = J->vidx;
+  if (J->quat >= 0) {
+    an_quat *Q = &ch->quat[ch->nquat++];
+    Q->q = J->qidx[J->quat];
+    Q->zsym = J->zsym;
+    for (int i = 0; i < 3; i++) {
+      Q->c[i] = v[J->wofs + (i + 2) % 3];   /* heading, tilt, spin: indices of wz, wx, wy */
+      ch->qof[Q->c[i]] = -1;
+      ch->names[Q->c[i]] = dup_str(J->name, rot[i]);
+      if (!ch->names[Q->c[i]]) return AP_ERR_NOMEM;
+    }
+  }
+  switch (J->kind) {
+    case AP_JOINT_PLANAR: add_frame(ch, v[2], v[0], v[1], -1, -1); break;
+    case AP_JOINT_BALL: add_frame(ch, v[2], v[0], v[1], -1, -1); break;
+    case AP_JOINT_FREE: add_frame(ch, v[5], v[0], v[1], v[3], v[4]); break;
+    case AP_JOINT_PLANE_CONTACT: add_frame(ch, v[4], v[0], v[1], v[2], v[3]); break;
+    default: break;
+  }
+  return AP_OK;
+}
+
+static int chart_body(const ap_model *m, an_chart *ch, char *msg, size_t len) {
+  int nj = ap_bm_joint_count(m), rc = AP_OK;
+  for (int j = 0; j < nj && rc == AP_OK; j++) {
+    ap_jlayout J;
+    rc = ap_bm_joint_layout(m, j, &J);
+    if (rc == AP_OK) rc = chart_joint(m, &J, ch);
+  }
+  for (int c = 0; c < ch->nc && rc == AP_OK; c++)
+    if (!ch->names[c]) {
+      snprintf(msg, len, "model '%s': speed '%s' belongs to no coordinate the linearization "
+               "knows (joint kinds: revolute, prismatic, planar, ball, free, plane contact)",
+               ap_model_name(m), ap_model_speed_name(m, c));
+      rc = AP_ERR_UNSUPPORTED;
+    }
+  return rc;
+}
+
+int ap_an_chart_build(const ap_model *m, an_chart *ch, char *msg, size_t len) {
+  int n = ap_model_n(m), k = ap_model_k(m);
+  memset(ch, 0, sizeof *ch);
+  ch->body = ap_model_is_body_model(m) == 1;
+  ch->nc = ch->body ? k : n;
+  ch->k = k;
+  ch->qof = calloc((size_t)ch->nc + 1, sizeof *ch->qof);
+  ch->names = calloc((size_t)ch->nc + 1, sizeof *ch->names);
+  ch->quat = calloc((size_t)k / 3 + 1, sizeof *ch->quat);
+  ch->frame = calloc((size_t)k / 2 + 1, sizeof *ch->frame);
+  if (!ch->qof || !ch->names || !ch->quat || !ch->frame) return AP_ERR_NOMEM;
+  if (ch->body) return chart_body(m, ch, msg, len);
+  for (int i = 0; i < n; i++) {
+    ch->qof[i] = i;
+    ch->names[i] = dup_str(ap_model_coord_name(m, i), "");
+    if (!ch->names[i]) return AP_ERR_NOMEM;
+  }
+  return AP_OK;
+}
+
+void ap_an_chart_free(an_chart *ch) {
+  for (int c = 0; ch->names && c < ch->nc; c++) free(ch->names[c]);
+  free(ch->names);
+  free(ch->qof);
+  free(ch->quat);
+  free(ch->frame);
+  memset(ch, 0, sizeof *ch);
+}
+
+/* ---- the quaternion chart ------------------------------------------------------------------ */
+
+static void cross(const double *a, const double *b, double *c) {
+  c[0] = a[1] * b[2] - a[2] * b[1], c[1] = a[2] * b[0] - a[0] * b[2];
+  c[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* x = R(p) y for a unit quaternion p. */
+static void rotate(const double *p, const double *y, double *x) {
+  double R[9];
+  ap_quat_to_matrix(p, R);
+  for (int i = 0; i < 3; i++) x[i] = R[i] * y[0] + R[i + 3] * y[1] + R[i + 6] * y[2];
+}
+
+void ap_an_chart_centre(an_chart *ch, const double *q_ref, int keep_axis) {
+  for (int i = 0; i < ch->nquat; i++) {
+    an_quat *Q = &ch->quat[i];
+    const double *p = q_ref + Q->q;
+    rotate(p, Q->nb, Q->n0);
+    if (!keep_axis || !(fabs(Q->n0[2]) < 0.95)) {
+      double ez[3] = {0, 0, 1}, best = 2.0;
+      rotate(p, ez, Q->n0);
+      if (Q->zsym && fabs(Q->n0[2]) < 0.9) best = -1.0, Q->nb[0] = Q->nb[1] = 0, Q->nb[2] = 1;
+      for (int a = 0; a < 3 && best >= 0.0; a++) {   /* the most horizontal body axis */
+        double e[3] = {a == 0, a == 1, a == 2}, n[3];
+        rotate(p, e, n);
+        if (fabs(n[2]) < best) best = fabs(n[2]), memcpy(Q->nb, e, sizeof e);
+      }
+      rotate(p, Q->nb, Q->n0);
+    }
+    double ez[3] = {0, 0, 1}, h;
+    cross(ez, Q->n0, Q->d);
+    h = sqrt(Q->d[0] * Q->d[0] + Q->d[1] * Q->d[1]);
+    Q->d[0] /= h, Q->d[1] /= h, Q->d[2] = 0.0;
+  }
+}
+
+/* The angles (heading, tilt, spin) of quaternion chart Q from delta. */
+static void angles(const an_quat *Q, const double *delta, double *a, double *b, double *c) {
+  *a = delta[Q->c[0]], *b = delta[Q->c[1]], *c = delta[Q->c[2]];
+}
+
+/* M(b) = [e_z, d, cos b n0 + sin b d x n0] (3 x 3, column-major). */
+static void chart_M(const an_quat *Q, double b, double *M) {
+  double dn[3];
+  cross(Q->d, Q->n0, dn);
+  M[0] = 0, M[1] = 0, M[2] = 1;
+  for (int i = 0; i < 3; i++) M[3 + i] = Q->d[i], M[6 + i] = cos(b) * Q->n0[i] + sin(b) * dn[i];
+}
+
+/* x = M^-1 y by Cramer's rule (M regular: its columns are never near coplanar). */
+static void solve3(const double *M, const double *y, double *x) {
+  double c0[3], c1[3], c2[3];
+  cross(M + 3, M + 6, c0), cross(M + 6, M, c1), cross(M, M + 3, c2);
+  double det = M[0] * c0[0] + M[1] * c0[1] + M[2] * c0[2];
+  x[0] = (y[0] * c0[0] + y[1] * c0[1] + y[2] * c0[2]) / det;
+  x[1] = (y[0] * c1[0] + y[1] * c1[1] + y[2] * c1[2]) / det;
+  x[2] = (y[0] * c2[0] + y[1] * c2[1] + y[2] * c2[2]) / det;
+}
+
+/* p = qz(a) (x) qd(b) (x) p_ref (x) qn(c). */
+static void quat_chart(const an_quat *Q, const double *p_ref, double a, double b, double c,
+                       double *p) {
+  double ez[3] = {0, 0, 1}, qz[4], qd[4], qn[4], t[4], u[4];
+  ap_quat_from_axis_angle(ez, a, qz);
+  ap_quat_from_axis_angle(Q->d, b, qd);
+  ap_quat_from_axis_angle(Q->nb, c, qn);
+  ap_quat_mul(p_ref, qn, t);
+  ap_quat_mul(qd, t, u);
+  ap_quat_mul(qz, u, p);
+}
+
+/* Chart rates (a', b', c') from the parent-axes angular velocity w. */
+static void quat_rates(const an_quat *Q, const double *delta, const double *w, double *out) {
+  double a, b, c, M[9], ca, sa, u[3];
+  angles(Q, delta, &a, &b, &c);
+  ca = cos(a), sa = sin(a);
+  u[0] = ca * w[0] + sa * w[1], u[1] = -sa * w[0] + ca * w[1], u[2] = w[2];
+  chart_M(Q, b, M);
+  solve3(M, u, out);
+}
+
+/* W = Rz(a) M(b): w = W (a', b', c'). */
+static void quat_W(const an_quat *Q, const double *delta, double *W) {
+  double a, b, c, M[9];
+  angles(Q, delta, &a, &b, &c);
+  chart_M(Q, b, M);
+  for (int j = 0; j < 3; j++) {
+    const double *Mj = M + 3 * j;
+    W[3 * j] = cos(a) * Mj[0] - sin(a) * Mj[1];
+    W[3 * j + 1] = sin(a) * Mj[0] + cos(a) * Mj[1];
+    W[3 * j + 2] = Mj[2];
+  }
+}
+
+/* ---- chart maps ---------------------------------------------------------------------------- */
+
+void ap_an_chart_apply(const an_chart *ch, int n, const double *q_ref, const double *delta,
+                       double *q) {
+  memcpy(q, q_ref, (size_t)n * sizeof *q);
+  for (int c = 0; c < ch->nc; c++)
+    if (ch->qof[c] >= 0) q[ch->qof[c]] = q_ref[ch->qof[c]] + delta[c];
+  for (int i = 0; i < ch->nquat; i++) {
+    const an_quat *Q = &ch->quat[i];
+    double a, b, c;
+    angles(Q, delta, &a, &b, &c);
+    quat_chart(Q, q_ref + Q->q, a, b, c, q + Q->q);
+  }
+}
+
+void ap_an_chart_jacobian(const an_chart *ch, int n, const double *q, const double *delta,
+                          double *J) {
+  memset(J, 0, (size_t)n * ch->nc * sizeof *J);
+  for (int c = 0; c < ch->nc; c++)
+    if (ch->qof[c] >= 0) J[ch->qof[c] + (size_t)c * n] = 1.0;
+  for (int i = 0; i < ch->nquat; i++) {
+    const an_quat *Q = &ch->quat[i];
+    const double *p = q + Q->q;
+    double W[9];
+    quat_W(Q, delta, W);
+    for (int j = 0; j < 3; j++) {   /* dp = 1/2 [0; w] (x) p with w = W e_j */
+      const double *w = W + 3 * j;
+      double *col = J + (size_t)Q->c[j] * n + Q->q;
+      col[0] = -0.5 * (w[0] * p[1] + w[1] * p[2] + w[2] * p[3]);
+      col[1] = 0.5 * (p[0] * w[0] + w[1] * p[3] - w[2] * p[2]);
+      col[2] = 0.5 * (p[0] * w[1] + w[2] * p[1] - w[0] * p[3]);
+      col[3] = 0.5 * (p[0] * w[2] + w[0] * p[2] - w[1] * p[1]);
+    }
+  }
+}
+
+void ap_an_chart_rates(const an_chart *ch, const double *delta, const double *v, double *dd) {
+  for (int c = 0; c < ch->nc; c++)
+    if (ch->qof[c] >= 0) dd[c] = v[c];
+  for (int i = 0; i < ch->nquat; i++) {
+    const an_quat *Q = &ch->quat[i];
+    double w[3] = {v[Q->c[1]], v[Q->c[2]], v[Q->c[0]]}, out[3];   /* wx, wy, wz */
+    quat_rates(Q, delta, w, out);
+    for (int j = 0; j < 3; j++) dd[Q->c[j]] = out[j];
+  }
+}
+
+/* ---- heading frames ------------------------------------------------------------------------ */
+
+void ap_an_frame_to_u(const an_chart *ch, const double *delta, const double *v, double *u) {
+  if (u != v) memcpy(u, v, sizeof *u * (size_t)ch->k);
+  for (int f = 0; f < ch->nframe; f++) {
+    const an_frame *F = &ch->frame[f];
+    double c = cos(delta[F->h]), s = sin(delta[F->h]);
+    for (int p = 0; p < F->npair; p++) {
+      int i = F->pair[p][0], j = F->pair[p][1];
+      double vi = v[i], vj = v[j];
+      u[i] = c * vi + s * vj, u[j] = -s * vi + c * vj;
+    }
+  }
+}
+
+void ap_an_frame_to_v(const an_chart *ch, const double *delta, const double *u, double *v) {
+  if (u != v) memcpy(v, u, sizeof *v * (size_t)ch->k);
+  for (int f = 0; f < ch->nframe; f++) {
+    const an_frame *F = &ch->frame[f];
+    double c = cos(delta[F->h]), s = sin(delta[F->h]);
+    for (int p = 0; p < F->npair; p++) {
+      int i = F->pair[p][0], j = F->pair[p][1];
+      double ui = u[i], uj = u[j];
+      v[i] = c * ui - s * uj, v[j] = s * ui + c * uj;
+    }
+  }
+}
+
+void ap_an_frame_rates(const an_chart *ch, const double *delta, const double *dd,
+                       const double *v, const double *vdot, double *udot) {
+  if (udot != vdot) memcpy(udot, vdot, sizeof *udot * (size_t)ch->k);
+  for (int f = 0; f < ch->nframe; f++) {
+    const an_frame *F = &ch->frame[f];
+    double c = cos(delta[F->h]), s = sin(delta[F->h]), hd = dd[F->h];
+    for (int p = 0; p < F->npair; p++) {
+      int i = F->pair[p][0], j = F->pair[p][1];
+      double ui = c * v[i] + s * v[j], uj = -s * v[i] + c * v[j];
+      double ai = vdot[i], aj = vdot[j];
+      udot[i] = c * ai + s * aj + hd * uj, udot[j] = -s * ai + c * aj - hd * ui;
+    }
+  }
+}
+
+void ap_an_frame_matrix(const an_chart *ch, const double *delta, int b, const double *A,
+                        double *Au) {
+  size_t bb = (size_t)b;
+  memcpy(Au, A, sizeof *Au * bb * (size_t)ch->k);
+  for (int f = 0; f < ch->nframe; f++) {
+    const an_frame *F = &ch->frame[f];
+    double c = cos(delta[F->h]), s = sin(delta[F->h]);
+    for (int p = 0; p < F->npair; p++) {
+      const double *Ai = A + bb * F->pair[p][0], *Aj = A + bb * F->pair[p][1];
+      double *Ui = Au + bb * F->pair[p][0], *Uj = Au + bb * F->pair[p][1];
+      for (int r = 0; r < b; r++) Ui[r] = c * Ai[r] + s * Aj[r], Uj[r] = -s * Ai[r] + c * Aj[r];
+    }
+  }
+}

@@ -1,0 +1,145 @@
+/* The batch's thread pool: `threads` POSIX threads take run indices from a shared counter in
+ * increasing order, run them (batch_run.c) and write row i, status[i] and messages[i] only;
+ * the calling thread waits, reporting progress about every 0.2 s. Rows are therefore the same
+ * whatever the number of threads and the order in which runs finish.
+ * Cancelling (the progress callback returns non-zero) stops the handing out of indices and
+ * interrupts the runs under way at their next internal step (ap_sim_set_poll; their rows say
+ * AP_ERR_INTERRUPTED); rows never started keep status AP_BATCH_NOT_RUN and NaN values.
+ * When no thread can be created the calling thread runs everything itself. */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "batch/batch_int.h"
+
+#define POOL_MAX_THREADS 256
+#define POOL_MSG 1024
+#define POOL_SET 512
+
+typedef struct pool {
+  const ap_batch *b;
+  const ap_bat_source *src;
+  long count;
+  double *values;
+  int *status;
+  char **messages;
+  pthread_mutex_t mu;
+  pthread_cond_t cv;
+  long next, done;         /* next index to hand out; runs finished */
+  int cancel;
+  atomic_int stop;         /* = cancel, read by the simulations' poll without the mutex */
+  int active;              /* workers still running */
+} pool;
+
+/* The overrides of run i: pointers into the explicit list, or written from the plan. */
+static const char *const *run_sets(const pool *p, long i, char (*buf)[POOL_SET],
+                                   const char **sets) {
+  const ap_bat_source *s = p->src;
+  if (!s->plan) return s->sets ? s->sets + (size_t)i * (size_t)s->nper : NULL;
+  for (int r = 0; r < s->nper; r++) {
+    if (ap_plan_value(s->plan, s->first + i, r, NULL, buf[r], POOL_SET) != AP_OK)
+      snprintf(buf[r], POOL_SET, "%s", "plan: no value");   /* checked before the pool */
+    sets[r] = buf[r];
+  }
+  return sets;
+}
+
+static void *worker(void *arg) {
+  pool *p = arg;
+  int nper = p->src->nper;
+  char msg[POOL_MSG], (*buf)[POOL_SET] = calloc((size_t)nper + 1, sizeof *buf);
+  const char **sets = calloc((size_t)nper + 1, sizeof *sets);
+  for (;;) {
+    pthread_mutex_lock(&p->mu);
+    long i = p->cancel || !buf || !sets ? p->count : p->next;
+    if (i < p->count) p->next++;
+    pthread_mutex_unlock(&p->mu);
+    if (i >= p->count) break;
+    const char *const *vs = run_sets(p, i, buf, sets);
+    int rc = ap_bat_run_one(p->b, vs, nper, p->values + (size_t)i * (size_t)p->b->ncols, msg,
+                            sizeof msg, &p->stop);
+    p->status[i] = rc;
+    if (p->messages) p->messages[i] = msg[0] ? strdup(msg) : NULL;
+    pthread_mutex_lock(&p->mu);
+    p->done++;
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+  }
+  free(buf);
+  free(sets);
+  pthread_mutex_lock(&p->mu);
+  p->active--;
+  pthread_cond_signal(&p->cv);
+  pthread_mutex_unlock(&p->mu);
+  return NULL;
+}
+
+static int progress(pool *p, long done) {
+  const ap_batch_def *d = &p->b->def;
+  return d->progress ? d->progress(done, p->count, d->user) : 0;
+}
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Wait for the workers, calling the progress callback about every 0.2 s. */
+static void wait_done(pool *p) {
+  double last = now();
+  pthread_mutex_lock(&p->mu);
+  while (p->active > 0 && p->done < p->count && !p->cancel) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    ts.tv_nsec += 200000000L;
+    if (ts.tv_nsec >= 1000000000L) ts.tv_sec++, ts.tv_nsec -= 1000000000L;
+    pthread_cond_timedwait(&p->cv, &p->mu, &ts);
+    if (p->done >= p->count || now() - last < 0.2) continue;
+    long done = p->done;
+    pthread_mutex_unlock(&p->mu);
+    int stop = progress(p, done);
+    last = now();
+    pthread_mutex_lock(&p->mu);
+    if (stop) p->cancel = 1, atomic_store(&p->stop, 1);
+  }
+  pthread_mutex_unlock(&p->mu);
+}
+
+static int thread_count(const ap_batch *b, long count) {
+  long t = b->def.threads > 0 ? b->def.threads : sysconf(_SC_NPROCESSORS_ONLN);
+  if (t < 1) t = 1;
+  if (t > POOL_MAX_THREADS) t = POOL_MAX_THREADS;
+  return (int)(t < count ? t : count);
+}
+
+int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
+                char **messages) {
+  pool p = {b, src, count, values, status, messages, PTHREAD_MUTEX_INITIALIZER,
+            PTHREAD_COND_INITIALIZER, 0, 0, 0, 0, 0};
+  atomic_init(&p.stop, 0);
+  for (long i = 0; i < count; i++) {
+    status[i] = AP_BATCH_NOT_RUN;
+    if (messages) messages[i] = NULL;
+    for (int j = 0; j < b->ncols; j++) values[(size_t)i * (size_t)b->ncols + (size_t)j] = NAN;
+  }
+  pthread_t tid[POOL_MAX_THREADS];
+  int nt = thread_count(b, count), started = 0;
+  p.active = nt;
+  while (started < nt && pthread_create(&tid[started], NULL, worker, &p) == 0) started++;
+  pthread_mutex_lock(&p.mu);
+  p.active -= nt - started;   /* threads that could not be created */
+  pthread_mutex_unlock(&p.mu);
+  if (started == 0) p.active = 1, worker(&p);
+  else wait_done(&p);
+  for (int t = 0; t < started; t++) pthread_join(tid[t], NULL);
+  int cancelled = p.cancel || p.done < count;
+  if (!cancelled) progress(&p, p.done);
+  pthread_cond_destroy(&p.cv);
+  pthread_mutex_destroy(&p.mu);
+  return cancelled ? AP_BATCH_CANCELLED : AP_OK;
+}

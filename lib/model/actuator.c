@@ -1,0 +1,210 @@
+/* Joint forces and motors: generalized forces on one joint speed, and the inputs they read.
+ *
+ * A joint force or motor effect adds tau to Q_i, i the global index of the speed v_i it acts
+ * on. That is the generalized force of a torque (or force) tau along the joint's motion column,
+ * acting on the child and -tau on the parent: its virtual power is tau (w_child - w_parent) .
+ * axis = tau v_i (for a revolute joint; likewise for every column of every kind), with no
+ * component on any other speed (docs/bodies.md "Joint forces and motors"):
+ *
+ *   joint force     tau = F                                    F = state_fn(t, x), value_fn(t)
+ *   motor, rate     tau = sat(kd (s - v_i))                        or value; s likewise
+ *   motor, angle    tau = sat(kp (s - q_i) + kd (s' - v_i))    s' = d value_fn / dt, else 0
+ *   sat(u)          = max(-M, min(M, u)),  M = max_effort
+ *
+ * The inputs x of a state function are gathered from q and v through indices resolved at
+ * compile time (in_idx, in_v), in the order declared. Partial derivatives of tau follow by the
+ * chain rule from the function's own partials df; while saturated they vanish.
+ * Invariant: ap_act_force reads only t, q and v; it runs no kinematics. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "model/builder.h"
+
+#define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
+
+static const char *what(const ap_effect_def *d) {
+  return d->kind == AP_EFFECT_MOTOR ? "motor" : "joint force";
+}
+
+/* ---- compile ------------------------------------------------------------------------------ */
+
+/* Input i of the state function: joint, kind of scalar, local index -> global index. */
+static int resolve_input(ap_builder *b, const ap_bmodel *M, ap_meff *ef, int i) {
+  const ap_state_input *in = &ef->def.inputs[i];
+  const char *nm = ef->name;
+  if (in->joint < 0 || in->joint >= M->nj)
+    FAIL("effect '%s': input %d reads joint %d, which does not exist (%d joints)", nm, i,
+         in->joint, M->nj);
+  const ap_mjoint *J = &M->joints[M->joint_topo[in->joint]];
+  int count = in->speed ? J->nv : J->nq;
+  if (in->index < 0 || in->index >= count)
+    FAIL("effect '%s': input %d reads %s %d of joint '%s', which has %d (a %s joint)", nm, i,
+         in->speed ? "speed" : "coordinate", in->index, J->name, count,
+         ap_joint_kind_name(J->kind));
+  int g = in->speed ? J->vidx[in->index] : J->qidx[in->index];
+  if (g < 0)
+    FAIL("effect '%s': input %d reads %s '%s' of joint '%s', which is driven (a function of "
+         "time, not part of the state): use that function instead", nm, i,
+         in->speed ? "speed" : "coordinate",
+         in->speed ? ap_joint_speed_name(J->kind, in->index)
+                   : ap_joint_coord_name(J->kind, in->index),
+         J->name);
+  ef->in_idx[i] = g, ef->in_v[i] = in->speed != 0;
+  return AP_OK;
+}
+
+static int check_motor(ap_builder *b, const ap_mjoint *J, ap_meff *ef) {
+  const ap_effect_def *d = &ef->def;
+  const char *nm = ef->name;
+  if (d->motor != AP_MOTOR_RATE && d->motor != AP_MOTOR_ANGLE)
+    FAIL("effect '%s': unknown motor mode %d", nm, (int)d->motor);
+  if (!(d->kp >= 0) || !(d->kd >= 0) || !isfinite(d->kp + d->kd))
+    FAIL("effect '%s': motor gains kp %g and kd %g must be finite and >= 0", nm, d->kp, d->kd);
+  if (!(d->max_effort > 0))
+    FAIL("effect '%s': motor max_effort %g must be positive (HUGE_VAL for no limit)", nm,
+         d->max_effort);
+  if (d->motor == AP_MOTOR_RATE) {
+    if (!(d->kd > 0)) FAIL("effect '%s': a rate motor needs kd > 0 (got %g)", nm, d->kd);
+    if (d->kp != 0)
+      FAIL("effect '%s': a rate motor has no angle to hold: kp must be 0 (got %g)", nm, d->kp);
+    return AP_OK;
+  }
+  if (d->speed >= J->ndrivable)
+    FAIL("effect '%s': speed '%s' of the %s joint '%s' is not the rate of a coordinate, so an "
+         "angle motor cannot hold it (use a rate motor)", nm,
+         ap_joint_speed_name(J->kind, d->speed), ap_joint_kind_name(J->kind), J->name);
+  if (!(d->kp + d->kd > 0)) FAIL("effect '%s': an angle motor needs kp > 0 or kd > 0", nm);
+  ef->qcol = J->qidx[d->speed];   /* not driven: it is driven together with its speed */
+  return AP_OK;
+}
+
+int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef) {
+  const ap_effect_def *d = &ef->def;
+  const char *nm = ef->name;
+  ef->qcol = -1;
+  if (d->joint < 0 || d->joint >= M->nj)
+    FAIL("effect '%s': joint %d does not exist (%d joints)", nm, d->joint, M->nj);
+  const ap_mjoint *J = &M->joints[M->joint_topo[d->joint]];
+  if (d->speed < 0 || d->speed >= J->nv)
+    FAIL("effect '%s': the %s joint '%s' has %d speeds, not speed %d", nm,
+         ap_joint_kind_name(J->kind), J->name, J->nv, d->speed);
+  if (J->vidx[d->speed] < 0)
+    FAIL("effect '%s': speed '%s' of joint '%s' is driven (eliminated from the state): a %s "
+         "on it has no degree of freedom to act on (remove the drive or the effect)", nm,
+         ap_joint_speed_name(J->kind, d->speed), J->name, what(d));
+  ef->col = J->vidx[d->speed];
+  if (!isfinite(d->value)) FAIL("effect '%s': value %g is not finite", nm, d->value);
+  if (d->ninputs < 0 || d->ninputs > AP_STATE_MAX_INPUTS)
+    FAIL("effect '%s': %d inputs (0 to %d allowed)", nm, d->ninputs, AP_STATE_MAX_INPUTS);
+  if (d->ninputs > 0 && !d->state_fn)
+    FAIL("effect '%s': %d inputs declared but no state_fn to read them", nm, d->ninputs);
+  for (int i = 0; i < d->ninputs; i++) {
+    int rc = resolve_input(b, M, ef, i);
+    if (rc != AP_OK) return rc;
+  }
+  return d->kind == AP_EFFECT_MOTOR ? check_motor(b, J, ef) : AP_OK;
+}
+
+/* ---- evaluation --------------------------------------------------------------------------- */
+
+static int callback_fail(const ap_model *m, ap_data *d, const ap_meff *ef, const char *fn,
+                         int rc, double t) {
+  AP_BM_MSG(d, "model '%s': effect '%s': the %s %s (returned %d) at t = %.17g", m->name,
+            ef->name, fn, rc > 0 ? "asked for a smaller step" : "failed", rc, t);
+  return rc > 0 ? AP_RECOVERABLE : AP_ERR_CALLBACK;
+}
+
+static int not_finite(const ap_model *m, ap_data *d, const ap_meff *ef, const char *fn,
+                      double t) {
+  AP_BM_MSG(d, "model '%s': effect '%s': the %s gave a non-finite value at t = %.17g", m->name,
+            ef->name, fn, t);
+  return AP_ERR_NAN;
+}
+
+/* The value F (joint force) or set-point s (motor): f[0], and f[1], f[2] its first and second
+ * time derivatives when it is a function of time alone (0 otherwise). With df (1 + ninputs
+ * entries), the partial derivatives: the state function's, or df[0] = f[1] for a function of
+ * time (0 for a constant). */
+static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
+                  const double *v, double f[3], double *df) {
+  const ap_effect_def *e = &ef->def;
+  f[0] = e->value, f[1] = f[2] = 0.0;
+  if (df) memset(df, 0, (size_t)(1 + e->ninputs) * sizeof *df);
+  if (e->state_fn) {
+    double x[AP_STATE_MAX_INPUTS];
+    for (int i = 0; i < e->ninputs; i++) x[i] = ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]];
+    ap_state_args a = {t, x, e->ninputs, q, v};
+    int rc = e->state_fn(&a, &f[0], df, e->user);
+    if (rc != 0) return callback_fail(m, d, ef, "state function", rc, t);
+    int ok = isfinite(f[0]);
+    for (int i = 0; df && i <= e->ninputs; i++) ok = ok && isfinite(df[i]);
+    return ok ? AP_OK : not_finite(m, d, ef, "state function", t);
+  }
+  if (!e->value_fn) return AP_OK;
+  int rc = e->value_fn(t, f, e->user);
+  if (rc != 0) return callback_fail(m, d, ef, "value function", rc, t);
+  if (!isfinite(f[0]) || !isfinite(f[1]) || !isfinite(f[2]))
+    return not_finite(m, d, ef, "value function", t);
+  if (df) df[0] = f[1];
+  return AP_OK;
+}
+
+/* tau from the source value; *sat = 1 when the motor's limit holds it. */
+static double law(const ap_meff *ef, const double *q, const double *v, const double f[3],
+                  int *sat) {
+  const ap_effect_def *e = &ef->def;
+  *sat = 0;
+  if (e->kind == AP_EFFECT_JOINT_FORCE) return f[0];
+  double u = e->motor == AP_MOTOR_RATE
+                 ? e->kd * (f[0] - v[ef->col])
+                 : e->kp * (f[0] - q[ef->qcol]) + e->kd * (f[1] - v[ef->col]);
+  if (fabs(u) > e->max_effort) *sat = 1, u = copysign(e->max_effort, u);
+  return u;
+}
+
+int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
+                 const double *v, double *Q) {
+  double f[3];
+  int sat, rc = source(m, d, ef, t, q, v, f, NULL);
+  if (rc != AP_OK) return rc;
+  Q[ef->col] += law(ef, q, v, f, &sat);
+  return AP_OK;
+}
+
+/* ---- partial derivatives -------------------------------------------------------------------- */
+
+/* dtau = g dF + (the PD law's own terms); g = 1 (joint force), kd (rate), kp (angle). */
+static void chain(const ap_meff *ef, const double f[3], const double *df, double *dq,
+                  double *dv, double *dt) {
+  const ap_effect_def *e = &ef->def;
+  int motor = e->kind == AP_EFFECT_MOTOR, angle = motor && e->motor == AP_MOTOR_ANGLE;
+  double g = !motor ? 1.0 : angle ? e->kp : e->kd;
+  for (int i = 0; i < e->ninputs; i++) (ef->in_v[i] ? dv : dq)[ef->in_idx[i]] += g * df[1 + i];
+  *dt = g * df[0] + (angle ? e->kd * f[2] : 0.0);
+  if (motor) dv[ef->col] -= e->kd;
+  if (angle) dq[ef->qcol] -= e->kp;
+}
+
+int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *col, double *tau,
+                              double *dtau_dq, double *dtau_dv, double *dtau_dt) {
+  if (!ap_model_is_body_model(m) || !d || effect < 0 || effect >= ap_bm(m)->ne) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  const ap_meff *ef = &M->effs[effect];
+  if (ef->def.kind != AP_EFFECT_JOINT_FORCE && ef->def.kind != AP_EFFECT_MOTOR) return AP_ERR_ARG;
+  double f[3], df[1 + AP_STATE_MAX_INPUTS], *dq = calloc((size_t)M->n + (size_t)M->k + 1,
+                                                        sizeof *dq);
+  if (!dq) return AP_ERR_NOMEM;
+  double *dv = dq + M->n, dt = 0.0;
+  int sat, rc = source(m, d, ef, d->t, d->q, d->v, f, df);
+  double u = rc == AP_OK ? law(ef, d->q, d->v, f, &sat) : 0.0;
+  if (rc == AP_OK && !sat) chain(ef, f, df, dq, dv, &dt);
+  if (rc == AP_OK) {
+    if (col) *col = ef->col;
+    if (tau) *tau = u;
+    if (dtau_dq) memcpy(dtau_dq, dq, (size_t)M->n * sizeof *dq);
+    if (dtau_dv) memcpy(dtau_dv, dv, (size_t)M->k * sizeof *dv);
+    if (dtau_dt) *dtau_dt = dt;
+  }
+  free(dq);
+  return rc;
+}

@@ -1,0 +1,182 @@
+"""appell.sweep: many runs of one scene over grids and random samples, on threads or on a
+Dask cluster (docs/sweeps.md).
+
+The plan (grids, random samples, seed) is built in C exactly as `appell sweep` builds it, so a
+sweep gives the same runs with the same values from the command line, from Python and from any
+slice of it. Locally the runs go to the C thread pool (jobs threads, GIL released); with a Dask
+client the runs are cut into chunks, each chunk runs on a worker (appell._sweep._run_chunk)
+and the table is put together in run order. Dask reschedules the chunks of a worker that dies,
+and a chunk's rows depend only on the plan and the run indices, so no run is lost or changed.
+"""
+
+import math
+import os
+
+import numpy as np
+
+from . import _appell
+
+_FIXED = ("t", "steps", "rhs_evals", "err_fails", "max_residual", "energy_drift")
+
+
+class Table(dict):
+    """The result of a sweep: column name -> NumPy array, in the order of `appell sweep`'s CSV:
+    run, the parameters, status, t, steps, rhs_evals, err_fails, max_residual, energy_drift,
+    NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths the parameters' paths."""
+
+    runs = 0
+    paths = ()
+
+    @property
+    def columns(self):
+        return tuple(self.keys())
+
+    @property
+    def failed(self):
+        """Indices (rows) of the runs that failed."""
+        return np.nonzero(self["status"] != 0)[0]
+
+    def to_csv(self, path):
+        """Write the table as `appell sweep --out` does (same bytes for the same runs)."""
+        cols = [c for c in self.columns if c != "run"]
+        lines = [",".join(["run", "runs"] + cols)]
+        tmp = f"{path}.tmp.{os.getpid()}"
+        with open(tmp, "w") as f:
+            f.write("\n".join(lines + [_row(self, i, cols) for i in range(len(self["run"]))]))
+            f.write("\n")
+        os.replace(tmp, path)
+
+
+def _g17(x):
+    x = float(x)
+    if math.isnan(x):
+        return "nan"
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return "%.17g" % x
+
+
+def _row(table, i, cols):
+    cells = [str(int(table["run"][i])), str(table.runs)]
+    for c in cols:
+        x = table[c][i]
+        if c == "message":
+            cells.append('"' + (x or "").replace('"', '""').replace("\n", " ") + '"')
+        elif c == "status":
+            cells.append(str(int(x)))
+        elif isinstance(x, str):
+            cells.append(x)
+        else:
+            cells.append(_g17(x))
+    return ",".join(cells)
+
+
+def _format_number(x):
+    if isinstance(x, str):
+        return x
+    x = float(x)
+    if not math.isfinite(x):
+        raise ValueError(f"grid value {x!r} is not finite")
+    return repr(x)
+
+
+def _grid_spec(path, values):
+    """{path: "A:B:N" | "V1,V2" | sequence} -> "path=..." for the C plan."""
+    if isinstance(values, str):
+        return f"{path}={values}"
+    items = list(np.asarray(values).ravel()) if isinstance(values, np.ndarray) else list(values)
+    if not items:
+        raise ValueError(f"grid {path!r}: no values")
+    return f"{path}=" + ",".join(_format_number(v) for v in items)
+
+
+def _random_spec(path, dist):
+    """{path: "normal(MU,SIGMA)" | ("normal", mu, sigma) | ("uniform", a, b)}."""
+    if isinstance(dist, str):
+        return f"{path}={dist}"
+    kind, a, b = dist
+    return f"{path}={kind}({_format_number(a)},{_format_number(b)})"
+
+
+def _source(scene, set):
+    from . import _sets
+    if isinstance(scene, _appell.Model):
+        text, name, sets = scene.source
+        return bytes(text), name, tuple(sets) + _sets(set)
+    path = os.fspath(scene)
+    with open(path, "rb") as f:
+        return f.read(), path, _sets(set)
+
+
+def _assemble(parts, first):
+    """One Table from the run_plan results of consecutive slices starting at run first."""
+    p0 = parts[0]
+    out = Table()
+    out.runs, out.paths = p0["runs"], p0["paths"]
+    count = sum(len(p["status"]) for p in parts)
+    out["run"] = np.arange(first, first + count, dtype=np.int64)
+    for r, path in enumerate(p0["paths"]):
+        if any(p["params"][1][r] is not None for p in parts):
+            out[path] = np.array(sum((p["params"][1][r] or [_g17(x) for x in p["params"][0][:, r]]
+                                      for p in parts), []), dtype=object)
+        else:
+            out[path] = np.concatenate([p["params"][0][:, r] for p in parts])
+    out["status"] = np.concatenate([p["status"] for p in parts])
+    values = np.concatenate([p["values"] for p in parts])
+    for j, name in enumerate(p0["columns"]):
+        col = values[:, j]
+        out[name] = col.astype(np.int64) if name in _FIXED[1:4] and np.all(np.isfinite(col)) else col
+    out["message"] = np.array(sum((p["messages"] for p in parts), []), dtype=object)
+    return out
+
+
+def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channels=(),
+          times=None, final_state=True, jobs=1, shard=None, client=None, chunk_size=None,
+          progress=None):
+    """Run a scene once per point of a grid or random sample of its values; returns a Table.
+
+    scene      a scene file's path or a Model (its text and overrides are used)
+    grid       {path: "A:B:N" (N values from A to B) | "V1,V2,..." | a sequence of values}
+    random     {path: "normal(MU,SIGMA)" | "uniform(A,B)"}, `samples` draws per grid point
+    seed       seed of the random values (the same seed gives the same values anywhere)
+    set        overrides applied to every run, as in appell.load
+    channels   output columns to sample at `times` (default: t_end)
+    jobs       threads (0: one per processor); with a Dask client, chunks run on the workers
+    shard      (i, n): only the i-th of n equal slices of the runs (1 <= i <= n)
+    client     a dask.distributed.Client: run chunks of chunk_size runs on its workers
+    progress   callable(done, total), called about every 0.2 s
+    A failed run is a row with its status (non-zero) and message.
+    """
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
+        raise ValueError(f"jobs must be a whole number >= 0 (0: one per processor), got {jobs!r}")
+    text, name, sets = _source(scene, set)
+    grids = tuple(_grid_spec(p, v) for p, v in (grid or {}).items())
+    randoms = tuple(_random_spec(p, v) for p, v in (random or {}).items())
+    n_samples = int(samples or 0)
+    runs, _ = _appell.plan_info(grids, randoms, n_samples, int(seed))
+    first, count = 0, runs
+    if shard is not None:
+        i, n = shard
+        if not 1 <= i <= n:
+            raise ValueError(f"shard {shard!r}: need 1 <= i <= n")
+        first = runs // n * (i - 1) + runs % n * (i - 1) // n
+        count = runs // n * i + runs % n * i // n - first
+    args = dict(text=text, name=name, sets=sets, grids=grids, randoms=randoms,
+                samples=n_samples, seed=int(seed),
+                channels=(channels,) if isinstance(channels, str) else tuple(channels),
+                times=() if times is None else tuple(float(t) for t in np.ravel(times)),
+                final_state=bool(final_state))
+    if client is None:
+        part = _appell.run_plan(first=first, count=count, jobs=int(jobs),
+                                progress=progress, **args)
+        return _assemble([part], first)
+    from ._dask import run_on_dask
+    # The plan checked here, as a local sweep checks it, before any chunk goes to a worker
+    # (the chunks skip the check): a misspelt path raises instead of failing every run.
+    _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
+    return _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
+
+
+def _run_chunk(args, first, count):
+    """A Dask task: runs first .. first + count - 1 of the plan in one worker thread."""
+    return _appell.run_plan(first=first, count=count, jobs=1, check=False, **args)

@@ -1,0 +1,165 @@
+/* appell linearize: CSV files and the eigenvalue figure.
+ *
+ * CSV files are written to a temporary file and renamed over the target only when complete;
+ * a FIFO or a device (/dev/null) is written in place, and a link to a regular file keeps being
+ * a link (the file it names is replaced), as appell run --out does.
+ * Sweep CSV: the parameter, then re_i and im_i of each tracked eigenvalue (row i of the sweep
+ * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension)
+ * draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
+ * the same colour, with a vertical line at each characteristic point: the classic picture of
+ * eigenvalues against speed. */
+#define _XOPEN_SOURCE 700   /* realpath */
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "linearize.h"
+
+/* Output files are written to FILE.appell-tmp.PID and renamed over FILE only when complete,
+ * so that no partial file is left as if it were whole. A target that exists and is not a
+ * regular file is written in place (direct): renaming over /dev/null, run as root, would
+ * replace the device with a regular file. */
+typedef struct out_file {
+  char target[4200];
+  char tmp[4300];
+  FILE *f;
+  int direct;
+} out_file;
+
+int lin_check_target(const char *opt, const char *file, const char *scene) {
+  struct stat st, sc;
+  if (strlen(file) > 4000)
+    return fprintf(stderr, "appell linearize: %s %s: the path is too long\n", opt, file), -1;
+  if (stat(file, &st) == 0 && S_ISDIR(st.st_mode))
+    return fprintf(stderr, "appell linearize: %s %s: is a directory; name a file\n", opt,
+                   file), -1;
+  if (stat(file, &st) == 0 && stat(scene, &sc) == 0 && st.st_dev == sc.st_dev &&
+      st.st_ino == sc.st_ino)
+    return fprintf(stderr, "appell linearize: %s %s: is the scene file; refusing to overwrite "
+                   "it\n", opt, file), -1;
+  return 0;
+}
+
+static FILE *open_out(out_file *o, const char *file) {
+  struct stat st;
+  char real[PATH_MAX];
+  snprintf(o->target, sizeof o->target, "%s", file);
+  o->direct = stat(file, &st) == 0 && !S_ISREG(st.st_mode);
+  if (!o->direct && lstat(file, &st) == 0 && S_ISLNK(st.st_mode) && realpath(file, real))
+    snprintf(o->target, sizeof o->target, "%s", real);   /* the link stays; its file is new */
+  snprintf(o->tmp, sizeof o->tmp, "%s.appell-tmp.%ld", o->target, (long)getpid());
+  o->f = fopen(o->direct ? o->target : o->tmp, "w");
+  if (!o->f) fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
+  return o->f;
+}
+
+static int close_out(out_file *o) {
+  int bad = ferror(o->f) != 0;
+  bad |= fclose(o->f) != 0;
+  if (!bad && (o->direct || rename(o->tmp, o->target) == 0)) return 0;
+  fprintf(stderr, "appell linearize: cannot write %s: %s\n", o->target,
+          strerror(errno ? errno : EIO));
+  if (!o->direct) remove(o->tmp);
+  return -1;
+}
+
+int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep *sw) {
+  out_file o;
+  FILE *f = open_out(&o, file);
+  if (!f) return -1;
+  fprintf(f, "%s", param);
+  for (int i = 0; i < sw->n; i++) fprintf(f, ",re%d,im%d", i, i);
+  fprintf(f, "\n");
+  for (int c = 0; c < sw->count; c++) {
+    fprintf(f, "%.17g", sw->p[c]);
+    for (int i = 0; i < sw->n; i++)
+      fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
+    fprintf(f, "\n");
+  }
+  return close_out(&o);
+}
+
+int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
+  out_file o;
+  FILE *f = open_out(&o, file);
+  if (!f) return -1;
+  fprintf(f, "index,re,im,rcond,rcondv,error\n");
+  for (int i = 0; i < e->n; i++)
+    fprintf(f, "%d,%.17g,%.17g,%.6g,%.6g,%.6g\n", i, e->re[i], e->im[i], e->rcond[i],
+            e->rcondv[i], e->err[i]);
+  return close_out(&o);
+}
+
+static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
+
+static void script(FILE *g, const char *fig, const char *csv, const char *param,
+                   const ap_lin_sweep *sw, const char *title) {
+  const char *ext = strrchr(fig, '.');
+  fprintf(g, "set terminal %s size 900,600 noenhanced\n",
+          ext && strcmp(ext, ".svg") == 0 ? "svg" : "pngcairo");
+  fprintf(g, "set output '%s'\nset datafile separator ','\nset grid\n", fig);
+  fprintf(g, "set xlabel '%s'\nset ylabel 'eigenvalues (1/s)'\n", param);
+  fprintf(g, "set title '%s: real parts (solid), imaginary parts (dashed)'\n", title);
+  fprintf(g, "set key off\nset xzeroaxis lt -1\n");
+  for (int i = 0; i < sw->npoints; i++)
+    fprintf(g, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 3 lc rgb 'gray40'\n",
+            sw->points[i].p, sw->points[i].p);
+  fprintf(g, "plot ");
+  for (int i = 0; i < sw->n; i++) {
+    int cplx = 0;
+    for (int c = 0; c < sw->count && !cplx; c++) cplx = sw->im[i + (size_t)c * sw->n] != 0.0;
+    fprintf(g, "%s'%s' skip 1 using 1:%d with lines lw 2 lc %d", i ? ", " : "", csv, 2 + 2 * i,
+            i % 8 + 1);
+    if (cplx)
+      fprintf(g, ", '%s' skip 1 using 1:(abs($%d)) with lines lw 1.5 dt 2 lc %d", csv,
+              3 + 2 * i, i % 8 + 1);
+  }
+  fprintf(g, "\n");
+}
+
+int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
+             const char *title) {
+  const char *ext = strrchr(fig, '.');
+  if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
+    return fprintf(stderr, "appell linearize: --plot %s: the figure must end in .png or .svg\n",
+                   fig), -1;
+  if (!safe_name(fig) || !safe_name(csv) || !safe_name(param) || !safe_name(title))
+    return fprintf(stderr, "appell linearize: file names must not contain quotes, backslashes "
+                   "or newlines\n"), -1;
+  int fd[2];
+  if (pipe(fd) != 0) return fprintf(stderr, "appell linearize: pipe: %s\n", strerror(errno)), -1;
+  pid_t pid = fork();
+  if (pid < 0) return fprintf(stderr, "appell linearize: fork: %s\n", strerror(errno)), -1;
+  if (pid == 0) {
+    dup2(fd[0], STDIN_FILENO);
+    close(fd[0]), close(fd[1]);
+    execlp("gnuplot", "gnuplot", (char *)NULL);
+    fprintf(stderr, "appell linearize: cannot run gnuplot (%s); install the Debian package "
+            "gnuplot-nox\n", strerror(errno));
+    _exit(127);
+  }
+  close(fd[0]);
+  FILE *g = fdopen(fd[1], "w");
+  if (g) {
+    script(g, fig, csv, param, sw, title);
+    fclose(g);
+  } else {
+    close(fd[1]);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 127)
+      fprintf(stderr, "appell linearize: gnuplot failed (status %d)\n", WEXITSTATUS(status));
+    return -1;
+  }
+  return 0;
+}
