@@ -17,7 +17,7 @@
  * joint-space terms, gamma from ap_con_gamma on the shadow, w from the rows with -gamma.
  * Effects as wrenches (t; f) at the body origin (effect.c gives the same as J^T F):
  *   gravity m g at the com; applied F at R p and T; spring +-F at its two points;
- *   joint damping -c v_i and user effects straight into Q. */
+ *   joint damping -c v_i, joint forces, motors and user effects straight into Q. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -323,6 +323,8 @@ static int forces(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
       }
       case AP_EFFECT_APPLIED: rc = applied(m, d, P, ws, ef); break;
       case AP_EFFECT_USER: rc = user_effect(m, d, ws, ef); break;
+      case AP_EFFECT_JOINT_FORCE:   /* straight into Q (actuator.c reads t, q, v only) */
+      case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, d->t, d->q, d->v, d->Q); break;
     }
     if (rc != AP_OK) return rc;
   }
