@@ -19,8 +19,11 @@
  * collects every evaluation of the warm-up and timed blocks: divide by reps x (blocks + 1)
  * (printed as the divisor); --toggle-collect=load_one counts the loads with their initial
  * states (a warm-up, `loads` timed ones and the one evaluated: divide by loads + 2).
- * Usage: bench_bicycle [--only bicycle|rolling_disk] [--reps N] [--blocks N] [--loads N]
- *                      [--rtol X] [--no-run]
+ * Hoffmann's two rods with their loop closure (hoffmann.yaml) are measured the same way (load
+ * and eval; no runs): the third scene whose evaluation cost the generic-scalar conversion of
+ * lib/core and lib/model was checked against.
+ * Usage: bench_bicycle [--only bicycle|rolling_disk|hoffmann] [--reps N] [--blocks N]
+ *                      [--loads N] [--rtol X] [--no-run]
  * Run with OPENBLAS_NUM_THREADS=1. */
 #include <math.h>
 #include <stdio.h>
@@ -208,13 +211,14 @@ int main(int argc, char **argv) {
     else if (strcmp(argv[i], "--loads") == 0 && i + 1 < argc) loads = atoi(argv[++i]);
     else if (strcmp(argv[i], "--rtol") == 0 && i + 1 < argc) rtol = atof(argv[++i]);
     else if (strcmp(argv[i], "--no-run") == 0) runs = 0;
-    else die("usage", "bench_bicycle [--only bicycle|rolling_disk] [--reps N] [--blocks N] "
+    else die("usage", "bench_bicycle [--only bicycle|rolling_disk|hoffmann] [--reps N] "
+             "[--blocks N] "
              "[--loads N] [--rtol X] [--no-run]");
   }
   if (reps < 1 || blocks < 1 || loads < 1 || !(rtol > 0))
     die("usage", "--reps, --blocks, --loads and --rtol must be > 0");
-  const char *names[2] = {"rolling_disk", "bicycle"};
-  for (int c = 0; c < 2; c++) {
+  const char *names[3] = {"rolling_disk", "bicycle", "hoffmann"};
+  for (int c = 0; c < 3; c++) {
     if (only && strcmp(only, names[c]) != 0) continue;
     char file[1200];
     double x[64], t_load;

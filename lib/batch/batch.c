@@ -140,7 +140,9 @@ int ap_batch_create(const char *text, size_t len, const char *name, const char *
   if (msg && msg_len) msg[0] = '\0';
   if (!out) return AP_ERR_ARG;
   *out = NULL;
-  if (!text || nsets < 0 || (nsets && !sets))
+  int null_set = 0;
+  for (int i = 0; sets && i < nsets; i++) null_set |= !sets[i];
+  if (!text || nsets < 0 || (nsets && !sets) || null_set)
     return say(msg, msg_len, AP_ERR_ARG, "NULL scene text or overrides");
   ap_batch *b = calloc(1, sizeof *b);
   if (!b) return say(msg, msg_len, AP_ERR_NOMEM, "out of memory");

@@ -2,7 +2,7 @@
 
 References: the scene files and their fixtures (tests/scenes, the positions test_scene.c
 checks in C), the command-line tool's own output (appell check, the CSV header), the energy
-invariant of the rolling disk (REFERENCES.md's section on the rolling disk: rolling without
+invariant of the rolling disk (docs/references.md §4, the rolling disk: rolling without
 slip does no work), and serial runs for the threaded ones."""
 
 import signal
