@@ -146,6 +146,11 @@ static int setup(ap_lin *L, const ap_lin_def *def, double t, const double *q, co
               "needs coordinates whose rates are the speeds", ap_model_name(L->m), L->n, L->k);
     return AP_ERR_UNSUPPORTED;
   }
+  if (L->m->ops) {   /* pscale: the tree path's data has no A or B */
+    ap_an_msg(L, "model '%s' is on the tree path: the linearization needs the dense path "
+              "(path: dense)", ap_model_name(L->m));
+    return AP_ERR_UNSUPPORTED;
+  }
   int rc = ap_data_create(L->m, &L->d);
   if (rc == AP_OK) rc = ap_an_chart_build(L->m, &L->ch, L->msg, sizeof L->msg);
   if (rc == AP_OK) rc = alloc_all(L);

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "core/core.h"
+#include "core/structured.h"
 #include "linalg/linalg.h"
 
 #define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
@@ -179,8 +180,23 @@ int AP_SC(ap_core_position_objects)(const ap_model *m, ap_data *d) {
 #endif
 }
 
+#ifndef AP_SC_COMPLEX
+/* The tree path (m->ops) builds a basis always: the DAE residual's g and A are not there. */
+static int structured_position(const ap_model *m, ap_data *d) {
+  if (d->basis == AP_BASIS_NONE) {
+    ap_core_msg(d, "system '%s' is on the tree path, which forms no g or A: the DAE mode "
+                "needs the dense path (path: dense)", m->name);
+    return AP_ERR_UNSUPPORTED;
+  }
+  return ap_st_position(m, d, ap_core_st(d));
+}
+#endif
+
 int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return structured_position(m, d);
+#endif
   d->cnt.position++;
   int rc = AP_SC(ap_core_position_objects)(m, d);
   if (rc != AP_OK || m->b == 0 || d->basis == AP_BASIS_NONE) return rc;  /* b == 0: B = I */
@@ -275,12 +291,18 @@ static int particular(const ap_model *m, ap_data *d) {
 }
 
 void AP_SC(ap_core_speeds)(const ap_model *m, ap_data *d) {
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_speeds(m, d, ap_core_st(d));
+#endif
   AP_SC(ap_la_gemv)(m->k, d->l, d->B, d->e, d->v);     /* v = B e' + b0 */
   for (int i = 0; i < m->k; i++) d->v[i] += d->b0[i];
 }
 
 int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_velocity(m, d, ap_core_st(d));
+#endif
   d->cnt.velocity++;
   if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) AP_SC(ap_core_speeds)(m, d);
 #ifdef AP_SC_COMPLEX
@@ -297,6 +319,9 @@ int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
 
 int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_acceleration(m, d, ap_core_st(d));
+#endif
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l;
   d->cnt.acceleration++;
@@ -338,6 +363,7 @@ int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
 int ap_fwd_reactions(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  if (ap_core_st(d)) return ap_st_reactions(m, d, ap_core_st(d));
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
   d->cnt.reactions++;

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "model/builder.h"
+#include "model/tree_model.h"
 
 #define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
 
@@ -428,6 +429,10 @@ int ap_builder_compile(ap_builder *b, ap_model **out) {
   int rc = M ? compile_all(b, M) : AP_ERR_NOMEM;
   if (rc == AP_OK) rc = make_model(b, M, out);   /* M is the model's (or freed) from here */
   else ap_bm_destroy(M);
+  if (rc == AP_OK) {                              /* the evaluation path (docs/large.md) */
+    rc = ap_tree_attach(*out, b->path, b->msg, sizeof b->msg);
+    if (rc != AP_OK) ap_model_free(*out), *out = NULL;
+  }
   if (rc == AP_ERR_NOMEM) snprintf(b->msg, sizeof b->msg, "model '%s': out of memory", b->name);
   return rc;
 }

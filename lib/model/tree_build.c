@@ -234,3 +234,37 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
   ws->avoid = ints, ints += k;
   ap_la_tree_work_init(&P->T, P->lmax, dbl, ints, &ws->W);
 }
+
+/* ---- the compile-time choice ------------------------------------------------------------ */
+
+static void plan_destroy(void *impl) { ap_tree_plan_free(impl); }
+
+/* project_q and check_q of the body layer, on the shadow (its scratch is the data's). */
+static int shadow_project_q(const ap_model *m, ap_data *d, double *q, double *S,
+                            double *change) {
+  return ap_bm_project_q(&ap_tree_plan(m)->sm, d, q, S, change);
+}
+
+static int shadow_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
+  return ap_bm_check_q(&ap_tree_plan(m)->sm, d, q, S);
+}
+
+int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
+  if (path == AP_PATH_DENSE || (path == AP_PATH_AUTO && m->k < AP_TREE_AUTO_K)) return AP_OK;
+  char reason[256] = "";
+  ap_tplan *P = NULL;
+  int rc = ap_tree_plan_create(m, &P, reason, sizeof reason);
+  if (rc == AP_ERR_UNSUPPORTED && path == AP_PATH_AUTO) return AP_OK;   /* the dense path */
+  if (rc != AP_OK) {
+    snprintf(why, why_len, "%s", rc == AP_ERR_NOMEM ? "out of memory planning the tree path"
+             : reason);
+    if (rc == AP_ERR_UNSUPPORTED)
+      snprintf(why, why_len, "%s: the tree path cannot take it (path: dense)", reason);
+    return rc;
+  }
+  ap_tree_ops(P, &P->ops);
+  m->ops = &P->ops, m->ops_impl = P, m->ops_destroy = plan_destroy;
+  if (m->ev.project_q) m->ev.project_q = shadow_project_q;
+  if (m->ev.check_q) m->ev.check_q = shadow_check_q;
+  return AP_OK;
+}

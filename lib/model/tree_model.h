@@ -16,6 +16,7 @@
 #ifndef AP_MODEL_TREE_MODEL_H
 #define AP_MODEL_TREE_MODEL_H
 
+#include "core/core.h"
 #include "core/structured.h"
 #include "linalg/tree.h"
 #include "model/model.h"
@@ -80,6 +81,24 @@ int ap_tree_body_eval(const ap_model *m, ap_data *d, ap_tree_ws *ws);
 void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, double *Jw,
                             double *Jv);
 void ap_tree_com_accel(ap_tree_ws *ws, const double *vdot, int body, double *a);
+
+/* The compile-time choice of the path (system.h, ap_path): on AP_PATH_TREE, or AP_PATH_AUTO
+ * with at least AP_TREE_AUTO_K speeds and a model the plan takes, the plan is attached to m
+ * (m->ops; project_q and check_q run on the shadow). AP_PATH_TREE on a model the plan cannot
+ * take: AP_ERR_UNSUPPORTED with the reason in why. */
+int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len);
+/* The body layout of the data's evaluator scratch: the shadow's on the tree path. */
+static inline const ap_bmodel *ap_tree_layout(const ap_model *m) {
+  return m->ops ? &((const ap_tplan *)m->ops_impl)->shadow : ap_bm(m);
+}
+static inline const ap_tplan *ap_tree_plan(const ap_model *m) {
+  return (const ap_tplan *)m->ops_impl;
+}
+
+/* The tree workspace of a data made for a model on the tree path. */
+static inline ap_tree_ws *ap_tree_ws_of(const ap_data *d) {
+  return (ap_tree_ws *)ap_core_st(d)->ws;
+}
 
 /* The operators of the core's structured pipeline for this plan. */
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops);
