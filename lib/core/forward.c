@@ -180,22 +180,12 @@ int AP_SC(ap_core_position_objects)(const ap_model *m, ap_data *d) {
 #endif
 }
 
-#ifndef AP_SC_COMPLEX
-/* The tree path (m->ops) builds a basis always: the DAE residual's g and A are not there. */
-static int structured_position(const ap_model *m, ap_data *d) {
-  if (d->basis == AP_BASIS_NONE) {
-    ap_core_msg(d, "system '%s' is on the tree path, which forms no g or A: the DAE mode "
-                "needs the dense path (path: dense)", m->name);
-    return AP_ERR_UNSUPPORTED;
-  }
-  return ap_st_position(m, d, ap_core_st(d));
-}
-#endif
-
 int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
 #ifndef AP_SC_COMPLEX
-  if (ap_core_st(d)) return structured_position(m, d);
+  /* the tree path (m->ops): a basis always (AP_BASIS_NONE as projected mode: g and A are never
+   * formed, so the DAE mode refuses such models) */
+  if (ap_core_st(d)) return ap_st_position(m, d, ap_core_st(d));
 #endif
   d->cnt.position++;
   int rc = AP_SC(ap_core_position_objects)(m, d);
