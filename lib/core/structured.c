@@ -204,18 +204,25 @@ int ap_st_reactions(const ap_model *m, ap_data *d, ap_st *st) {
 
 /* ---- projection and diagnostics ------------------------------------------------------------ */
 
+/* From the residual, as core/project.c: r = A v + a0, d0 with A d0 + r = 0, the correction
+ * (I - B G^-1 B^T g) d0 (the g-nearest). v is not touched when r is zero, and otherwise moves by
+ * a correction computed from r alone: no O(eps |v|) rounding per projection accumulates. */
 int ap_st_project_here(const ap_model *m, ap_data *d, ap_st *st, double *v, double *change) {
   int k = m->k, bad = -1;
   ap_sblocks bl;
+  if (change) *change = 0.0;
+  if (m->b == 0) return AP_OK;
+  st->ops->amul(st->ws, d, v, st->tb);                    /* r = A v + a0 */
+  if (!(max_abs(st->tb, m->b) > 0.0)) return AP_OK;
   st->ops->blocks(st->ws, &bl);
-  for (int i = 0; i < k; i++) st->tk1[i] = v[i] - d->b0[i];
-  st->ops->gmul(st->ws, st->tk1, st->tk2);                /* g (v - b0) */
+  st->ops->psolve(st->ws, st->tb, st->tk1);               /* d0: A d0 + r = 0 */
+  st->ops->gmul(st->ws, st->tk1, st->tk2);                /* g d0 */
   apply_Bt(&bl, st->tk2, st->te);
   if (factor_G(&bl, st, &bad) != AP_OK) return singular(m, d, &bl, bad, " (speed projection)");
   solve_G(&bl, st, st->te);
-  memcpy(st->tk2, d->b0, sizeof(double) * (size_t)k);
-  apply_B_add(&bl, st->te, st->tk2);                      /* the projected v */
-  for (int i = 0; i < k; i++) st->tk1[i] = st->tk2[i] - v[i], v[i] = st->tk2[i];
+  for (int i = 0; i < k; i++) st->te[i] = -st->te[i];
+  apply_B_add(&bl, st->te, st->tk1);                      /* the correction d0 - B G^-1 B^T g d0 */
+  for (int i = 0; i < k; i++) v[i] += st->tk1[i];
   st->ops->gmul(st->ws, st->tk1, st->tk2);
   double c2 = 0.0;
   for (int i = 0; i < k; i++) c2 += st->tk1[i] * st->tk2[i];

@@ -36,6 +36,8 @@ typedef struct ap_ops {
   void (*gmul)(void *ws, const double *x, double *y);                  /* y = g x */
   void (*amul)(void *ws, const ap_data *d, const double *x, double *r); /* r = A x + a0 */
   void (*nmul)(void *ws, const double *q, const double *v, double *qdot); /* q' = N v */
+  /* u (k) with A u + r = 0 (a particular solution), after the position stage */
+  void (*psolve)(void *ws, const double *r, double *u);
   /* lambda (b) with A^T lambda = r (k), after the position stage */
   void (*reactions)(void *ws, const double *r, double *lambda);
   /* the model's evaluator scratch inside ws (the data's ev scratch on this path) */

@@ -11,6 +11,7 @@
  * climb about one level on average) and b + 1 rows at one body; one tree's free speeds at most
  * k_t - b_t + 6 (six redundant rows per tree). Beyond them the position stage reports
  * AP_ERR_UNSUPPORTED. */
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -250,7 +251,12 @@ static int shadow_check_q(const ap_model *m, ap_data *d, const double *q, double
 }
 
 int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
-  if (path == AP_PATH_DENSE || (path == AP_PATH_AUTO && m->k < AP_TREE_AUTO_K)) return AP_OK;
+  /* APPELL_PATH=tree|dense overrides the automatic choice (for running whole test suites on
+   * one path: tree wherever the model allows it) */
+  const char *env = getenv("APPELL_PATH");
+  int min_k = env && strcmp(env, "tree") == 0 ? 0 : env && strcmp(env, "dense") == 0 ? INT_MAX
+              : AP_TREE_AUTO_K;
+  if (path == AP_PATH_DENSE || (path == AP_PATH_AUTO && m->k < min_k)) return AP_OK;
   char reason[256] = "";
   ap_tplan *P = NULL;
   int rc = ap_tree_plan_create(m, &P, reason, sizeof reason);

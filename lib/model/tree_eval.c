@@ -403,6 +403,10 @@ static void ops_gmul(void *ws, const double *x, double *y) { ap_tree_gmul(ws, x,
 static void ops_amul(void *ws, const ap_data *d, const double *x, double *r) {
   ap_tree_amul(ws, d, x, 1, r);
 }
+static void ops_psolve(void *wsp, const double *r, double *u) {
+  ap_tree_ws *ws = wsp;
+  ap_la_tree_solve(&ws->P->T, &ws->g, &ws->W, NULL, r, u);
+}
 static void ops_nmul(void *wsp, const double *q, const double *v, double *qdot) {
   const ap_tree_ws *ws = wsp;
   ap_tree_nmul(ws->P, q, v, qdot);
@@ -433,6 +437,6 @@ static double *ops_ev_scratch(void *wsp) { return ((ap_tree_ws *)wsp)->S; }
 
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
   ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
-              ops_amul, ops_nmul, ops_reactions, ops_ev_scratch};
+              ops_amul, ops_nmul, ops_psolve, ops_reactions, ops_ev_scratch};
   *ops = o;
 }
