@@ -421,7 +421,7 @@ static void check_model(const ap_model *m, const char *label, double t) {
       for (int c = 0; c < k; c++) z[a] += dd->g[a + (size_t)c * k] * x[c];
     }
     AP_CHECK_LE(diff(k, y, z), TOL * sg * 10);
-    ap_tree_amul(&ws, dt, x, 1, r1);
+    ap_tree_amul(&ws, dt, x, 1, r1, NULL);
     dense_A(dd, x, dd->a0, r2);
     AP_CHECK_LE(diff(b, r1, r2), TOL * sa * 10);
     ap_tree_nmul(P, dt->q, dt->v, qd);

@@ -13,6 +13,7 @@
  * rows: the same relative 1e-8 as forward.c. Nothing here allocates after ap_st_create. */
 #include "core/structured.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,7 +30,7 @@ int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   if (!st) return AP_ERR_NOMEM;
   st->m = m, st->ops = ops;
   st->ws = ops->ws_create(ops->ctx, &gcap);
-  double *p = st->ws ? calloc(gcap + 5 * k + b + 1, sizeof(double)) : NULL;
+  double *p = st->ws ? calloc(gcap + 5 * k + 2 * b + 1, sizeof(double)) : NULL;
   if (!p) {
     if (st->ws) ops->ws_free(st->ws);
     free(st);
@@ -40,7 +41,8 @@ int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   st->tk2 = p, p += k;
   st->tl = p, p += k;
   st->te = p, p += k;
-  st->tb = p;
+  st->tb = p, p += b;
+  st->tm = p;
   *out = st;
   return AP_OK;
 }
@@ -212,8 +214,10 @@ int ap_st_project_here(const ap_model *m, ap_data *d, ap_st *st, double *v, doub
   ap_sblocks bl;
   if (change) *change = 0.0;
   if (m->b == 0) return AP_OK;
-  st->ops->amul(st->ws, d, v, st->tb);                    /* r = A v + a0 */
-  if (!(max_abs(st->tb, m->b) > 0.0)) return AP_OK;
+  st->ops->amul(st->ws, d, v, st->tb, st->tm);            /* r = A v + a0 */
+  int any = 0;   /* a residual at the rounding level of its row: v stays as it is */
+  for (int s = 0; s < m->b; s++) any |= fabs(st->tb[s]) > 4.0 * DBL_EPSILON * st->tm[s];
+  if (!any) return AP_OK;
   st->ops->blocks(st->ws, &bl);
   st->ops->psolve(st->ws, st->tb, st->tk1);               /* d0: A d0 + r = 0 */
   st->ops->gmul(st->ws, st->tk1, st->tk2);                /* g d0 */
@@ -243,7 +247,7 @@ void ap_st_project_tangent(const ap_model *m, ap_data *d, ap_st *st, double *x) 
 
 double ap_st_residual(const ap_data *d, ap_st *st, const double *v) {
   if (d->b == 0) return 0.0;
-  st->ops->amul(st->ws, d, v, st->tb);
+  st->ops->amul(st->ws, d, v, st->tb, NULL);
   return max_abs(st->tb, d->b);
 }
 

@@ -34,7 +34,8 @@ typedef struct ap_ops {
   int (*velocity)(const ap_model *m, ap_data *d, void *ws);
   void (*blocks)(void *ws, ap_sblocks *out);
   void (*gmul)(void *ws, const double *x, double *y);                  /* y = g x */
-  void (*amul)(void *ws, const ap_data *d, const double *x, double *r); /* r = A x + a0 */
+  /* r = A x + a0; mag (may be NULL): per row, the sum of its terms' magnitudes */
+  void (*amul)(void *ws, const ap_data *d, const double *x, double *r, double *mag);
   void (*nmul)(void *ws, const double *q, const double *v, double *qdot); /* q' = N v */
   /* u (k) with A u + r = 0 (a particular solution), after the position stage */
   void (*psolve)(void *ws, const double *r, double *u);
@@ -53,6 +54,7 @@ typedef struct ap_st {
   double *Gf;                 /* (gcap) Cholesky factors of the blocks of G */
   double *tk1, *tk2, *tb;     /* (k), (k), (b) */
   double *tl, *te;            /* (k), (k) */
+  double *tm;                 /* (b) */
   int chosen;                 /* a partition was chosen (ap_st_partition) */
 } ap_st;
 

@@ -492,12 +492,17 @@ void ap_la_tree_gmul(const ap_la_tree *T, const ap_la_tree_geom *g, const double
 }
 
 void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
-                     const double *U, const double *a0, double *r) {
+                     const double *U, const double *a0, double *r, double *mag) {
   for (int i = 0; i < T->nb; i++)
     for (int p = T->rofs[i]; p < T->rofs[i + 1]; p++) {
-      double s = dot6(g->C + 6 * (size_t)p, U + 6 * (size_t)i);
-      if (T->rdir[p] >= 0) s += x[T->fidx[T->fofs[i] + T->rdir[p]]];
-      r[T->ridx[p]] = s + (a0 ? a0[T->ridx[p]] : 0.0);
+      const double *c = g->C + 6 * (size_t)p, *u = U + 6 * (size_t)i;
+      double s = dot6(c, u), xd = T->rdir[p] >= 0 ? x[T->fidx[T->fofs[i] + T->rdir[p]]] : 0.0;
+      double a = a0 ? a0[T->ridx[p]] : 0.0;
+      r[T->ridx[p]] = s + xd + a;
+      if (!mag) continue;
+      double m = fabs(xd) + fabs(a);
+      for (int j = 0; j < 6; j++) m += fabs(c[j] * u[j]);
+      mag[T->ridx[p]] = m;
     }
 }
 

@@ -120,9 +120,11 @@ void ap_la_tree_force(const ap_la_tree *T, const ap_la_tree_geom *g, double *F, 
 /* y = g x (U, F: 6 nb scratch each). */
 void ap_la_tree_gmul(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x, double *y,
                      double *U, double *F);
-/* r (b) = A x + a0 for the speeds x with twists U = J x (a0 may be NULL). */
+/* r (b) = A x + a0 for the speeds x with twists U = J x (a0 may be NULL); mag (b, may be
+ * NULL): the sum of the magnitudes of each row's terms (c_j U_j, the direct speed, a0), the
+ * scale of its rounding error. */
 void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
-                     const double *U, const double *a0, double *r);
+                     const double *U, const double *a0, double *r, double *mag);
 /* Multipliers lambda (b) with A^T lambda = r (k), r in the range of A^T (as g v' + h - Q at
  * the solution of Appell's equations): the rows that reached the ground (redundant) get zero.
  * Fw: 6 nb scratch. Returns the largest residual of the equations of the independent speeds

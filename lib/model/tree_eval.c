@@ -297,39 +297,75 @@ static int user_effect(const ap_model *m, ap_data *d, ap_tree_ws *ws, const ap_m
   return AP_OK;
 }
 
+/* One effect: its wrenches into ws->F, its joint-space terms into d->Q. */
+static int one_effect(const ap_model *m, ap_data *d, ap_tree_ws *ws, const ap_meff *ef) {
+  const ap_tplan *P = ws->P;
+  const ap_bmodel *M = P->M;
+  int rc = AP_OK;
+  switch (ef->def.kind) {
+    case AP_EFFECT_GRAVITY:
+      for (int b = 0; b < M->nb; b++) {
+        double f[3];
+        for (int r = 0; r < 3; r++) f[r] = M->bodies[b].mass * ef->def.gravity[r];
+        add_force(wrench_of(P, ws, b), ap_kin_body(&P->shadow, ws->S, b).rcom, f, NULL);
+      }
+      break;
+    case AP_EFFECT_SPRING: rc = spring(m, d, P, ws, ef); break;
+    case AP_EFFECT_JOINT_DAMPING: {
+      const ap_mjoint *j = &M->joints[M->joint_topo[ef->def.joint]];
+      for (int a = 0; a < j->nv; a++)
+        if (j->vidx[a] >= 0) d->Q[j->vidx[a]] -= ef->def.damping * d->v[j->vidx[a]];
+      break;
+    }
+    case AP_EFFECT_APPLIED: rc = applied(m, d, P, ws, ef); break;
+    case AP_EFFECT_USER: rc = user_effect(m, d, ws, ef); break;
+    case AP_EFFECT_JOINT_FORCE:   /* straight into Q (actuator.c reads t, q, v only) */
+    case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, d->t, d->q, d->v, d->Q); break;
+  }
+  return rc;
+}
+
+static int q_ok(const ap_model *m, const ap_data *d) {
+  for (int c = 0; c < m->k; c++)
+    if (!(fabs(d->Q[c]) <= AP_HUGE)) return 0;
+  return 1;
+}
+
+/* Q is not finite or past AP_HUGE: evaluate the effects one at a time to name the first that
+ * makes it so, in effect.c's words (this path runs only on that error). */
+static int name_effect(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
+  const ap_tplan *P = ws->P;
+  for (int i = 0; i < P->M->ne; i++) {
+    const ap_meff *ef = &P->M->effs[i];
+    memset(d->Q, 0, sizeof(double) * (size_t)m->k);
+    memset(ws->F, 0, sizeof(double) * 6 * (size_t)P->T.nb);
+    int rc = one_effect(m, d, ws, ef);
+    if (rc != AP_OK) return rc;
+    ap_la_tree_force(&P->T, &ws->g, ws->F, d->Q);
+    for (int c = 0; c < m->k; c++)
+      if (!(fabs(d->Q[c]) <= AP_HUGE)) {
+        AP_BM_MSG(d, "model '%s': effect '%s' gives the generalized force %g on speed '%s' at "
+                  "t = %.17g%s", m->name, ef->name, d->Q[c], ap_model_speed_name(m, c), d->t,
+                  isfinite(d->Q[c]) ? " (more than 1e150 in magnitude: too large to "
+                  "integrate)" : "");
+        return AP_ERR_NAN;
+      }
+  }
+  return AP_OK;   /* only their sum: the core's check names the entry */
+}
+
 /* Q: the effects' wrenches into ws->F, gathered up the tree, and their joint-space terms. */
 static int forces(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
   const ap_tplan *P = ws->P;
   const ap_bmodel *M = P->M;
   memset(ws->F, 0, sizeof(double) * 6 * (size_t)P->T.nb);
   for (int i = 0; i < M->ne; i++) {
-    const ap_meff *ef = &M->effs[i];
-    int rc = AP_OK;
     ws->S[P->shadow.off_cnt + i] += 1.0;
-    switch (ef->def.kind) {
-      case AP_EFFECT_GRAVITY:
-        for (int b = 0; b < M->nb; b++) {
-          double f[3];
-          for (int r = 0; r < 3; r++) f[r] = M->bodies[b].mass * ef->def.gravity[r];
-          add_force(wrench_of(P, ws, b), ap_kin_body(&P->shadow, ws->S, b).rcom, f, NULL);
-        }
-        break;
-      case AP_EFFECT_SPRING: rc = spring(m, d, P, ws, ef); break;
-      case AP_EFFECT_JOINT_DAMPING: {
-        const ap_mjoint *j = &M->joints[M->joint_topo[ef->def.joint]];
-        for (int a = 0; a < j->nv; a++)
-          if (j->vidx[a] >= 0) d->Q[j->vidx[a]] -= ef->def.damping * d->v[j->vidx[a]];
-        break;
-      }
-      case AP_EFFECT_APPLIED: rc = applied(m, d, P, ws, ef); break;
-      case AP_EFFECT_USER: rc = user_effect(m, d, ws, ef); break;
-      case AP_EFFECT_JOINT_FORCE:   /* straight into Q (actuator.c reads t, q, v only) */
-      case AP_EFFECT_MOTOR: rc = ap_act_force(m, d, ef, d->t, d->q, d->v, d->Q); break;
-    }
+    int rc = one_effect(m, d, ws, &M->effs[i]);
     if (rc != AP_OK) return rc;
   }
   ap_la_tree_force(&P->T, &ws->g, ws->F, d->Q);
-  return AP_OK;
+  return q_ok(m, d) ? AP_OK : name_effect(m, d, ws);
 }
 
 int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
@@ -361,9 +397,10 @@ void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y) {
   ap_la_tree_gmul(&ws->P->T, &ws->g, x, y, ws->U, ws->F);
 }
 
-void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r) {
+void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r,
+                  double *mag) {
   ap_la_tree_twists(&ws->P->T, &ws->g, x, ws->U);
-  ap_la_tree_rows(&ws->P->T, &ws->g, x, ws->U, with_a0 ? d->a0 : NULL, r);
+  ap_la_tree_rows(&ws->P->T, &ws->g, x, ws->U, with_a0 ? d->a0 : NULL, r, mag);
 }
 
 void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *qdot) {
@@ -400,8 +437,8 @@ static void ops_blocks(void *wsp, ap_sblocks *out) {
   out->B = W->B, out->G = W->G;
 }
 static void ops_gmul(void *ws, const double *x, double *y) { ap_tree_gmul(ws, x, y); }
-static void ops_amul(void *ws, const ap_data *d, const double *x, double *r) {
-  ap_tree_amul(ws, d, x, 1, r);
+static void ops_amul(void *ws, const ap_data *d, const double *x, double *r, double *mag) {
+  ap_tree_amul(ws, d, x, 1, r, mag);
 }
 static void ops_psolve(void *wsp, const double *r, double *u) {
   ap_tree_ws *ws = wsp;

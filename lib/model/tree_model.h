@@ -66,7 +66,8 @@ int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const
                             double *v);
 /* y = g x;  r = A x (+ a0 when with_a0);  qdot = N v. */
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
-void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r);
+void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r,
+                  double *mag);
 void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *qdot);
 /* The geometry of the position stage from the shadow's kinematics (after ap_kin_position on
  * the shadow); each body's full twist J v + rho into the shadow's column (after the geometry),
