@@ -69,6 +69,7 @@ static void knife(ap_builder *b, const char *name, int body, double px, double p
 
 static ap_model *compile(ap_builder *b) {
   ap_model *m = NULL;
+  ok(ap_builder_set_path(b, AP_PATH_DENSE), "path", b);   /* the reference; plans made here */
   ok(ap_builder_compile(b, &m), "compile", b);
   ap_builder_free(b);
   return m;

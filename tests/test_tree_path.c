@@ -203,7 +203,7 @@ int main(int argc, char **argv) {
   family("trailers", 10, 0, 3.0);
   family("disks", 6, 1, 1.5);
   /* the automatic choice: by size, for models the tree path takes */
-  ap_model *small = tm_disks(9, AP_PATH_AUTO), *big = tm_disks(10, AP_PATH_AUTO);
+  ap_model *small = tm_trailers(12, AP_PATH_AUTO), *big = tm_trailers(13, AP_PATH_AUTO);
   AP_CHECK(ap_model_k(small) < AP_TREE_AUTO_K && ap_model_k(big) >= AP_TREE_AUTO_K);
   AP_CHECK_EQ_INT(ap_model_path(small), AP_PATH_DENSE);
   AP_CHECK_EQ_INT(ap_model_path(big), AP_PATH_TREE);

@@ -89,7 +89,7 @@ AP_API void ap_model_free(ap_model *m);   /* NULL: nothing */
  * B, G (those fields are NULL; the DAE mode and linearization need the dense path). AUTO, the
  * default, takes the tree path for such models with at least AP_TREE_AUTO_K speeds. */
 typedef enum ap_path { AP_PATH_AUTO = 0, AP_PATH_DENSE = 1, AP_PATH_TREE = 2 } ap_path;
-#define AP_TREE_AUTO_K 48
+#define AP_TREE_AUTO_K 16
 
 /* AP_PATH_DENSE or AP_PATH_TREE: the path the model was compiled for; AP_ERR_ARG for NULL. */
 AP_API int ap_model_path(const ap_model *m);
