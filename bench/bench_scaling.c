@@ -341,6 +341,7 @@ int main(int argc, char **argv) {
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--csv-dir") && i + 1 < argc) dir = argv[++i];
     else if (!strcmp(argv[i], "--plot")) do_plot = 1;
+    else if (!strcmp(argv[i], "--plot-only")) do_plot = 2;   /* from DIR's csv files */
     else if (!strcmp(argv[i], "--min-n") && i + 1 < argc) min_n = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--max-ms") && i + 1 < argc) max_ms = atof(argv[++i]);
@@ -356,13 +357,14 @@ int main(int argc, char **argv) {
     } else {
       fprintf(stderr, "usage: bench_scaling [--csv-dir DIR] [--plot] [--path auto|dense|tree] "
                       "[--family trailers|disks] [--min-n N] [--max-n N] [--max-ms X] "
-                      "[--fit-from N]\n       bench_scaling [--path P] --callgrind FAMILY N "
+                      "[--fit-from N] [--plot-only]\n       bench_scaling [--path P] --callgrind FAMILY N "
                       "STEPS   (under valgrind --tool=callgrind --collect-atstart=no)\n");
       return 2;
     }
   }
   if (cg_family) return callgrind_run(cg_family, cg_n, cg_steps);
   if (do_plot && !dir) die("--plot", "needs --csv-dir");
+  if (do_plot == 2) return plot(dir, "pngcairo", "png"), plot(dir, "svg", "svg"), 0;
   if (min_n < 1 || max_n < min_n) die("--min-n/--max-n", "need 1 <= min-n <= max-n");
   result res[40];
   printf("bench_scaling: thread CPU time; us = microseconds; bytes: malloc'd by the model and "

@@ -5,6 +5,7 @@
 # Ir per step against N. Load-independent, unlike bench_scaling's CPU times (docs/performance.md).
 #
 #   bench/scaling_callgrind.sh OUT.csv [STEPS] [N...]     (default: 10 steps, N = 64 256 1024 4096 10000)
+# (FAMILIES="disks" in the environment: one family only)
 set -euo pipefail
 out=${1:?usage: bench/scaling_callgrind.sh OUT.csv [STEPS] [N...]}
 steps=${2:-10}
@@ -16,7 +17,7 @@ exe=build/bench/bench_scaling
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 echo "family,N,k,path,steps,evals,Ir,Ir_per_step" >"$out"
-for fam in trailers disks; do
+for fam in ${FAMILIES:-trailers disks}; do
   for n in "${ns[@]}"; do
     line=$(OPENBLAS_NUM_THREADS=1 valgrind --tool=callgrind --collect-atstart=no \
       --callgrind-out-file="$tmp/cg" "$exe" --callgrind "$fam" "$n" "$steps" 2>/dev/null |
