@@ -274,7 +274,20 @@ static int run_family(const char *family, int min_n, int max_n, double max_ms, i
   return count;
 }
 
+/* The fitted exponent of the step time in DIR/scaling_FAMILY.csv (NAN when absent). */
+static double csv_exponent(const char *dir, const char *family) {
+  char path[1024], line[256];
+  double p = NAN;
+  snprintf(path, sizeof path, "%s/scaling_%s.csv", dir, family);
+  FILE *f = fopen(path, "r");
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, "# exponent_step,%lf", &p) == 1) break;
+  if (f) fclose(f);
+  return p;
+}
+
 static void plot(const char *dir, const char *term, const char *ext) {
+  double pt = csv_exponent(dir, "trailers"), pd = csv_exponent(dir, "disks");
   FILE *g = popen("gnuplot", "w");
   if (!g) die("gnuplot", "cannot start");
   fprintf(g, "set terminal %s size 900,600\nset datafile separator ','\n"
@@ -282,10 +295,10 @@ static void plot(const char *dir, const char *term, const char *ext) {
   fprintf(g, "set output '%s/scaling_step.%s'\nset ylabel 'CPU time per step (us)'\n"
              "set title 'Cost per step, minimal mode, dopri5, rtol 1e-8'\n"
              "plot '%s/scaling_trailers.csv' every ::1 using 1:($5/1e3) with linespoints "
-             "title 'car + N trailers (k = N+3, b = N+1)', "
+             "title 'car + N trailers (k = N+3, b = N+1): fitted N^%.2f', "
              "'%s/scaling_disks.csv' every ::1 using 1:($5/1e3) with linespoints "
-             "title 'N rolling disks (k = 5N, b = 2N)'\n",
-          dir, ext, dir, dir);
+             "title 'N rolling disks (k = 5N, b = 2N): fitted N^%.2f'\n",
+          dir, ext, dir, pt, dir, pd);
   fprintf(g, "set output '%s/scaling_stages.%s'\nset ylabel 'CPU time per call (us)'\n"
              "set title 'Pipeline stages on a saved state'\n"
              "plot for [c=8:10] '%s/scaling_trailers.csv' every ::1 using 1:(column(c)/1e3) "
