@@ -302,7 +302,7 @@ static void check_forest(forest *F, int verbose) {
   }
   AP_CHECK_LE(err, TOL * fmax(1.0, max_abs(6 * nb * k, F->J)) * nb);
   ap_la_tree_twists(&F->T, &F->g, x, Ut == NULL ? U : U);
-  ap_la_tree_rows(&F->T, &F->g, x, U, a0, r, NULL);
+  ap_la_tree_rows(&F->T, &F->g, x, U, a0, r, NULL, NULL);
   err = 0.0;
   for (int s = 0; s < b; s++) {
     double z = a0[s];

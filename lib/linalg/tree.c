@@ -472,6 +472,27 @@ void ap_la_tree_twists(const ap_la_tree *T, const ap_la_tree_geom *g, const doub
   }
 }
 
+void ap_la_tree_twists_abs(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
+                           double *Ua) {
+  for (int i = 0; i < T->nb; i++) {
+    double *U = Ua + 6 * (size_t)i;
+    int p = T->parent[i];
+    memset(U, 0, 6 * sizeof *U);
+    if (p >= 0) {   /* |w|, |v| + |w x d| bounded entry by entry */
+      const double *Up = Ua + 6 * (size_t)p, *d = g->d + 3 * (size_t)i;
+      for (int r = 0; r < 3; r++) {
+        int a = (r + 1) % 3, b = (r + 2) % 3;
+        U[r] = Up[r];
+        U[3 + r] = Up[3 + r] + Up[a] * fabs(d[b]) + Up[b] * fabs(d[a]);
+      }
+    }
+    for (int c = T->fofs[i]; c < T->fofs[i + 1]; c++) {
+      const double *Sc = g->S + 6 * (size_t)c;
+      for (int q = 0; q < 6; q++) U[q] += fabs(Sc[q] * x[T->fidx[c]]);
+    }
+  }
+}
+
 void ap_la_tree_force(const ap_la_tree *T, const ap_la_tree_geom *g, double *F, double *y) {
   for (int i = T->nb - 1; i >= 0; i--) {
     double *Fi = F + 6 * (size_t)i;
@@ -492,7 +513,8 @@ void ap_la_tree_gmul(const ap_la_tree *T, const ap_la_tree_geom *g, const double
 }
 
 void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
-                     const double *U, const double *a0, double *r, double *mag) {
+                     const double *U, const double *a0, double *r, const double *Ua,
+                     double *mag) {
   for (int i = 0; i < T->nb; i++)
     for (int p = T->rofs[i]; p < T->rofs[i + 1]; p++) {
       const double *c = g->C + 6 * (size_t)p, *u = U + 6 * (size_t)i;
@@ -501,7 +523,8 @@ void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double
       r[T->ridx[p]] = s + xd + a;
       if (!mag) continue;
       double m = fabs(xd) + fabs(a);
-      for (int j = 0; j < 6; j++) m += fabs(c[j] * u[j]);
+      const double *ua = Ua ? Ua + 6 * (size_t)i : u;
+      for (int j = 0; j < 6; j++) m += fabs(c[j]) * fabs(ua[j]);
       mag[T->ridx[p]] = m;
     }
 }

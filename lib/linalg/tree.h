@@ -121,10 +121,16 @@ void ap_la_tree_force(const ap_la_tree *T, const ap_la_tree_geom *g, double *F, 
 void ap_la_tree_gmul(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x, double *y,
                      double *U, double *F);
 /* r (b) = A x + a0 for the speeds x with twists U = J x (a0 may be NULL); mag (b, may be
- * NULL): the sum of the magnitudes of each row's terms (c_j U_j, the direct speed, a0), the
- * scale of its rounding error. */
+ * NULL): a bound of the sum of the magnitudes of each row's terms, the scale of its rounding
+ * error: |c| . Ua + |direct speed| + |a0|, with Ua from ap_la_tree_twists_abs (or |U| when Ua
+ * is NULL). */
 void ap_la_tree_rows(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
-                     const double *U, const double *a0, double *r, double *mag);
+                     const double *U, const double *a0, double *r, const double *Ua,
+                     double *mag);
+/* Ua (6 nb) >= |J x| entry by entry: the twists' sweep on magnitudes (each body's terms
+ * |S_c x_c| and its parent's transported bound). */
+void ap_la_tree_twists_abs(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
+                           double *Ua);
 /* Multipliers lambda (b) with A^T lambda = r (k), r in the range of A^T (as g v' + h - Q at
  * the solution of Appell's equations): the rows that reached the ground (redundant) get zero.
  * Fw: 6 nb scratch. Returns the largest residual of the equations of the independent speeds

@@ -400,7 +400,9 @@ void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y) {
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r,
                   double *mag) {
   ap_la_tree_twists(&ws->P->T, &ws->g, x, ws->U);
-  ap_la_tree_rows(&ws->P->T, &ws->g, x, ws->U, with_a0 ? d->a0 : NULL, r, mag);
+  if (mag) ap_la_tree_twists_abs(&ws->P->T, &ws->g, x, ws->F);   /* F: a 6 nb temporary */
+  ap_la_tree_rows(&ws->P->T, &ws->g, x, ws->U, with_a0 ? d->a0 : NULL, r, mag ? ws->F : NULL,
+                  mag);
 }
 
 void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *qdot) {
