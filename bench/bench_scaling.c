@@ -32,7 +32,11 @@
 #include <string.h>
 #include <time.h>
 
+#include <malloc.h>
+#include <valgrind/callgrind.h>
+
 #include "appell/appell.h"
+#include "treemodels.h"
 
 static volatile double sink;
 
@@ -61,122 +65,16 @@ static void check(int rc, const char *what) {
   if (rc != AP_OK) die(what, ap_strerror(rc));
 }
 
+/* Bytes held by malloc now (glibc: arena in use plus mmapped blocks). */
+static double heap_bytes(void) {
+  struct mallinfo2 mi = mallinfo2();
+  return (double)mi.uordblks + (double)mi.hblkhd;
+}
+
 static void *xcalloc(size_t n, size_t size) {
   void *p = calloc(n ? n : 1, size);
   if (!p) die("memory", "out of memory");
   return p;
-}
-
-/* ---- models --------------------------------------------------------------------------------- */
-
-static ap_model *compile(ap_builder *b) {
-  ap_model *m = NULL;
-  if (ap_builder_compile(b, &m) != AP_OK) die("compile", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
-}
-
-static int add_box(ap_builder *b, const char *name, double mass, double cx, double Izz) {
-  ap_body_def d = ap_body_def_default();
-  int id = -1;
-  d.name = name, d.mass = mass, d.com[0] = cx;
-  d.inertia[0] = 0.5 * Izz, d.inertia[4] = 0.6 * Izz, d.inertia[8] = Izz;
-  check(ap_builder_add_body(b, &d, &id), name);
-  return id;
-}
-
-static void knife(ap_builder *b, const char *name, int body) {
-  ap_constraint_def c = ap_constraint_def_default();
-  c.name = name, c.kind = AP_CON_KNIFE_EDGE, c.body = body;   /* origin, body y blocked */
-  check(ap_builder_add_constraint(b, &c, NULL), name);
-}
-
-/* Car: origin at the rear axle, centre of mass 1 m ahead. Trailer i: origin at its axle, hitch
- * 1.2 m ahead of it, hinged 0.5 m behind the previous body's axle. */
-static ap_model *trailers_model(int N) {
-  ap_builder *b = NULL;
-  char name[64];
-  check(ap_builder_create("trailers", &b), "builder");
-  int prev = add_box(b, "car", 1000.0, 1.0, 1500.0);
-  ap_joint_def j = ap_joint_def_default();
-  j.name = "car", j.kind = AP_JOINT_PLANAR, j.child = prev;
-  check(ap_builder_add_joint(b, &j, NULL), "car joint");
-  knife(b, "car.axle", prev);
-  for (int i = 0; i < N; i++) {
-    snprintf(name, sizeof name, "trailer%d", i + 1);
-    int id = add_box(b, name, 300.0, 0.4, 250.0);
-    j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = prev, j.child = id;
-    j.parent_frame.pos[0] = -0.5, j.child_frame.pos[0] = 1.2;   /* axis: z (default) */
-    check(ap_builder_add_joint(b, &j, NULL), name);
-    snprintf(name, sizeof name, "trailer%d.axle", i + 1);
-    knife(b, name, id);
-    prev = id;
-  }
-  return compile(b);
-}
-
-static ap_model *disks_model(int N) {
-  ap_builder *b = NULL;
-  char name[64];
-  check(ap_builder_create("disks", &b), "builder");
-  for (int i = 0; i < N; i++) {
-    snprintf(name, sizeof name, "disk%d", i + 1);
-    ap_body_def d = ap_body_def_default();
-    d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = 0.5;
-    check(ap_body_def_uniform(&d, 1.0), name);
-    int id = -1;
-    check(ap_builder_add_body(b, &d, &id), name);
-    ap_joint_def j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_PLANE_CONTACT, j.child = id;
-    check(ap_builder_add_joint(b, &j, NULL), name);
-    ap_constraint_def c = ap_constraint_def_default();
-    snprintf(name, sizeof name, "roll%d", i + 1);
-    c.name = name, c.kind = AP_CON_ROLLING, c.body = id;
-    check(ap_builder_add_constraint(b, &c, NULL), name);
-  }
-  ap_effect_def e = ap_effect_def_default();   /* gravity on every body */
-  check(ap_builder_add_effect(b, &e, NULL), "gravity");
-  return compile(b);
-}
-
-/* Consistent initial states: the given speeds are kept, the others completed (minimum norm). */
-static void trailers_state(const ap_model *m, int N, double *q, double *v) {
-  int n = ap_model_n(m), k = ap_model_k(m);
-  int *given = xcalloc((size_t)k, sizeof *given);
-  memset(q, 0, sizeof(double) * (size_t)n);
-  memset(v, 0, sizeof(double) * (size_t)k);
-  for (int i = 0; i < N; i++) q[3 + i] = 0.15 * ((i % 2) ? -1.0 : 1.0);   /* zig-zag */
-  v[0] = 2.0, v[2] = 0.3;     /* car: 2 m/s forward, turning at 0.3 rad/s */
-  given[0] = given[2] = 1;
-  ap_data *d = NULL;
-  check(ap_data_create(m, &d), "data");
-  d->t = 0;
-  if (ap_body_complete_speeds(m, d, q, given, v) != AP_OK) die("trailers speeds", d->msg);
-  ap_data_free(d);
-  free(given);
-}
-
-static void disks_state(const ap_model *m, int N, double *q, double *v) {
-  int k = ap_model_k(m);
-  int *given = xcalloc((size_t)k, sizeof *given);
-  const double ex[3] = {1, 0, 0};
-  for (int i = 0; i < N; i++) {
-    double *qi = q + 6 * i, *vi = v + 5 * i, tilt = (50.0 + 20.0 * i / N) * 3.14159265358979323846 / 180.0;
-    double R[9], spin = -6.0 + 0.5 * (i % 3), turn = 4.0;
-    qi[0] = 2.0 * (i % 32), qi[1] = 2.0 * (i / 32);
-    ap_quat_from_axis_angle(ex, tilt, qi + 2);   /* disk axis tilted from the vertical */
-    ap_quat_to_matrix(qi + 2, R);
-    vi[0] = vi[1] = 0;
-    for (int r = 0; r < 3; r++) vi[2 + r] = spin * R[6 + r] + (r == 2 ? turn : 0.0);
-    given[5 * i + 2] = given[5 * i + 3] = given[5 * i + 4] = 1;
-  }
-  ap_data *d = NULL;
-  check(ap_data_create(m, &d), "data");
-  d->t = 0;
-  if (ap_body_complete_speeds(m, d, q, given, v) != AP_OK) die("disk speeds", d->msg);
-  ap_data_free(d);
-  free(given);
 }
 
 /* ---- measurements --------------------------------------------------------------------------- */
@@ -185,8 +83,12 @@ typedef struct result {
   int N, n, k, b;
   double step_ns, evals_per_step, eval_ns;     /* eval_ns: step_ns / evals_per_step */
   double pos_ns, vel_ns, acc_ns, fwd_ns;
+  double bytes;                                /* model + simulation (with its data) */
+  double model_bytes;                          /* the model alone */
   long steps_timed;
 } result;
+
+static ap_path path = AP_PATH_AUTO;
 
 static int warm = 40, chunks = 15, blocks = 7;
 
@@ -196,7 +98,9 @@ static void time_steps(const ap_model *m, const double *q0, const double *v0, re
   def.mode = AP_MODE_MINIMAL, def.method = "dopri5", def.rtol = 1e-8, def.atol = 1e-10;
   ap_sim *s = NULL;
   char msg[512];
+  double b0 = heap_bytes();
   if (ap_sim_create(m, &def, 0.0, q0, v0, &s, msg, sizeof msg) != AP_OK) die("sim", msg);
+  r->bytes += heap_bytes() - b0;
   ap_sim_stats st;
   /* warm-up: advance until `warm` steps were taken, in growing intervals */
   double t = 0, dt = 1e-3;
@@ -236,7 +140,7 @@ static void run_prefix(const ap_model *m, ap_data *d, int stages) {
     if (rc == AP_OK && stages >= 3) rc = ap_fwd_acceleration(m, d);
   }
   if (rc != AP_OK) die("stage", d->msg);
-  sink += d->g[0];
+  sink += d->vdot[0];
 }
 
 static void time_stages(const ap_model *m, const double *q, const double *v, result *r) {
@@ -292,32 +196,44 @@ static double get_pos(const result *r) { return r->pos_ns; }
 static double get_vel(const result *r) { return r->vel_ns > 1 ? r->vel_ns : 1; }
 static double get_acc(const result *r) { return r->acc_ns > 1 ? r->acc_ns : 1; }
 
-static int run_family(const char *family, int max_n, double max_ms, int fit_from,
+static double get_bytes(const result *r) { return r->bytes; }
+
+static const char *path_name(const ap_model *m) {
+  return ap_model_path(m) == AP_PATH_TREE ? "tree" : "dense";
+}
+
+/* N = min_n, 2 min_n, ... and max_n itself last. */
+static int next_n(int N, int max_n) { return N < max_n && 2 * N > max_n ? max_n : 2 * N; }
+
+static int run_family(const char *family, int min_n, int max_n, double max_ms, int fit_from,
                       const char *dir, result *res) {
   int count = 0;
   printf("\n%s (minimal mode, dopri5, rtol 1e-8; step: median over %d chunks of ~4 steps; "
          "stages: median over %d blocks)\n", family, chunks, blocks);
-  printf("%5s %5s %5s %5s %11s %7s %10s %11s %11s %11s %11s %7s\n", "N", "n", "k", "b",
-         "step_us", "ev/step", "eval_us", "position_us", "velocity_us", "accel_us", "forward_us",
-         "dom");
-  for (int N = 1; N <= max_n; N *= 2) {
+  printf("%6s %6s %6s %6s %5s %11s %7s %10s %11s %11s %11s %11s %5s %9s %9s\n", "N", "n", "k",
+         "b", "path", "step_us", "ev/step", "eval_us", "position_us", "velocity_us", "accel_us",
+         "forward_us", "dom", "bytes/N", "model/N");
+  for (int N = min_n; N <= max_n; N = next_n(N, max_n)) {
     int tr = strcmp(family, "trailers") == 0;
-    ap_model *m = tr ? trailers_model(N) : disks_model(N);
+    double b0 = heap_bytes();
+    ap_model *m = tr ? tm_trailers(N, path) : tm_disks(N, path);
     result *r = &res[count];
     memset(r, 0, sizeof *r);
     r->N = N, r->n = ap_model_n(m), r->k = ap_model_k(m), r->b = ap_model_b(m);
     double *q = xcalloc((size_t)r->n, sizeof *q), *v = xcalloc((size_t)r->k, sizeof *v);
     double *qs = xcalloc((size_t)r->n, sizeof *qs), *vs = xcalloc((size_t)r->k, sizeof *vs);
-    if (tr) trailers_state(m, N, q, v);
-    else disks_state(m, N, q, v);
+    r->bytes = r->model_bytes = heap_bytes() - b0;   /* time_steps adds the simulation's */
+    if (tr) tm_trailers_state(m, N, q, v);
+    else tm_disks_state(m, N, q, v);
     time_steps(m, q, v, r, qs, vs);
     time_stages(m, qs, vs, r);
     const char *dom = r->pos_ns >= r->vel_ns && r->pos_ns >= r->acc_ns ? "pos"
                       : r->vel_ns >= r->acc_ns                            ? "vel"
                                                                           : "acc";
-    printf("%5d %5d %5d %5d %11.2f %7.2f %10.3f %11.3f %11.3f %11.3f %11.3f %7s\n", N, r->n,
-           r->k, r->b, r->step_ns * 1e-3, r->evals_per_step, r->eval_ns * 1e-3,
-           r->pos_ns * 1e-3, r->vel_ns * 1e-3, r->acc_ns * 1e-3, r->fwd_ns * 1e-3, dom);
+    printf("%6d %6d %6d %6d %5s %11.2f %7.2f %10.3f %11.3f %11.3f %11.3f %11.3f %5s %9.0f "
+           "%9.0f\n", N, r->n, r->k, r->b, path_name(m), r->step_ns * 1e-3, r->evals_per_step,
+           r->eval_ns * 1e-3, r->pos_ns * 1e-3, r->vel_ns * 1e-3, r->acc_ns * 1e-3,
+           r->fwd_ns * 1e-3, dom, r->bytes / N, r->model_bytes / N);
     fflush(stdout);
     free(q), free(v), free(qs), free(vs);
     ap_model_free(m);
@@ -336,26 +252,42 @@ static int run_family(const char *family, int max_n, double max_ms, int fit_from
   double pv = fit_exponent(res, count, fit_from, get_vel, &used);
   double pa = fit_exponent(res, count, fit_from, get_acc, &used);
   printf("stage exponents: position %.2f, velocity %.2f, acceleration %.2f\n", pp, pv, pa);
+  double pm = fit_exponent(res, count, fit_from, get_bytes, &used);
+  printf("memory exponent (model + simulation bytes ~ N^p): p = %.2f\n", pm);
   if (dir) {
     char path[1024];
     snprintf(path, sizeof path, "%s/scaling_%s.csv", dir, family);
     FILE *f = fopen(path, "w");
     if (!f) die(path, "cannot write");
     fprintf(f, "N,n,k,b,step_ns,evals_per_step,eval_ns,position_ns,velocity_ns,"
-               "acceleration_ns,forward_ns,steps_timed\n");
+               "acceleration_ns,forward_ns,steps_timed,bytes\n");
     for (int i = 0; i < count; i++)
-      fprintf(f, "%d,%d,%d,%d,%.1f,%.3f,%.1f,%.1f,%.1f,%.1f,%.1f,%ld\n", res[i].N, res[i].n,
-              res[i].k, res[i].b, res[i].step_ns, res[i].evals_per_step, res[i].eval_ns,
-              res[i].pos_ns, res[i].vel_ns, res[i].acc_ns, res[i].fwd_ns, res[i].steps_timed);
+      fprintf(f, "%d,%d,%d,%d,%.1f,%.3f,%.1f,%.1f,%.1f,%.1f,%.1f,%ld,%.0f\n", res[i].N,
+              res[i].n, res[i].k, res[i].b, res[i].step_ns, res[i].evals_per_step,
+              res[i].eval_ns, res[i].pos_ns, res[i].vel_ns, res[i].acc_ns, res[i].fwd_ns,
+              res[i].steps_timed, res[i].bytes);
     fprintf(f, "# exponent_step,%.3f,fit_from,%d\n# exponent_position,%.3f\n"
-               "# exponent_velocity,%.3f\n# exponent_acceleration,%.3f\n", p, fit_from, pp, pv,
-            pa);
+               "# exponent_velocity,%.3f\n# exponent_acceleration,%.3f\n"
+               "# exponent_bytes,%.3f\n", p, fit_from, pp, pv, pa, pm);
     fclose(f);
   }
   return count;
 }
 
+/* The fitted exponent of the step time in DIR/scaling_FAMILY.csv (NAN when absent). */
+static double csv_exponent(const char *dir, const char *family) {
+  char path[1024], line[256];
+  double p = NAN;
+  snprintf(path, sizeof path, "%s/scaling_%s.csv", dir, family);
+  FILE *f = fopen(path, "r");
+  while (f && fgets(line, sizeof line, f))
+    if (sscanf(line, "# exponent_step,%lf", &p) == 1) break;
+  if (f) fclose(f);
+  return p;
+}
+
 static void plot(const char *dir, const char *term, const char *ext) {
+  double pt = csv_exponent(dir, "trailers"), pd = csv_exponent(dir, "disks");
   FILE *g = popen("gnuplot", "w");
   if (!g) die("gnuplot", "cannot start");
   fprintf(g, "set terminal %s size 900,600\nset datafile separator ','\n"
@@ -363,10 +295,10 @@ static void plot(const char *dir, const char *term, const char *ext) {
   fprintf(g, "set output '%s/scaling_step.%s'\nset ylabel 'CPU time per step (us)'\n"
              "set title 'Cost per step, minimal mode, dopri5, rtol 1e-8'\n"
              "plot '%s/scaling_trailers.csv' every ::1 using 1:($5/1e3) with linespoints "
-             "title 'car + N trailers (k = N+3, b = N+1)', "
+             "title 'car + N trailers (k = N+3, b = N+1): fitted N^%.2f', "
              "'%s/scaling_disks.csv' every ::1 using 1:($5/1e3) with linespoints "
-             "title 'N rolling disks (k = 5N, b = 2N)'\n",
-          dir, ext, dir, dir);
+             "title 'N rolling disks (k = 5N, b = 2N): fitted N^%.2f'\n",
+          dir, ext, dir, pt, dir, pd);
   fprintf(g, "set output '%s/scaling_stages.%s'\nset ylabel 'CPU time per call (us)'\n"
              "set title 'Pipeline stages on a saved state'\n"
              "plot for [c=8:10] '%s/scaling_trailers.csv' every ::1 using 1:(column(c)/1e3) "
@@ -378,27 +310,82 @@ static void plot(const char *dir, const char *term, const char *ext) {
   if (pclose(g) != 0) die("gnuplot", "failed");
 }
 
+/* One family at one N for callgrind (--collect-atstart=no): the warm-up uncounted, then
+ * collection on for about `steps` steps; prints the steps and evaluations counted. */
+static int callgrind_run(const char *family, int N, int steps) {
+  int tr = strcmp(family, "trailers") == 0;
+  ap_model *m = tr ? tm_trailers(N, path) : tm_disks(N, path);
+  int n = ap_model_n(m), k = ap_model_k(m);
+  double *q = xcalloc((size_t)n, sizeof *q), *v = xcalloc((size_t)k, sizeof *v);
+  if (tr) tm_trailers_state(m, N, q, v);
+  else tm_disks_state(m, N, q, v);
+  ap_sim_def def = ap_sim_def_default();
+  def.mode = AP_MODE_MINIMAL, def.method = "dopri5", def.rtol = 1e-8, def.atol = 1e-10;
+  ap_sim *s = NULL;
+  char msg[512];
+  if (ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg) != AP_OK) die("sim", msg);
+  ap_sim_stats st;
+  double t = 0, dt = 1e-3;
+  do {
+    t += dt, dt *= 1.5;
+    if (ap_sim_advance(s, t) != AP_OK) die("warm-up", ap_sim_message(s));
+    ap_sim_get_stats(s, &st);
+  } while (st.steps < 10);
+  double h = t / (double)st.steps;
+  long s0 = st.steps, e0 = st.rhs_evals;
+  CALLGRIND_TOGGLE_COLLECT;
+  while (st.steps < s0 + steps) {   /* output times every step or so, as time_steps */
+    if (ap_sim_advance(s, t += h) != AP_OK) die("run", ap_sim_message(s));
+    ap_sim_get_stats(s, &st);
+  }
+  CALLGRIND_TOGGLE_COLLECT;
+  printf("callgrind %s N %d k %d path %s steps %ld evals %ld\n", family, N, k, path_name(m),
+         st.steps - s0, st.rhs_evals - e0);
+  ap_sim_free(s);
+  ap_model_free(m);
+  free(q), free(v);
+  return 0;
+}
+
 int main(int argc, char **argv) {
-  int max_n = 512, fit_from = 16, do_plot = 0;
+  int min_n = 1, max_n = 512, fit_from = 16, do_plot = 0, cg_n = 0, cg_steps = 20;
   double max_ms = 50;
-  const char *dir = NULL;
+  const char *dir = NULL, *cg_family = NULL, *only = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--csv-dir") && i + 1 < argc) dir = argv[++i];
     else if (!strcmp(argv[i], "--plot")) do_plot = 1;
+    else if (!strcmp(argv[i], "--plot-only")) do_plot = 2;   /* from DIR's csv files */
+    else if (!strcmp(argv[i], "--min-n") && i + 1 < argc) min_n = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--max-n") && i + 1 < argc) max_n = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--max-ms") && i + 1 < argc) max_ms = atof(argv[++i]);
     else if (!strcmp(argv[i], "--fit-from") && i + 1 < argc) fit_from = atoi(argv[++i]);
-    else {
-      fprintf(stderr, "usage: bench_scaling [--csv-dir DIR] [--plot] [--max-n N] [--max-ms X]"
-                      " [--fit-from N]\n");
+    else if (!strcmp(argv[i], "--family") && i + 1 < argc) only = argv[++i];
+    else if (!strcmp(argv[i], "--path") && i + 1 < argc) {
+      const char *p = argv[++i];
+      path = !strcmp(p, "tree") ? AP_PATH_TREE : !strcmp(p, "dense") ? AP_PATH_DENSE
+                                                                       : AP_PATH_AUTO;
+      if (strcmp(p, "tree") && strcmp(p, "dense") && strcmp(p, "auto")) die("--path", p);
+    } else if (!strcmp(argv[i], "--callgrind") && i + 3 < argc) {
+      cg_family = argv[++i], cg_n = atoi(argv[++i]), cg_steps = atoi(argv[++i]);
+    } else {
+      fprintf(stderr, "usage: bench_scaling [--csv-dir DIR] [--plot] [--path auto|dense|tree] "
+                      "[--family trailers|disks] [--min-n N] [--max-n N] [--max-ms X] "
+                      "[--fit-from N] [--plot-only]\n       bench_scaling [--path P] --callgrind FAMILY N "
+                      "STEPS   (under valgrind --tool=callgrind --collect-atstart=no)\n");
       return 2;
     }
   }
+  if (cg_family) return callgrind_run(cg_family, cg_n, cg_steps);
   if (do_plot && !dir) die("--plot", "needs --csv-dir");
-  result res[16];
-  printf("bench_scaling: thread CPU time; us = microseconds\n");
-  run_family("trailers", max_n, max_ms, fit_from, dir, res);
-  run_family("disks", max_n, max_ms, fit_from, dir, res);
+  if (do_plot == 2) return plot(dir, "pngcairo", "png"), plot(dir, "svg", "svg"), 0;
+  if (min_n < 1 || max_n < min_n) die("--min-n/--max-n", "need 1 <= min-n <= max-n");
+  result res[40];
+  printf("bench_scaling: thread CPU time; us = microseconds; bytes: malloc'd by the model and "
+         "the simulation\n");
+  if (!only || !strcmp(only, "trailers"))
+    run_family("trailers", min_n, max_n, max_ms, fit_from, dir, res);
+  if (!only || !strcmp(only, "disks"))
+    run_family("disks", min_n, max_n, max_ms, fit_from, dir, res);
   if (do_plot) plot(dir, "pngcairo", "png"), plot(dir, "svg", "svg");
   return sink == 12345.678 ? 1 : 0;
 }

@@ -193,6 +193,7 @@ static void cases_status_system(void) {
   CASE(ap_model_from_system, "b = INT_MAX", refused(sysdef(3, 3, INT_MAX)));
   CASE(ap_model_free, "NULL", (ap_model_free(NULL), 1));
   CASE(ap_model_n, "NULL", ap_model_n(NULL) == AP_ERR_ARG);
+  CASE(ap_model_path, "NULL", ap_model_path(NULL) == AP_ERR_ARG);
   CASE(ap_model_k, "NULL", ap_model_k(NULL) == AP_ERR_ARG);
   CASE(ap_model_b, "NULL", ap_model_b(NULL) == AP_ERR_ARG);
   CASE(ap_model_name, "NULL", is_q(ap_model_name(NULL)));
@@ -353,6 +354,8 @@ static void cases_builder(void) {
   CASE(ap_builder_add_effect, "b NULL", ap_builder_add_effect(NULL, &ed, &id) == AP_ERR_ARG);
   CASE(ap_builder_add_effect, "def NULL", ap_builder_add_effect(B, NULL, &id) == AP_ERR_ARG);
   CASE(ap_builder_add_effect, "id NULL (optional)", ap_builder_add_effect(B, &ed, NULL) == AP_OK);
+  CASE(ap_builder_set_path, "b NULL", ap_builder_set_path(NULL, AP_PATH_TREE) == AP_ERR_ARG);
+  CASE(ap_builder_set_path, "unknown path", ap_builder_set_path(B, (ap_path)9) == AP_ERR_ARG);
   CASE(ap_builder_message, "NULL", is_empty(ap_builder_message(NULL)));
   CASE(ap_builder_compile, "b NULL", ap_builder_compile(NULL, &om) == AP_ERR_ARG && !om);
   CASE(ap_builder_compile, "out NULL", ap_builder_compile(B, NULL) == AP_ERR_ARG);

@@ -37,6 +37,7 @@ static const char help[] =
     "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
     "  --mode M           minimal, projected, dae or plain (simulation.mode)\n"
     "  --method NAME      stepper (simulation.method); see the list below\n"
+    "  --path P           auto, dense or tree: how the model evaluates (simulation.path)\n"
     "  --rtol X           relative tolerance (simulation.rtol)\n"
     "  --atol X           absolute tolerance (simulation.atol)\n"
     "  --t-end T          end time in seconds (simulation.t_end)\n"
@@ -53,7 +54,7 @@ typedef struct run_opts {
   const char *scene, *out;
   const char *sets[MAX_SETS + 8];
   int nsets, quiet;
-  char extra[6][96];      /* overrides built from --mode, --method, ... */
+  char extra[7][96];      /* overrides built from --mode, --method, ... */
 } run_opts;
 
 static void print_methods(void) {
@@ -71,16 +72,17 @@ static const char *const mapped[][2] = {{"--mode", "simulation.mode"},
                                         {"--rtol", "simulation.rtol"},
                                         {"--atol", "simulation.atol"},
                                         {"--t-end", "simulation.t_end"},
-                                        {"--interval", "output.interval"}};
+                                        {"--interval", "output.interval"},
+                                        {"--path", "simulation.path"}};
 
 static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
-  for (int m = 0; m < 6; m++) {
+  for (int m = 0; m < 7; m++) {
     const char *v = NULL;
     int r = cli_opt(argc, argv, i, mapped[m][0], &v);
     if (r == 0) continue;
     if (r < 0) return fprintf(stderr, "appell run: %s needs a value\n", mapped[m][0]), -1;
     double x;
-    if (m >= 2 && cli_number("run", mapped[m][0], v, &x) != 0) return -1;
+    if (m >= 2 && m < 6 && cli_number("run", mapped[m][0], v, &x) != 0) return -1;
     snprintf(o->extra[*extra], sizeof o->extra[0], "%s=%s", mapped[m][1], v);
     ++*extra;
     return 1;
@@ -90,7 +92,8 @@ static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
 
 static int parse_args(int argc, char **argv, run_opts *o) {
   static const char *const known[] = {"--out", "--set", "--mode", "--method", "--rtol", "--atol",
-                                      "--t-end", "--interval", "--quiet", "--help", NULL};
+                                      "--t-end", "--interval", "--path", "--quiet", "--help",
+                                      NULL};
   int extra = 0;
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;

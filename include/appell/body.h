@@ -329,6 +329,11 @@ AP_API int ap_builder_add_body(ap_builder *b, const ap_body_def *def, int *id);
 AP_API int ap_builder_add_joint(ap_builder *b, const ap_joint_def *def, int *id);
 AP_API int ap_builder_add_constraint(ap_builder *b, const ap_constraint_def *def, int *id);
 AP_API int ap_builder_add_effect(ap_builder *b, const ap_effect_def *def, int *id);
+/* The evaluation path ap_builder_compile chooses (system.h, ap_path; default AP_PATH_AUTO).
+ * AP_PATH_TREE on a model the tree path cannot take makes the compile fail with
+ * AP_ERR_UNSUPPORTED and the reason (the constraint that joins bodies). AP_ERR_ARG for NULL b
+ * or an unknown path. */
+AP_API int ap_builder_set_path(ap_builder *b, ap_path path);
 /* Validate and compile. On failure *out is NULL, the status is AP_ERR_ARG (or AP_ERR_NOMEM)
  * and ap_builder_message names the element and the offending number (ids and kinds out of
  * range included). AP_ERR_ARG when b or out is NULL. The builder may be compiled again or

@@ -82,6 +82,18 @@ AP_API int ap_model_from_system(const ap_system_def *def, ap_model **out, char *
 AP_API void ap_model_free(ap_model *m);   /* NULL: nothing */
 
 /* Sizes of a compiled model; AP_ERR_ARG when m is NULL. */
+/* How a model evaluates (docs/large.md). The dense path forms g, A and the basis B; the tree
+ * path (body models whose constraint rows each live on one body: knife edges, rolling on a
+ * plane-contact joint, prescribed speeds; no loop closures, wheel contacts or user
+ * constraints) works by sweeps over the joint tree in O(bodies), and its data has no g, N, A,
+ * B, G (those fields are NULL; the DAE mode and linearization need the dense path). AUTO, the
+ * default, takes the tree path for such models with at least AP_TREE_AUTO_K speeds. */
+typedef enum ap_path { AP_PATH_AUTO = 0, AP_PATH_DENSE = 1, AP_PATH_TREE = 2 } ap_path;
+#define AP_TREE_AUTO_K 16
+
+/* AP_PATH_DENSE or AP_PATH_TREE: the path the model was compiled for; AP_ERR_ARG for NULL. */
+AP_API int ap_model_path(const ap_model *m);
+
 AP_API int ap_model_n(const ap_model *m);
 AP_API int ap_model_k(const ap_model *m);
 AP_API int ap_model_b(const ap_model *m);

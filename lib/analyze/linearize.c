@@ -194,6 +194,11 @@ static int setup(ap_lin *L, const ap_lin_def *def, double t, const double *q, co
               "needs coordinates whose rates are the speeds", ap_model_name(L->m), L->n, L->k);
     return AP_ERR_UNSUPPORTED;
   }
+  if (L->m->ops) {   /* the tree path's data has no A or B */
+    ap_an_msg(L, "model '%s' is on the tree path: the linearization needs the dense path "
+              "(path: dense)", ap_model_name(L->m));
+    return AP_ERR_UNSUPPORTED;
+  }
   int rc = check_guess(L, q, v);
   if (rc == AP_OK) rc = ap_data_create(L->m, &L->d);
   if (rc == AP_OK) rc = ap_an_chart_build(L->m, &L->ch, L->msg, sizeof L->msg);

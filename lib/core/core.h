@@ -21,6 +21,8 @@
 #include "linalg/scalar.h"
 
 typedef struct ap_data_cs ap_data_cs;
+typedef struct ap_ops ap_ops;   /* core/structured.h */
+typedef struct ap_st ap_st;
 
 /* A model compiled from bodies (lib/model) evaluates its own g, N, A, a0 and h, Q, gamma in
  * place of user callbacks. Its per-data scratch (ev.scratch doubles) lives in the data, so one
@@ -73,6 +75,12 @@ struct ap_model {
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */
   char **constraint_names;  /* (b) */
+  /* The tree path (docs/large.md): the structured operators chosen at compile time, or NULL
+   * (the dense path). A data made for such a model has no g, N, A, B, G (NULL) and runs the
+   * stages of core/structured.c; the complex-step build always takes the dense path. */
+  const ap_ops *ops;
+  void *ops_impl;           /* owner of ops, freed by ops_destroy with the model */
+  void (*ops_destroy)(void *impl);
 };
 
 /* Scratch owned by one ap_data (no allocation after ap_data_create). */
@@ -94,7 +102,13 @@ typedef struct ap_scratch {
                                accepted states (ap_core_judge_redundant after the stages):
                                a multistep stepper's trial states (predictor, Newton
                                iterates, difference-quotient columns) lie off A v + a0 = 0 */
+  ap_st *st;                /* the tree path's structured state (m->ops), else NULL */
 } ap_scratch;
+
+/* The structured state of a data on the tree path, or NULL (double build only). */
+static inline ap_st *ap_core_st(const ap_data *d) {
+  return ((const ap_scratch *)d->internal)->st;
+}
 
 /* 1 when m and d are not NULL and d was made by ap_data_create for m: the public functions
  * that take (m, d) return AP_ERR_ARG otherwise. */

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "core/core.h"
+#include "core/structured.h"
 #include "linalg/linalg.h"
 
 typedef struct ap_data_block {
@@ -31,10 +32,58 @@ static int *carve_int(int **p, size_t count) {
   return out;
 }
 
+#ifndef AP_SC_COMPLEX
+/* The tree path's data (m->ops): the vectors only, O(n + k + b); g, N, A, B, G stay NULL and
+ * the structured state (core/structured.c) holds the operators' workspace, whose shadow
+ * scratch is the data's evaluator scratch. */
+static int create_structured(const ap_model *m, ap_data **out) {
+  size_t n = (size_t)m->n, k = (size_t)m->k, b = (size_t)m->b, nb = b > 0 ? b : 1;
+  size_t nd = n + 3 * k + nb + k + k + k + nb + k + k + k + k + n + nb + 4 * k + n;
+  ap_data *d = calloc(1, sizeof *d);
+  ap_data_block *blk = calloc(1, sizeof *blk);
+  double *dbl = calloc(nd, sizeof *dbl);
+  int *ints = calloc(k + nb, sizeof *ints);
+  ap_st *st = NULL;
+  int rc = d && blk && dbl && ints ? ap_st_create(m, m->ops, &st) : AP_ERR_NOMEM;
+  if (rc != AP_OK) {
+    free(d), free(blk), free(dbl), free(ints);
+    return rc;
+  }
+  double *p = dbl;
+  int *ip = ints;
+  d->n = m->n, d->k = m->k, d->b = m->b;
+  d->q = carve(&p, n), d->v = carve(&p, k), d->e = carve(&p, k), d->a0 = carve(&p, nb);
+  d->b0 = carve(&p, k), d->h = carve(&p, k), d->Q = carve(&p, k), d->gamma = carve(&p, nb);
+  d->w = carve(&p, k), d->Phi = carve(&p, k), d->edd = carve(&p, k), d->vdot = carve(&p, k);
+  d->qdot = carve(&p, n), d->lambda = carve(&p, nb);
+  ap_scratch *s = &blk->s;
+  s->tk1 = carve(&p, k), s->tk2 = carve(&p, k), s->tl = carve(&p, k);
+  s->tau = carve(&p, k), s->tn = carve(&p, n);
+  s->ev = m->ops->ev_scratch(st->ws);
+  s->model = m, s->st = st;
+  d->perm = carve_int(&ip, k), s->jpvt = carve_int(&ip, nb);
+  blk->dbl = dbl, blk->ints = ints;
+  d->internal = blk;
+  d->basis = AP_BASIS_PARTITIONED;
+  d->rank_rtol = 1e-10;
+  d->manifold_rtol = 1e-8;
+  d->rank = 0, d->l = m->k;
+  for (int i = 0; i < m->k; i++) d->perm[i] = i;
+  d->rcond_R = 1.0, d->rcond_G = 1.0;
+  *out = d;
+  return AP_OK;
+}
+#endif
+
 int AP_SC(ap_data_create)(const ap_model *m, ap_data **out) {
   if (!m || !out) return AP_ERR_ARG;
 #ifdef AP_SC_COMPLEX
   if (!m->ev.position_cs) return AP_ERR_UNSUPPORTED;
+#else
+  if (m->ops) {
+    *out = NULL;
+    return create_structured(m, out);
+  }
 #endif
   *out = NULL;
   size_t n = (size_t)m->n, k = (size_t)m->k, b = (size_t)m->b;
@@ -92,6 +141,9 @@ void AP_SC(ap_data_free)(ap_data *d) {
   if (!d) return;
   ap_data_block *blk = d->internal;
   if (blk) {
+#ifndef AP_SC_COMPLEX
+    ap_st_free(blk->s.st);
+#endif
     free(blk->dbl);
     free(blk->ints);
     free(blk);

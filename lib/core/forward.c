@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "core/core.h"
+#include "core/structured.h"
 #include "linalg/linalg.h"
 
 #define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
@@ -181,6 +182,11 @@ int AP_SC(ap_core_position_objects)(const ap_model *m, ap_data *d) {
 
 int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  /* the tree path (m->ops): a basis always (AP_BASIS_NONE as projected mode: g and A are never
+   * formed, so the DAE mode refuses such models) */
+  if (ap_core_st(d)) return ap_st_position(m, d, ap_core_st(d));
+#endif
   d->cnt.position++;
   int rc = AP_SC(ap_core_position_objects)(m, d);
   if (rc != AP_OK || m->b == 0 || d->basis == AP_BASIS_NONE) return rc;  /* b == 0: B = I */
@@ -277,12 +283,18 @@ static int particular(const ap_model *m, ap_data *d) {
 }
 
 void AP_SC(ap_core_speeds)(const ap_model *m, ap_data *d) {
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_speeds(m, d, ap_core_st(d));
+#endif
   AP_SC(ap_la_gemv)(m->k, d->l, d->B, d->e, d->v);     /* v = B e' + b0 */
   for (int i = 0; i < m->k; i++) d->v[i] += d->b0[i];
 }
 
 int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_velocity(m, d, ap_core_st(d));
+#endif
   d->cnt.velocity++;
   if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) AP_SC(ap_core_speeds)(m, d);
 #ifdef AP_SC_COMPLEX
@@ -299,6 +311,9 @@ int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
 
 int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+#ifndef AP_SC_COMPLEX
+  if (ap_core_st(d)) return ap_st_acceleration(m, d, ap_core_st(d));
+#endif
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l;
   d->cnt.acceleration++;
@@ -340,6 +355,7 @@ int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
 int ap_fwd_reactions(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  if (ap_core_st(d)) return ap_st_reactions(m, d, ap_core_st(d));
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
   d->cnt.reactions++;

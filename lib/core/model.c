@@ -129,11 +129,16 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
 
 void ap_model_free(ap_model *m) {
   if (!m) return;
+  if (m->ops_destroy) m->ops_destroy(m->ops_impl);
   if (m->ev.destroy) m->ev.destroy(m->ev.impl);
   free_names(m->coord_names, m->n);
   free_names(m->speed_names, m->k);
   free_names(m->constraint_names, m->b);
   free(m);
+}
+
+int ap_model_path(const ap_model *m) {
+  return m ? (m->ops ? AP_PATH_TREE : AP_PATH_DENSE) : AP_ERR_ARG;
 }
 
 int ap_model_n(const ap_model *m) { return m ? m->n : AP_ERR_ARG; }

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "core/core.h"
+#include "core/structured.h"
 #include "linalg/linalg.h"
 
 #define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
@@ -100,6 +101,7 @@ static int nearby_rank(const ap_model *m, ap_data *d) {
 
 int ap_partition(const ap_model *m, ap_data *d) {
   if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  if (ap_core_st(d)) return ap_st_partition(m, d, ap_core_st(d));   /* the tree path */
   ap_scratch *s = SCRATCH(d);
   d->cnt.partitions++;
   if (m->b == 0) {

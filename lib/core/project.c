@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core/core.h"
+#include "core/structured.h"
 #include "linalg/linalg.h"
 
 #define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
@@ -48,6 +49,7 @@ static double dot_compensated(int len, const double *x, int incx, const double *
  * v <- v + d. Rows whose residual is within the round-off of their own terms
  * (|r_s| <= 4 eps sum |A_sj v_j| + |a0_s|) count as satisfied; when all are, v is left as is. */
 int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *change) {
+  if (ap_core_st(d)) return ap_st_project_here(m, d, ap_core_st(d), v, change);
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l, b = m->b, rc, any = 0;
   if (change) *change = 0.0;
@@ -89,6 +91,7 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
 }
 
 void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x) {
+  if (ap_core_st(d)) return ap_st_project_tangent(m, d, ap_core_st(d), x);
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l;
   ap_la_gemv(k, k, d->g, x, s->tk1);                         /* tk1 = g x */
@@ -98,7 +101,8 @@ void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x) {
 }
 
 double ap_constraint_residual(const ap_data *d, const double *v) {
-  if (!d || !v) return NAN;
+  if (!d || !v || !d->internal) return NAN;
+  if (ap_core_st(d)) return ap_st_residual(d, ap_core_st(d), v);
   double mx = 0.0;
   for (int s = 0; s < d->b; s++) {
     double r = d->a0[s];
@@ -109,7 +113,8 @@ double ap_constraint_residual(const ap_data *d, const double *v) {
 }
 
 double ap_kinetic_energy(const ap_data *d, const double *v) {
-  if (!d || !v) return NAN;
+  if (!d || !v || !d->internal) return NAN;
+  if (ap_core_st(d)) return ap_st_energy(d, ap_core_st(d), v);
   double e = 0.0;
   for (int j = 0; j < d->k; j++)
     for (int i = 0; i < d->k; i++) e += v[i] * d->g[i + (size_t)j * d->k] * v[j];

@@ -61,6 +61,10 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
   if (!s->meth)
     return ap_drv_fail(s, AP_ERR_ARG, "unknown method '%s' (see ap_method_get for the list)",
                          def->method ? def->method : "(null)");
+  if (def->mode == AP_MODE_DAE && s->m->ops)   /* the tree path forms no g or A */
+    return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "system '%s' is on the tree path, which forms "
+                         "no g or A: the DAE mode needs the dense path (path: dense)",
+                         s->m->name);
   if (def->mode == AP_MODE_PROJECTED && s->meth->backend == &ap_step_cvode &&
       !ap_step_native_projection(s->meth))
     return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "method '%s' cannot run in projected mode: CVODE "

@@ -94,6 +94,13 @@ int ap_builder_create(const char *name, ap_builder **out) {
   return AP_OK;
 }
 
+int ap_builder_set_path(ap_builder *b, ap_path path) {
+  if (!b || (path != AP_PATH_AUTO && path != AP_PATH_DENSE && path != AP_PATH_TREE))
+    return AP_ERR_ARG;
+  b->path = path;
+  return AP_OK;
+}
+
 void ap_builder_free(ap_builder *b) {
   if (!b) return;
   free(b->bodies);

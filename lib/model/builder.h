@@ -20,6 +20,7 @@ struct ap_builder {
   ap_beff *effs;
   int nb, cb, nj, cj, nc, cc, ne, ce;   /* counts and capacities */
   char msg[512];                        /* last error */
+  ap_path path;                         /* ap_builder_set_path; AP_PATH_AUTO */
 };
 
 /* printf into b->msg; returns AP_ERR_ARG. */

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "model/builder.h"
+#include "model/tree_model.h"
 
 #define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
 
@@ -245,6 +246,8 @@ static int body_columns(ap_bmodel *M) {
       p = J->parent;
     }
     qsort(B->cols, (size_t)B->ncols, sizeof *B->cols, cmp_int);
+    int *fit = realloc(B->cols, ((size_t)B->ncols + 1) * sizeof *B->cols);   /* O(ancestors) */
+    if (fit) B->cols = fit;
   }
   return AP_OK;
 }
@@ -401,8 +404,7 @@ static int compile_all(ap_builder *b, ap_bmodel *M) {
   if (M->k < 1)
     FAIL("model '%s': no degrees of freedom (%d bodies; every joint is fixed or driven)",
          b->name, b->nb);
-  rc = body_columns(M);
-  if (rc == AP_OK) rc = ap_compile_constraints(b, M);
+  rc = ap_compile_constraints(b, M);   /* body_columns: after the choice of the path */
   for (int i = 0; rc == AP_OK && i < b->ne; i++) {
     rc = check_effect(b, i);
     snprintf(M->effs[i].name, sizeof M->effs[i].name, "%s", b->effs[i].name);
@@ -428,6 +430,13 @@ int ap_builder_compile(ap_builder *b, ap_model **out) {
   int rc = M ? compile_all(b, M) : AP_ERR_NOMEM;
   if (rc == AP_OK) rc = make_model(b, M, out);   /* M is the model's (or freed) from here */
   else ap_bm_destroy(M);
+  if (rc == AP_OK) {                              /* the evaluation path (docs/large.md) */
+    rc = ap_tree_attach(*out, b->path, b->msg, sizeof b->msg);
+    /* the dense path's columns of each body (its ancestors' speeds: O(N^2) for a chain); the
+     * tree path never reads them */
+    if (rc == AP_OK && !(*out)->ops) rc = body_columns((ap_bmodel *)(*out)->ev.impl);
+    if (rc != AP_OK) ap_model_free(*out), *out = NULL;
+  }
   if (rc == AP_ERR_NOMEM) snprintf(b->msg, sizeof b->msg, "model '%s': out of memory", b->name);
   return rc;
 }

@@ -14,6 +14,7 @@
 
 #include "linalg/linalg.h"
 #include "model/model.h"
+#include "model/tree_model.h"   /* the tree path's layout and queries (m->ops) */
 
 /* ---- hooks ------------------------------------------------------------------------------- */
 
@@ -289,6 +290,7 @@ int ap_constraint_row_index(const ap_model *m, int constraint) {
 
 int ap_body_eval(const ap_model *m, ap_data *d) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  if (m->ops) return ap_tree_body_eval(m, d, ap_tree_ws_of(d));
   double *S = ap_bm_scratch(d);
   int rc = ap_kin_position(m, d, d->t, d->q, S);
   if (rc == AP_OK) ap_kin_velocity(ap_bm(m), d->v, S);
@@ -299,7 +301,7 @@ int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_sta
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out || body < 0 ||
       body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
-  const ap_bmodel *M = ap_bm(m);
+  const ap_bmodel *M = ap_tree_layout(m);
   double *S = ap_bm_scratch(d);
   kbody C = ap_kin_body(M, S, body);
   memset(out, 0, sizeof *out);
@@ -326,6 +328,7 @@ int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body, const 
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !p || body < 0 ||
       body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
+  if (m->ops) return AP_ERR_UNSUPPORTED;   /* the tree path keeps no Jacobian columns */
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d), *JP = S + M->off_tmp, r[3];
   kbody C = ap_kin_body(M, S, body);
@@ -344,7 +347,7 @@ int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *poten
   if (ap_model_is_body_model(m) && d) d->cnt.energy++;
   int rc = ap_body_eval(m, d);
   if (rc != AP_OK) return rc;
-  const ap_bmodel *M = ap_bm(m);
+  const ap_bmodel *M = ap_tree_layout(m);
   double *S = ap_bm_scratch(d), T = 0.0;
   for (int b = 0; b < M->nb; b++) {
     kbody C = ap_kin_body(M, S, b);
@@ -363,13 +366,13 @@ long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || effect < 0 ||
       effect >= ap_bm(m)->ne)
     return -1;
-  return (long)ap_bm_scratch(d)[ap_bm(m)->off_cnt + (size_t)effect];
+  return (long)ap_bm_scratch(d)[ap_tree_layout(m)->off_cnt + (size_t)effect];
 }
 
 int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q) return AP_ERR_ARG;
   double ch = 0.0;
-  int rc = ap_bm_project(m, d, q, ap_bm_scratch(d), &ch, 0);
+  int rc = ap_bm_project(m->ops ? &ap_tree_plan(m)->sm : m, d, q, ap_bm_scratch(d), &ch, 0);
   if (change) *change = ch;
   return rc;
 }
@@ -394,6 +397,7 @@ int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, cons
     return AP_ERR_ARG;
   int k = m->k, b = m->b, nf = 0;
   memcpy(d->q, q, (size_t)m->n * sizeof *q);
+  if (m->ops) return ap_tree_complete_speeds(m, d, ap_tree_ws_of(d), given, v);
   memset(d->g, 0, (size_t)k * k * sizeof *d->g);
   memset(d->A, 0, (size_t)(b ? b : 1) * k * sizeof *d->A);
   memset(d->a0, 0, (size_t)(b ? b : 1) * sizeof *d->a0);
@@ -473,7 +477,7 @@ static int wheel_force(const ap_bmodel *M, double *S, const ap_mcon *c, const do
 int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
                           int constraint, ap_contact_force *out) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out) return AP_ERR_ARG;
-  const ap_bmodel *M = ap_bm(m);
+  const ap_bmodel *M = ap_tree_layout(m);
   if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
     return AP_ERR_ARG;
   const ap_mcon *c = &M->cons[constraint];
@@ -481,10 +485,16 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
   if (c->wheel >= 0) return wheel_force(M, S, c, lam, out);
   int root = c->def.body, k = M->k;
+  if (m->ops) ap_tree_com_accel(ap_tree_ws_of(d), vd, -1, NULL);   /* twists of v' */
   for (int b = 0; b < M->nb; b++) {
     if (!ap_bm_in_subtree(M, b, root)) continue;
     kbody C = ap_kin_body(M, S, b);
     double a[3], t[3];
+    if (m->ops) {   /* tree path: J_b v' from the twists, plus the bias */
+      ap_tree_com_accel(ap_tree_ws_of(d), vd, b, a);
+      v3_axpy(M->bodies[b].mass, a, ma);
+      continue;
+    }
     v3_copy(C.ao, a);                     /* com bias: ao + al x rc + w x (w x rc) */
     v3_cross_add(C.al, C.rcom, a);
     v3_cross(C.w, C.rcom, t);

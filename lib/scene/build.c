@@ -68,6 +68,12 @@ int sc_build(sc_ctx *c, sc_scene *s, ap_model **out) {
   if (ap_builder_create(s->name, &b) != AP_OK) return sc_nomem(c);
   int rc = add_bodies(c, s, b);
   if (rc == AP_OK) rc = add_rest(c, s, b);
+  /* auto: the DAE mode and the linearization need the dense path's g and A */
+  int path = s->path;
+  if (path == AP_PATH_AUTO && (s->run.sim.mode == AP_MODE_DAE || sc_map_get(s->root,
+                                                                           "linearize")))
+    path = AP_PATH_DENSE;
+  if (rc == AP_OK) rc = ap_builder_set_path(b, (ap_path)path);
   int crc = rc == AP_OK ? ap_builder_compile(b, out) : AP_OK;
   if (crc == AP_ERR_NOMEM) rc = sc_nomem(c);
   else if (crc != AP_OK) {

@@ -233,6 +233,7 @@ typedef struct sc_scene {
   char method[32];
   unsigned channels;
   double init_tol;         /* relative speed correction above which the state is refused */
+  int path;                /* simulation.path (ap_path): auto, dense or tree */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);

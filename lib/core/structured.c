@@ -1,0 +1,263 @@
+/* The Appell solve on a structured model (structured.h, docs/large.md): the stages of
+ * forward.c with g, A and B known only as operators and the basis in independent blocks.
+ *
+ *     G_t e''_t = B_t^T (Q - h - g w)_t,    G_t = B_t^T g B_t,    v' = w + sum_t P_t B_t e''_t
+ *
+ * Per block t: the speeds kidx (rows of B_t), the free speeds lidx (its e' entries), B_t and G_t
+ * from the model's position stage; the core gathers, factors each G_t (Cholesky, native or
+ * LAPACK by size as on the dense path), solves and scatters. Partition: the model chooses it
+ * (the dependent speeds body by body) in ap_st_partition and keeps it in ap_st_position; the
+ * orthonormal basis of projected mode is replaced by a partition chosen at every position stage:
+ * projected mode's state is v, and both the projection v <- b0 + B G^-1 B^T g (v - b0) and
+ * v' = B e'' + w do not depend on which basis spans the null space. Consistency of redundant
+ * rows: the same relative 1e-8 as forward.c. Nothing here allocates after ap_st_create. */
+#include "core/structured.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/core.h"
+#include "linalg/linalg.h"
+
+static const double consistency_rtol = 1e-8;
+
+int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
+  *out = NULL;
+  size_t k = (size_t)m->k, b = (size_t)(m->b > 0 ? m->b : 1), gcap = 0;
+  ap_st *st = calloc(1, sizeof *st);
+  if (!st) return AP_ERR_NOMEM;
+  st->m = m, st->ops = ops;
+  st->ws = ops->ws_create(ops->ctx, &gcap);
+  double *p = st->ws ? calloc(gcap + 5 * k + 2 * b + 1, sizeof(double)) : NULL;
+  if (!p) {
+    if (st->ws) ops->ws_free(st->ws);
+    free(st);
+    return AP_ERR_NOMEM;
+  }
+  st->Gf = p, p += gcap;
+  st->tk1 = p, p += k;
+  st->tk2 = p, p += k;
+  st->tl = p, p += k;
+  st->te = p, p += k;
+  st->tb = p, p += b;
+  st->tm = p;
+  *out = st;
+  return AP_OK;
+}
+
+void ap_st_free(ap_st *st) {
+  if (!st) return;
+  if (st->ws) st->ops->ws_free(st->ws);
+  free(st->Gf);
+  free(st);
+}
+
+static double max_abs(const double *x, int n) {
+  double mx = 0.0;
+  for (int i = 0; i < n; i++) mx = fmax(mx, fabs(x[i]));
+  return mx;
+}
+
+/* ---- blocks --------------------------------------------------------------------------------- */
+
+/* y[lidx] = B_t^T x[kidx] for every block. */
+static void apply_Bt(const ap_sblocks *bl, const double *x, double *y) {
+  for (int t = 0; t < bl->n; t++) {
+    int kt = bl->kofs[t + 1] - bl->kofs[t], lt = bl->lofs[t + 1] - bl->lofs[t];
+    const double *Bt = bl->B + bl->bofs[t];
+    const int *ki = bl->kidx + bl->kofs[t];
+    for (int j = 0; j < lt; j++) {
+      double s = 0.0;
+      for (int r = 0; r < kt; r++) s += Bt[r + (size_t)j * kt] * x[ki[r]];
+      y[bl->lidx[bl->lofs[t] + j]] = s;
+    }
+  }
+}
+
+/* y[kidx] += B_t x[lidx] for every block. */
+static void apply_B_add(const ap_sblocks *bl, const double *x, double *y) {
+  for (int t = 0; t < bl->n; t++) {
+    int kt = bl->kofs[t + 1] - bl->kofs[t], lt = bl->lofs[t + 1] - bl->lofs[t];
+    const double *Bt = bl->B + bl->bofs[t];
+    const int *ki = bl->kidx + bl->kofs[t];
+    for (int j = 0; j < lt; j++) {
+      double xj = x[bl->lidx[bl->lofs[t] + j]];
+      for (int r = 0; r < kt; r++) y[ki[r]] += Bt[r + (size_t)j * kt] * xj;
+    }
+  }
+}
+
+/* Factor every G_t into st->Gf; AP_ERR_SINGULAR with the block in *bad. */
+static int factor_G(const ap_sblocks *bl, ap_st *st, int *bad) {
+  for (int t = 0; t < bl->n; t++) {
+    int lt = bl->lofs[t + 1] - bl->lofs[t];
+    double *Gt = st->Gf + bl->gofs[t];
+    memcpy(Gt, bl->G + bl->gofs[t], sizeof(double) * (size_t)lt * lt);
+    if (ap_la_chol(lt, Gt, NULL, NULL, NULL) != AP_OK) {
+      *bad = t;
+      return AP_ERR_SINGULAR;
+    }
+  }
+  return AP_OK;
+}
+
+/* x[lidx] <- G_t^-1 x[lidx] with the factors (tl: scratch). */
+static void solve_G(const ap_sblocks *bl, ap_st *st, double *x) {
+  for (int t = 0; t < bl->n; t++) {
+    int lt = bl->lofs[t + 1] - bl->lofs[t];
+    const int *li = bl->lidx + bl->lofs[t];
+    for (int j = 0; j < lt; j++) st->tl[j] = x[li[j]];
+    ap_la_chol_solve(lt, st->Gf + bl->gofs[t], st->tl);
+    for (int j = 0; j < lt; j++) x[li[j]] = st->tl[j];
+  }
+}
+
+/* ---- stages --------------------------------------------------------------------------------- */
+
+static int judge(const ap_model *m, ap_data *d, double resid, const double *x, int n,
+                 const char *what) {
+  double scale = fmax(1.0, max_abs(x, n));
+  if (!(resid > consistency_rtol * scale)) return AP_OK;
+  ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and inconsistent at "
+              "t = %.17g (%s residual %.3g)", m->name, m->b - d->rank, m->b, d->t, what, resid);
+  return AP_ERR_INCONSISTENT;
+}
+
+int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
+  d->cnt.partitions++;
+  int rc = st->ops->position(m, d, st->ws, 1);
+  if (rc != AP_OK) return rc;
+  st->chosen = 1;
+  rc = judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+  if (rc == AP_OK && d->redundant > 0)
+    ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
+                "at t = %.17g; residual %.3g", m->name, d->redundant, m->b, d->t, d->resid_a0);
+  return rc;
+}
+
+int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
+  d->cnt.position++;
+  /* projected mode (and no basis): any valid partition; minimal mode: the one chosen */
+  int select = d->basis != AP_BASIS_PARTITIONED || !st->chosen;
+  int rc = st->ops->position(m, d, st->ws, select);
+  d->cnt.qr += m->b > 0;
+  d->rcond_R = 1.0;
+  if (rc != AP_OK) return rc;
+  return judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+}
+
+void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st) {
+  ap_sblocks bl;
+  st->ops->blocks(st->ws, &bl);
+  memcpy(d->v, d->b0, sizeof(double) * (size_t)m->k);
+  apply_B_add(&bl, d->e, d->v);
+}
+
+int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
+  d->cnt.velocity++;
+  if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) ap_st_speeds(m, d, st);
+  int rc = st->ops->velocity(m, d, st->ws);
+  if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
+  if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
+  if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
+  if (rc == AP_OK) rc = judge(m, d, d->resid_gamma, d->gamma, m->b, "gamma");
+  return rc;
+}
+
+static int singular(const ap_model *m, ap_data *d, const ap_sblocks *bl, int bad,
+                    const char *where) {
+  ap_core_msg(d, "system '%s': block %d of G = B^T g B (%d x %d) is not positive definite at "
+              "t = %.17g%s: the metric g is not positive definite on the free speeds", m->name,
+              bad, bl->lofs[bad + 1] - bl->lofs[bad], bl->lofs[bad + 1] - bl->lofs[bad], d->t,
+              where);
+  return AP_ERR_SINGULAR;
+}
+
+int ap_st_acceleration(const ap_model *m, ap_data *d, ap_st *st) {
+  int k = m->k, bad = -1;
+  ap_sblocks bl;
+  d->cnt.acceleration++;
+  st->ops->blocks(st->ws, &bl);
+  st->ops->gmul(st->ws, d->w, st->tk1);                   /* g w */
+  for (int i = 0; i < k; i++) st->tk2[i] = d->Q[i] - d->h[i] - st->tk1[i];
+  apply_Bt(&bl, d->Q, d->Phi);                            /* Phi = B^T Q */
+  apply_Bt(&bl, st->tk2, d->edd);                         /* B^T (Q - h - g w) */
+  d->rcond_G = 1.0;
+  if (factor_G(&bl, st, &bad) != AP_OK) return singular(m, d, &bl, bad, "");
+  solve_G(&bl, st, d->edd);
+  int rc = ap_core_check_finite(m, d, "Appell solve (e'')", d->edd, d->l, 1);
+  if (rc != AP_OK) return rc;
+  memcpy(d->vdot, d->w, sizeof(double) * (size_t)k);     /* v' = B e'' + w */
+  apply_B_add(&bl, d->edd, d->vdot);
+  st->ops->nmul(st->ws, d->q, d->v, d->qdot);             /* q' = N v */
+  return AP_OK;
+}
+
+int ap_st_reactions(const ap_model *m, ap_data *d, ap_st *st) {
+  d->cnt.reactions++;
+  if (m->b == 0) return AP_OK;
+  st->ops->gmul(st->ws, d->vdot, st->tk1);               /* g v' + h - Q */
+  for (int i = 0; i < m->k; i++) st->tk1[i] += d->h[i] - d->Q[i];
+  st->ops->reactions(st->ws, st->tk1, d->lambda);
+  return ap_core_check_finite(m, d, "reactions (lambda)", d->lambda, m->b, 1);
+}
+
+/* ---- projection and diagnostics ------------------------------------------------------------ */
+
+/* From the residual, as core/project.c: r = A v + a0, d0 with A d0 + r = 0, the correction
+ * (I - B G^-1 B^T g) d0 (the g-nearest). v is not touched when r is zero, and otherwise moves by
+ * a correction computed from r alone: no O(eps |v|) rounding per projection accumulates. */
+int ap_st_project_here(const ap_model *m, ap_data *d, ap_st *st, double *v, double *change) {
+  int k = m->k, bad = -1;
+  ap_sblocks bl;
+  if (change) *change = 0.0;
+  if (m->b == 0) return AP_OK;
+  st->ops->amul(st->ws, d, v, st->tb, st->tm);            /* r = A v + a0 */
+  /* a residual within the rounding bound of its row leaves v as it is: the row is a dot
+   * product of 6 entries of a twist, itself a sum of a few transported terms, so its error is
+   * at most about 16 eps times the sum of the magnitudes (the dense path's compensated dot
+   * product gets 4 eps) */
+  int any = 0;
+  for (int s = 0; s < m->b; s++) any |= fabs(st->tb[s]) > 16.0 * DBL_EPSILON * st->tm[s];
+  if (!any) return AP_OK;
+  st->ops->blocks(st->ws, &bl);
+  st->ops->psolve(st->ws, st->tb, st->tk1);               /* d0: A d0 + r = 0 */
+  st->ops->gmul(st->ws, st->tk1, st->tk2);                /* g d0 */
+  apply_Bt(&bl, st->tk2, st->te);
+  if (factor_G(&bl, st, &bad) != AP_OK) return singular(m, d, &bl, bad, " (speed projection)");
+  solve_G(&bl, st, st->te);
+  for (int i = 0; i < k; i++) st->te[i] = -st->te[i];
+  apply_B_add(&bl, st->te, st->tk1);                      /* the correction d0 - B G^-1 B^T g d0 */
+  for (int i = 0; i < k; i++) v[i] += st->tk1[i];
+  st->ops->gmul(st->ws, st->tk1, st->tk2);
+  double c2 = 0.0;
+  for (int i = 0; i < k; i++) c2 += st->tk1[i] * st->tk2[i];
+  if (change) *change = sqrt(fmax(c2, 0.0));
+  return AP_OK;
+}
+
+void ap_st_project_tangent(const ap_model *m, ap_data *d, ap_st *st, double *x) {
+  (void)d;   /* the factors live in st */
+  ap_sblocks bl;
+  st->ops->blocks(st->ws, &bl);
+  st->ops->gmul(st->ws, x, st->tk1);
+  apply_Bt(&bl, st->tk1, st->te);
+  solve_G(&bl, st, st->te);
+  memset(x, 0, sizeof(double) * (size_t)m->k);
+  apply_B_add(&bl, st->te, x);
+}
+
+double ap_st_residual(const ap_data *d, ap_st *st, const double *v) {
+  if (d->b == 0) return 0.0;
+  st->ops->amul(st->ws, d, v, st->tb, NULL);
+  return max_abs(st->tb, d->b);
+}
+
+double ap_st_energy(const ap_data *d, ap_st *st, const double *v) {
+  st->ops->gmul(st->ws, v, st->tk1);
+  double e = 0.0;
+  for (int i = 0; i < d->k; i++) e += v[i] * st->tk1[i];
+  return 0.5 * e;
+}

@@ -1,0 +1,276 @@
+/* The tree path's plan, built once from a compiled body model (tree_model.h, docs/large.md).
+ *
+ * Forest: tree body i is the child of joint i (topological order, so parent[i] < i); its free
+ * speeds are the joint's; its rows are those of the constraints on the body (a prescribed
+ * speed lives on the child of its joint, as a direct term on that speed). Trees are the
+ * ground's subtrees: with rows on one body each, they are the independent components.
+ * Shadow: a copy of the model's tables with k = 0 and K1 = 1 (its joints keep only the leading
+ * speeds that may be driven, with no free index), laid out again by ap_kin_layout, so every
+ * body block holds R, o, inertia, velocities, biases and one 3-column of each Jacobian.
+ * Capacities: rows pushed from a body to its parent take slots; 2 b + 16 slots (each row may
+ * climb about one level on average) and b + 1 rows at one body; one tree's free speeds at most
+ * k_t - b_t + 6 (six redundant rows per tree). Beyond them the position stage reports
+ * AP_ERR_UNSUPPORTED. */
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "model/tree_model.h"
+
+/* The body a constraint's rows live on, or -1 when the tree path cannot take the constraint
+ * (its reason in why). */
+static int con_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c, char *why,
+                    size_t len) {
+  switch (c->def.kind) {
+    case AP_CON_ROLLING:
+    case AP_CON_KNIFE_EDGE:
+      if (c->nhol == 0 && c->wheel < 0) return c->def.body;
+      snprintf(why, len, "model '%s': constraint '%s' is a wheel contact (an implicit holonomic "
+               "row)", m->name, c->name);
+      return -1;
+    case AP_CON_PRESCRIBED_SPEED: return M->joints[M->joint_topo[c->def.joint]].child;
+    case AP_CON_USER:
+      snprintf(why, len, "model '%s': constraint '%s' is a user constraint (rows over every "
+               "speed)", m->name, c->name);
+      return -1;
+    default:
+      snprintf(why, len, "model '%s': constraint '%s' is a loop closure (rows on two bodies)",
+               m->name, c->name);
+      return -1;
+  }
+}
+
+/* Local free column of global speed col in joint J, or -1. */
+static int local_column(const ap_mjoint *J, int col) {
+  for (int i = 0, f = 0; i < J->nv; i++) {
+    if (J->vidx[i] < 0) continue;
+    if (J->vidx[i] == col) return f;
+    f++;
+  }
+  return -1;
+}
+
+static int *take(int **p, size_t n) {
+  int *out = *p;
+  *p += n;
+  return out;
+}
+
+/* Forest arrays: parents, speeds, children (ascending), trees (bodies parents first), by
+ * counting passes. */
+static void forest(const ap_bmodel *M, ap_tplan *P, int *parent, int *fofs, int *fidx,
+                   int *cofs, int *cidx, int *tofs, int *tbody, int *tree) {
+  int nb = M->nj, f = 0, nt = 0;
+  for (int i = 0; i < nb; i++) {
+    const ap_mjoint *J = &M->joints[i];
+    P->body[i] = J->child;
+    parent[i] = J->parent >= 0 ? M->bodies[J->parent].joint : -1;
+    fofs[i] = f;
+    for (int a = 0; a < J->nv; a++)
+      if (J->vidx[a] >= 0) fidx[f++] = J->vidx[a];
+    P->T.maxnf = f - fofs[i] > P->T.maxnf ? f - fofs[i] : P->T.maxnf;
+    tree[i] = parent[i] < 0 ? nt++ : tree[parent[i]];
+  }
+  fofs[nb] = f;
+  memset(cofs, 0, sizeof(int) * (size_t)(nb + 1));
+  memset(tofs, 0, sizeof(int) * (size_t)(nt + 1));
+  for (int i = 0; i < nb; i++) {
+    if (parent[i] >= 0) cofs[parent[i] + 1]++;
+    tofs[tree[i] + 1]++;
+  }
+  for (int i = 0; i < nb; i++) cofs[i + 1] += cofs[i];
+  for (int t = 0; t < nt; t++) tofs[t + 1] += tofs[t];
+  int *cfill = P->kspeed, *tfill = P->kspeed + nb;   /* scratch: kspeed is filled later */
+  for (int i = 0; i < nb; i++) cfill[i] = cofs[i];
+  for (int t = 0; t < nt; t++) tfill[t] = tofs[t];
+  for (int i = 0; i < nb; i++) {
+    if (parent[i] >= 0) cidx[cfill[parent[i]]++] = i;
+    tbody[tfill[tree[i]]++] = i;
+  }
+  P->T.ntree = nt;
+}
+
+/* Rows by body (own rows in constraint order), their direct terms, the row capacities and
+ * the capacity of one tree's free speeds. Returns AP_ERR_UNSUPPORTED when a constraint cannot
+ * be taken. */
+static int rows(const ap_model *m, const ap_bmodel *M, ap_tplan *P, int *rofs, int *ridx,
+                int *rdir, char *why, size_t len) {
+  int nb = M->nj, *rb = P->kspeed;   /* scratch: tree body of each row, fill pointers */
+  memset(rofs, 0, sizeof(int) * (size_t)(nb + 1));
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    int body = con_body(m, M, c, why, len);
+    if (body < 0) return AP_ERR_UNSUPPORTED;
+    for (int r = 0; r < c->nrows; r++) rb[c->row + r] = M->bodies[body].joint;
+    rofs[M->bodies[body].joint + 1] += c->nrows;
+  }
+  for (int i = 0; i < nb; i++) rofs[i + 1] += rofs[i];
+  int *fill = rb + M->b;
+  for (int i = 0; i < nb; i++) fill[i] = rofs[i];
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    for (int r = 0; r < c->nrows; r++) {
+      int i = rb[c->row + r], p = fill[i]++;
+      ridx[p] = c->row + r, P->rcon[p] = ci, P->rrow[p] = r;
+      rdir[p] = c->def.kind == AP_CON_PRESCRIBED_SPEED ? local_column(&M->joints[i], c->col) : -1;
+    }
+  }
+  return AP_OK;
+}
+
+/* The shadow body model: no speeds, one twist column (module note). */
+static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
+  P->sjoints = calloc((size_t)M->nj + 1, sizeof *P->sjoints);
+  if (!P->sjoints) return AP_ERR_NOMEM;
+  for (int j = 0; j < M->nj; j++) {
+    ap_mjoint *J = &P->sjoints[j];
+    *J = M->joints[j];
+    int last = -1;
+    for (int i = 0; i < J->ndrivable; i++)
+      if (J->drive[i]) last = i;
+    J->nv = last + 1;   /* the driven speeds keep their places; free ones add nothing */
+    for (int i = 0; i < J->nv; i++) J->vidx[i] = -1;
+  }
+  P->M = M;
+  P->shadow = *M;
+  P->shadow.joints = P->sjoints;
+  P->shadow.k = 0, P->shadow.K1 = 1, P->shadow.ncol = M->has_drive ? 1 : 0;
+  P->shadow.max_user_rows = 0;
+  ap_kin_layout(&P->shadow);
+  memset(&P->sm, 0, sizeof P->sm);
+  snprintf(P->sm.name, sizeof P->sm.name, "%s", m->name);
+  P->sm.n = m->n, P->sm.k = m->k, P->sm.b = m->b;
+  P->sm.coord_names = m->coord_names, P->sm.speed_names = m->speed_names;
+  P->sm.constraint_names = m->constraint_names;
+  P->sm.ev.impl = &P->shadow;
+  return AP_OK;
+}
+
+/* Capacities (module note) and the workspace sizes. */
+static void capacities(const ap_bmodel *M, ap_tplan *P) {
+  ap_la_tree *T = &P->T;
+  int lmax = 1;
+  for (int t = 0; t < T->ntree; t++) {
+    int kt = 0, bt = 0;
+    for (int a = T->tofs[t]; a < T->tofs[t + 1]; a++) {
+      int i = T->tbody[a];
+      kt += T->fofs[i + 1] - T->fofs[i], bt += T->rofs[i + 1] - T->rofs[i];
+    }
+    int lt = kt - bt > 0 ? kt - bt + 6 : 6;
+    lt = lt < kt ? lt : kt;
+    lmax = lt > lmax ? lt : lmax;
+  }
+  P->lmax = lmax;
+  T->cap = 2 * M->b + 16, T->maxrow = M->b + 1;
+  size_t nb = (size_t)M->nj, k = (size_t)M->k, b = (size_t)M->b, niw = 0;
+  size_t ndw = ap_la_tree_work_size(T, lmax, &niw);
+  P->nd = P->shadow.scratch + 3 * nb + 6 * k + 13 * nb + 6 * b + 3 * 6 * nb + k + b + ndw;
+  P->ni = niw + k;
+}
+
+int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why_len) {
+  *out = NULL;
+  if (why && why_len) why[0] = '\0';
+  if (!ap_model_is_body_model(m)) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  ap_tplan *P = calloc(1, sizeof *P);
+  size_t nb = (size_t)M->nj, k = (size_t)M->k, b = (size_t)M->b;
+  size_t nks = (k > b ? k : b) + 2 * nb + 2;   /* kspeed, also scratch for the passes */
+  if (P) P->ints = calloc(9 * nb + 4 + k + 4 * b + nks, sizeof(int));
+  if (!P || !P->ints) {
+    free(P);
+    return AP_ERR_NOMEM;
+  }
+  int *ip = P->ints;
+  int *parent = take(&ip, nb), *fofs = take(&ip, nb + 1), *fidx = take(&ip, k);
+  int *rofs = take(&ip, nb + 1), *ridx = take(&ip, b), *rdir = take(&ip, b);
+  int *cofs = take(&ip, nb + 1), *cidx = take(&ip, nb), *tofs = take(&ip, nb + 1);
+  int *tbody = take(&ip, nb), *tree = take(&ip, nb);
+  P->body = take(&ip, nb), P->rcon = take(&ip, b), P->rrow = take(&ip, b);
+  P->kspeed = take(&ip, nks);
+  char dummy[8];
+  int rc = rows(m, M, P, rofs, ridx, rdir, why ? why : dummy, why ? why_len : sizeof dummy);
+  if (rc == AP_OK) {
+    forest(M, P, parent, fofs, fidx, cofs, cidx, tofs, tbody, tree);
+    ap_la_tree T = {(int)nb, M->k, M->b, parent, fofs, fidx, rofs, ridx, rdir, cofs, cidx,
+                    P->T.ntree, tofs, tbody, tree, P->T.maxnf, 0, 0};
+    P->T = T;
+    for (int t = 0, p = 0; t < T.ntree; t++)   /* speeds of each tree, as the blocks list them */
+      for (int a = tofs[t]; a < tofs[t + 1]; a++)
+        for (int c = fofs[tbody[a]]; c < fofs[tbody[a] + 1]; c++) P->kspeed[p++] = fidx[c];
+    rc = make_shadow(m, M, P);
+  }
+  if (rc != AP_OK) {
+    ap_tree_plan_free(P);
+    return rc;
+  }
+  capacities(M, P);
+  *out = P;
+  return AP_OK;
+}
+
+void ap_tree_plan_free(ap_tplan *P) {
+  if (!P) return;
+  free(P->sjoints);
+  free(P->ints);
+  free(P);
+}
+
+void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) {
+  size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b;
+  memset(dbl, 0, sizeof(double) * P->nd);
+  memset(ints, 0, sizeof(int) * P->ni);
+  ws->P = P;
+  ws->S = dbl, dbl += P->shadow.scratch;
+  ws->g.d = dbl, dbl += 3 * nb;
+  ws->g.S = dbl, dbl += 6 * k;
+  ws->g.M = dbl, dbl += 13 * nb;
+  ws->g.C = dbl, dbl += 6 * b;
+  ws->rho = dbl, dbl += 6 * nb;
+  ws->U = dbl, dbl += 6 * nb;
+  ws->F = dbl, dbl += 6 * nb;
+  ws->x = dbl, dbl += k;
+  ws->rb = dbl, dbl += b;
+  ws->avoid = ints, ints += k;
+  ap_la_tree_work_init(&P->T, P->lmax, dbl, ints, &ws->W);
+}
+
+/* ---- the compile-time choice ------------------------------------------------------------ */
+
+static void plan_destroy(void *impl) { ap_tree_plan_free(impl); }
+
+/* project_q and check_q of the body layer, on the shadow (its scratch is the data's). */
+static int shadow_project_q(const ap_model *m, ap_data *d, double *q, double *S,
+                            double *change) {
+  return ap_bm_project_q(&ap_tree_plan(m)->sm, d, q, S, change);
+}
+
+static int shadow_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
+  return ap_bm_check_q(&ap_tree_plan(m)->sm, d, q, S);
+}
+
+int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
+  /* APPELL_PATH=tree|dense overrides the automatic choice (for running whole test suites on
+   * one path: tree wherever the model allows it) */
+  const char *env = getenv("APPELL_PATH");
+  int min_k = env && strcmp(env, "tree") == 0 ? 0 : env && strcmp(env, "dense") == 0 ? INT_MAX
+              : AP_TREE_AUTO_K;
+  if (path == AP_PATH_DENSE || (path == AP_PATH_AUTO && m->k < min_k)) return AP_OK;
+  char reason[256] = "";
+  ap_tplan *P = NULL;
+  int rc = ap_tree_plan_create(m, &P, reason, sizeof reason);
+  if (rc == AP_ERR_UNSUPPORTED && path == AP_PATH_AUTO) return AP_OK;   /* the dense path */
+  if (rc != AP_OK) {
+    snprintf(why, why_len, "%s", rc == AP_ERR_NOMEM ? "out of memory planning the tree path"
+             : reason);
+    if (rc == AP_ERR_UNSUPPORTED)
+      snprintf(why, why_len, "%s: the tree path cannot take it (path: dense)", reason);
+    return rc;
+  }
+  ap_tree_ops(P, &P->ops);
+  m->ops = &P->ops, m->ops_impl = P, m->ops_destroy = plan_destroy;
+  if (m->ev.project_q) m->ev.project_q = shadow_project_q;
+  if (m->ev.check_q) m->ev.check_q = shadow_check_q;
+  return AP_OK;
+}

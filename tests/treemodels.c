@@ -1,0 +1,132 @@
+/* Large body models for the tree path (treemodels.h). */
+#include "treemodels.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static void die(const char *what, const char *msg) {
+  fprintf(stderr, "treemodels: %s: %s\n", what, msg);
+  exit(1);
+}
+
+static void check(int rc, const char *what) {
+  if (rc != AP_OK) die(what, ap_strerror(rc));
+}
+
+static void *xcalloc(size_t n, size_t size) {
+  void *p = calloc(n ? n : 1, size);
+  if (!p) die("memory", "out of memory");
+  return p;
+}
+
+static ap_model *compile(ap_builder *b, ap_path path) {
+  ap_model *m = NULL;
+  check(ap_builder_set_path(b, path), "path");
+  if (ap_builder_compile(b, &m) != AP_OK) die("compile", ap_builder_message(b));
+  ap_builder_free(b);
+  return m;
+}
+
+static int add_box(ap_builder *b, const char *name, double mass, double cx, double Izz) {
+  ap_body_def d = ap_body_def_default();
+  int id = -1;
+  d.name = name, d.mass = mass, d.com[0] = cx;
+  d.inertia[0] = 0.5 * Izz, d.inertia[4] = 0.6 * Izz, d.inertia[8] = Izz;
+  check(ap_builder_add_body(b, &d, &id), name);
+  return id;
+}
+
+static void knife(ap_builder *b, const char *name, int body) {
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = name, c.kind = AP_CON_KNIFE_EDGE, c.body = body;   /* origin, body y blocked */
+  check(ap_builder_add_constraint(b, &c, NULL), name);
+}
+
+/* Car: origin at the rear axle, centre of mass 1 m ahead. Trailer i: origin at its axle, hitch
+ * 1.2 m ahead of it, hinged 0.5 m behind the previous body's axle. */
+ap_model *tm_trailers(int N, ap_path path) {
+  ap_builder *b = NULL;
+  char name[64];
+  check(ap_builder_create("trailers", &b), "builder");
+  int prev = add_box(b, "car", 1000.0, 1.0, 1500.0);
+  ap_joint_def j = ap_joint_def_default();
+  j.name = "car", j.kind = AP_JOINT_PLANAR, j.child = prev;
+  check(ap_builder_add_joint(b, &j, NULL), "car joint");
+  knife(b, "car.axle", prev);
+  for (int i = 0; i < N; i++) {
+    snprintf(name, sizeof name, "trailer%d", i + 1);
+    int id = add_box(b, name, 300.0, 0.4, 250.0);
+    j = ap_joint_def_default();
+    j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = prev, j.child = id;
+    j.parent_frame.pos[0] = -0.5, j.child_frame.pos[0] = 1.2;   /* axis: z (default) */
+    check(ap_builder_add_joint(b, &j, NULL), name);
+    snprintf(name, sizeof name, "trailer%d.axle", i + 1);
+    knife(b, name, id);
+    prev = id;
+  }
+  return compile(b, path);
+}
+
+ap_model *tm_disks(int N, ap_path path) {
+  ap_builder *b = NULL;
+  char name[64];
+  check(ap_builder_create("disks", &b), "builder");
+  for (int i = 0; i < N; i++) {
+    snprintf(name, sizeof name, "disk%d", i + 1);
+    ap_body_def d = ap_body_def_default();
+    d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = 0.5;
+    check(ap_body_def_uniform(&d, 1.0), name);
+    int id = -1;
+    check(ap_builder_add_body(b, &d, &id), name);
+    ap_joint_def j = ap_joint_def_default();
+    j.name = name, j.kind = AP_JOINT_PLANE_CONTACT, j.child = id;
+    check(ap_builder_add_joint(b, &j, NULL), name);
+    ap_constraint_def c = ap_constraint_def_default();
+    snprintf(name, sizeof name, "roll%d", i + 1);
+    c.name = name, c.kind = AP_CON_ROLLING, c.body = id;
+    check(ap_builder_add_constraint(b, &c, NULL), name);
+  }
+  ap_effect_def e = ap_effect_def_default();   /* gravity on every body */
+  check(ap_builder_add_effect(b, &e, NULL), "gravity");
+  return compile(b, path);
+}
+
+static void complete(const ap_model *m, double *q, const int *given, double *v) {
+  ap_data *d = NULL;
+  check(ap_data_create(m, &d), "data");
+  d->t = 0;
+  if (ap_body_complete_speeds(m, d, q, given, v) != AP_OK) die("initial speeds", d->msg);
+  ap_data_free(d);
+}
+
+void tm_trailers_state(const ap_model *m, int N, double *q, double *v) {
+  int n = ap_model_n(m), k = ap_model_k(m);
+  int *given = xcalloc((size_t)k, sizeof *given);
+  memset(q, 0, sizeof(double) * (size_t)n);
+  memset(v, 0, sizeof(double) * (size_t)k);
+  for (int i = 0; i < N; i++) q[3 + i] = 0.15 * ((i % 2) ? -1.0 : 1.0);   /* zig-zag */
+  v[0] = 2.0, v[2] = 0.3;     /* car: 2 m/s forward, turning at 0.3 rad/s */
+  given[0] = given[2] = 1;
+  complete(m, q, given, v);
+  free(given);
+}
+
+void tm_disks_state(const ap_model *m, int N, double *q, double *v) {
+  int k = ap_model_k(m);
+  int *given = xcalloc((size_t)k, sizeof *given);
+  const double ex[3] = {1, 0, 0};
+  for (int i = 0; i < N; i++) {
+    double *qi = q + 6 * i, *vi = v + 5 * i;
+    double tilt = (50.0 + 20.0 * i / N) * 3.14159265358979323846 / 180.0;
+    double R[9], spin = -6.0 + 0.5 * (i % 3), turn = 4.0;
+    qi[0] = 2.0 * (i % 32), qi[1] = 2.0 * (i / 32);
+    ap_quat_from_axis_angle(ex, tilt, qi + 2);   /* disk axis tilted from the vertical */
+    ap_quat_to_matrix(qi + 2, R);
+    vi[0] = vi[1] = 0;
+    for (int r = 0; r < 3; r++) vi[2 + r] = spin * R[6 + r] + (r == 2 ? turn : 0.0);
+    given[5 * i + 2] = given[5 * i + 3] = given[5 * i + 4] = 1;
+  }
+  complete(m, q, given, v);
+  free(given);
+}
