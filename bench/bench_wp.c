@@ -1,5 +1,5 @@
 /* bench_wp: work-precision sweep of Appell on the reference problems with exact answers
- * (REFERENCES.md: knife edge, Chaplygin sleigh, ball on a turntable at constant and at
+ * (docs/references.md: knife edge, Chaplygin sleigh, ball on a turntable at constant and at
  * time-varying Omega, particle on a rotating line in its 3-D form with rheonomic rows) and on
  * the rolling disk (a body-layer model: disk on a plane-contact joint, rolling, gravity), side
  * by side with "the limit": each problem's hand-reduced closed-form ODE integrated by exactly
@@ -82,7 +82,7 @@ static void pos_first(const wp_problem *pr, double t, const double *q, double *p
   for (int i = 0; i < pr->npos; i++) pos[i] = q[i];
 }
 
-/* Knife edge by hand: y = (x, y, phi, u, w); u' = G cos phi, w' = 0 (REFERENCES §1). */
+/* Knife edge by hand: y = (x, y, phi, u, w); u' = G cos phi, w' = 0 (docs/references.md §1). */
 static int knife_hand(double t, const double *y, double *yd, void *user) {
   const wp_problem *pr = user;
   double G = pr->p.knife.grav * sin(pr->p.knife.alpha), c = cos(y[2]), s = sin(y[2]);
@@ -91,7 +91,7 @@ static int knife_hand(double t, const double *y, double *yd, void *user) {
   return 0;
 }
 
-/* Sleigh by hand: y = (x, y, theta, u, w); u' = a w^2, J w' = -m a u w (REFERENCES §2). */
+/* Sleigh by hand: y = (x, y, theta, u, w); u' = a w^2, J w' = -m a u w (docs/references.md §2). */
 static int sleigh_hand(double t, const double *y, double *yd, void *user) {
   const rs_sleigh *p = &((const wp_problem *)user)->p.sleigh;
   double J = p->I + p->m * p->a * p->a;
@@ -121,12 +121,12 @@ static int line_hand(double t, const double *y, double *yd, void *user) {
   return 0;
 }
 
-/* Rolling disk by hand (REFERENCES §4, derived again with the frames below). Heading frame:
+/* Rolling disk by hand (docs/references.md §4, derived anew in these frames). Heading frame:
  * y1 = (cos psi, sin psi, 0), y2 = e_z x y1; lean frame: l1 = y1, l2 = cos(theta) y2 +
  * sin(theta) e_z (the disk axis; theta = tilt from upright), l3 = l1 x l2 (towards the centre
  * from the contact point, C - P = r l3). Disk angular velocity w = w1 l1 + w2 l2 + w3 l3 with
  * w1 = theta', w3 = psi' cos(theta); rolling gives v_C = r (w2 l1 - w1 l2). Newton-Euler
- * about the centre with A = m r^2/4, C = m r^2/2 (REFERENCES' w_n = -w2, w_a = w3):
+ * about the centre with A = m r^2/4, C = m r^2/2 (the reference's w_n = -w2, w_a = w3):
  *   (A + m r^2) w1' = (C + m r^2) w2 w3 - A w3^2 tan(theta) + m g r sin(theta)
  *   (C + m r^2) w2' = -m r^2 w1 w3,      A w3' = A w1 w3 tan(theta) - C w1 w2.
  * y = (x, y, psi, theta, w1, w2, w3); (x, y) the centre. */

@@ -1,4 +1,4 @@
-/* Hoffmann's two-rod pendulum and Kron's method (REFERENCES.md §6).
+/* Hoffmann's two-rod pendulum and Kron's method (docs/references.md §6).
  *
  * Two uniform rods hinged together, the upper one hung from a fixed point, a horizontal force F
  * at the lower rod's midpoint. Kron: the metric of the connected system is C^T M C of the

@@ -1,4 +1,4 @@
-/* Knife edge (skate) on an inclined plane (REFERENCES.md §1).
+/* Knife edge (skate) on an inclined plane (docs/references.md §1).
  *
  * A skate on a slope of angle alpha cannot move across its blade: A = [sin phi, -cos phi, 0].
  * Turning at a constant rate w it does not slide down on average but drifts sideways at

@@ -1,4 +1,4 @@
-/* Rolling disk (REFERENCES.md §4) built from a body: the default demo of the body layer.
+/* Rolling disk (docs/references.md §4) built from a body: the default demo of the body layer.
  *
  * A thin uniform disk (radius 0.3 m, mass 1.5 kg) rests on the ground plane on a plane-contact
  * joint: coordinates x, y of its centre and a unit quaternion; its height is r |sin| of the

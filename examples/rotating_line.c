@@ -1,4 +1,4 @@
-/* Particle on a rotating inclined line (REFERENCES.md §5): rheonomic, two ways.
+/* Particle on a rotating inclined line (docs/references.md §5): rheonomic, two ways.
  *
  * A bead slides on a line through the origin at angle alpha from the vertical, the line
  * turning about the vertical at w. (a) Reduced: one coordinate r with the rheonomic

@@ -1,11 +1,11 @@
-/* Chaplygin sleigh (REFERENCES.md §2): the main demo.
+/* Chaplygin sleigh (docs/references.md §2): the main demo.
  *
  * A rigid body on a horizontal plane rests on a blade at P that cannot slide sideways; its centre
  * of mass sits a distance a ahead of P. The math-level system (tests/refsys.c) hands Appell the
  * non-diagonal metric g(theta), its derivative dg/dtheta (h by Christoffel symbols) and the
  * blade row A = [-sin theta, cos theta, 0]. The run is compared with the closed form
  * u = V tanh(k t + c), w = w0 cosh c / cosh(k t + c), theta by the Gudermannian and x, y by
- * quadrature, and ends with the sample values printed in REFERENCES.md.
+ * quadrature, and ends with the sample values printed in docs/references.md.
  *
  * Exits non-zero if a position is off by more than ERR_BOUND = 1e3 * rtol. */
 #include <math.h>
@@ -71,13 +71,13 @@ int main(void) {
            q[1], err, resid);
   }
 
-  /* The sample of REFERENCES.md at t = 15. */
+  /* The sample of docs/references.md at t = 15. */
   const double *q = ap_sim_q(s), *v = ap_sim_v(s);
   const double ref[5] = {0.29668571025517837, 0.03144510558402052, 4.672022704815886,
                          -1.5814737061340092, -3.0441567427652534};
   const double got[5] = {v[0] * cos(q[2]) + v[1] * sin(q[2]), v[2], q[2], q[0], q[1]};
   const char *name[5] = {"u", "w", "theta", "x", "y"};
-  printf("\nREFERENCES.md sample at t = 15:\n");
+  printf("\ndocs/references.md sample at t = 15:\n");
   for (int j = 0; j < 5; j++) {
     printf("  %-6s computed %22.17f  printed %22.17f  diff %9.2e\n", name[j], got[j], ref[j],
            got[j] - ref[j]);

@@ -1,4 +1,4 @@
-/* Ball on a rotating turntable (REFERENCES.md §3): an affine, rheonomic constraint.
+/* Ball on a rotating turntable (docs/references.md §3): an affine, rheonomic constraint.
  *
  * A uniform ball rolls without slipping on a table turning at Omega(t) = Omega0 + dOmega t.
  * The free term a0 = (Omega y, -Omega x) of the rolling rows carries the table's motion. With

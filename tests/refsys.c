@@ -1,12 +1,12 @@
-/* Reference systems with known answers (REFERENCES.md) as math-level systems.
+/* Reference systems with known answers (docs/references.md) as math-level systems.
  *
- * Each problem is a set of callbacks returning the founding paper's objects (DESIGN.md §1):
+ * Each problem is a set of callbacks returning the founding paper's objects (docs/design.md §1):
  * g (k x k), h or dg/dq, Q, A (b x k), a0 and gamma = -(A' v + a0'), all column-major, outputs
  * pre-zeroed by the core so only non-zero entries are written. gamma is the total derivative
  * along the motion at fixed v': the q-dependence enters through q' = v and the explicit
  * t-dependence through the rates of the moving parts (turntable, rotating line).
  *
- * The exact solutions are the closed forms of REFERENCES.md; where a position needs a
+ * The exact solutions are the closed forms of docs/references.md; where a position needs a
  * quadrature (sleigh x, y; turntable with Omega(t)) a composite 16-point Gauss-Legendre rule
  * with panels short against the fastest rate of the integrand is used (error ~1e-15). */
 #include "refsys.h"

@@ -1,9 +1,9 @@
-/* Reference systems with known answers (REFERENCES.md), written by hand as math-level systems.
+/* Reference systems with known answers (docs/references.md), written by hand as math-level systems.
  *
  * Each problem gives: a parameter struct, rs_<problem>_system() filling an ap_system_def with
  * callbacks whose user pointer is the parameter struct (which must outlive the model), the exact
  * solution at time t from an initial state at t = 0, and its invariants. The callbacks return
- * exactly the founding paper's objects (DESIGN.md §1): metric g (k x k, column-major), bias h
+ * exactly the founding paper's objects (docs/design.md §1): metric g (k x k, column-major), bias h
  * or the metric derivative dg/dq, forces Q, constraint rows A (b x k, column-major), free term
  * a0 and gamma = -(A' v + a0') as the total time derivative along the motion at fixed v.
  *
@@ -17,7 +17,7 @@
 #define RS_PI 3.14159265358979323846
 
 /* ------------------------------------------------------------------------------------------ */
-/* 1. Knife edge (skate) on an inclined plane. REFERENCES §1.                                 */
+/* 1. Knife edge (skate) on an inclined plane. docs/references.md §1.                             */
 /* q = (x, y, phi), v = q'; g = diag(m, m, J); Q = (m grav sin(alpha), 0, 0); h = 0;           */
 /* A = [sin phi, -cos phi, 0], a0 = 0. Needs w0 != 0 for the closed form.                     */
 
@@ -40,7 +40,7 @@ void rs_knife_exact(const rs_knife *p, const double q0[3], const double v0[3], d
 double rs_knife_energy(const rs_knife *p, const double *q, const double *v);
 
 /* ------------------------------------------------------------------------------------------ */
-/* 2. Chaplygin sleigh. REFERENCES §2. q = (x, y, theta) of the blade contact point, v = q'.  */
+/* 2. Chaplygin sleigh. docs/references.md §2. q = (x, y, theta) of the blade contact, v = q'.   */
 /* The non-diagonal printed metric; h either from dg/dq (AP_BIAS_CHRISTOFFEL) or from an      */
 /* explicit bias callback h = (-m a w^2 cos theta, -m a w^2 sin theta, 0).                     */
 
@@ -62,7 +62,7 @@ void rs_sleigh_exact(const rs_sleigh *p, const double q0[3], const double v0[3],
 double rs_sleigh_energy(const rs_sleigh *p, const double *q, const double *v);
 
 /* ------------------------------------------------------------------------------------------ */
-/* 3. Ball on a rotating turntable. REFERENCES §3. q = (x, y, a1, a2, a3), v = q' =           */
+/* 3. Ball on a rotating turntable. docs/references.md §3. q = (x, y, a1, a2, a3), v = q' =       */
 /* (x', y', wx, wy, wz). For a uniform sphere the orientation never enters the dynamics       */
 /* (g = diag(m, m, I, I, I) whatever the attitude), so integrating the angular-velocity       */
 /* components a' = (wx, wy, wz) as if they were coordinate rates is a valid math-level system;  */
@@ -92,7 +92,7 @@ void rs_turntable_invariant(const rs_turntable *p, double t, const double *q, co
                             double c[2]);
 
 /* ------------------------------------------------------------------------------------------ */
-/* 4. Particle on a rotating inclined line. REFERENCES §5.                                    */
+/* 4. Particle on a rotating inclined line. docs/references.md §5.                                */
 /* (a) reduced: q = r, k = 1, b = 0, g = m, h = -m s^2 r, Q = -m grav cos(alpha), s = w sin a. */
 /* (b) 3-D: q = p = (X, Y, Z), g = m I, Q = (0, 0, -m grav); the line imposed as two           */
 /*     rheonomic velocity rows n_i . p' + n_i' . p = 0 with                                   */
@@ -118,7 +118,7 @@ double rs_line_jacobi(const rs_line *p, double r, double rd);
 double rs_line_jacobi_3d(const rs_line *p, const double *q3, const double *v3);
 
 /* ------------------------------------------------------------------------------------------ */
-/* 5. Hoffmann's two-rod pendulum (Kron's method). REFERENCES §6.                             */
+/* 5. Hoffmann's two-rod pendulum (Kron's method). docs/references.md §6.                         */
 /* (a) reduced q = (theta, phi): printed g, Q; h from dg/dq (AP_BIAS_CHRISTOFFEL).             */
 /* (b) primitive q = (theta, phi, y, z): M = diag(I1 + m1 a1^2, I2, m2, m2),                   */
 /*     forces (-m1 grav a1 sin theta, 0, F, -m2 grav), h = 0, connection as two velocity rows  */

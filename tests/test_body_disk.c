@@ -1,14 +1,14 @@
-/* The rolling disk from bodies (REFERENCES.md §4): a thin uniform disk (m, r; A = m r^2/4,
+/* The rolling disk from bodies (docs/references.md §4): a thin uniform disk (m, r; A = m r^2/4,
  * C = m r^2/2) on the plane-contact joint, rolling without slip, under gravity.
  *
- * The disk's state is read in REFERENCES.md's variables: the axis a = R e_z has a_z = -sin(theta)
- * (theta = lean; the centre sits r b_up above the contact, b_up the upward unit vector in the
- * disk plane), w_a = w . b_up = psi' cos(theta), w_n = w . a = phi' - psi' sin(theta), and
+ * The disk's state is read in docs/references.md §4's variables: the axis a = R e_z has
+ * a_z = -sin(theta) (theta = lean; the centre sits r b_up above the contact, b_up the upward
+ * unit vector in the disk plane), w_a = w . b_up = psi' cos(theta), w_n = w . a = phi' - psi' sin(theta), and
  * theta' from a' = w x a. Checks (tolerances from rtol 1e-11, atol 1e-13):
- *   - REFERENCES' energy equals T + V of the body model at the same state (round-off, 1e-14);
+ *   - the reference's energy equals T + V of the body model at the same state (round-off, 1e-14);
  *   - energy conserved to 1e-9 relative over 10 s, constraint residual at round-off, in the
  *     minimal and projected modes;
- *   - theta, w_a, w_n follow REFERENCES' three equations (integrated as a math-level system by
+ *   - theta, w_a, w_n follow the reference's three equations (integrated as a math-level system by
  *     the same driver) to 1e-8 over 10 s;
  *   - steady circular rolling (theta' = 0, Omega, w_n from the steady relation) held for 5 s:
  *     theta, w_a, w_n constant to 1e-8;
@@ -35,7 +35,7 @@ static double ref_energy(const bs_disk *p, double th, double thd, double wa, dou
          p->m * p->grav * p->r * cos(th);
 }
 
-/* ---- REFERENCES §4's equations as a math-level system ---------------------------------------
+/* ---- docs/references.md §4's equations as a math-level system -------------------------------
  * q = (theta, alpha, beta), v = (theta', w_a, w_n) with alpha' = w_a, beta' = w_n pseudo-
  * coordinates that never enter the dynamics; g = diag(A + m r^2, A, C + m r^2),
  * h = ((C + m r^2) w_a w_n + A w_a^2 tan(theta), -theta' (C w_n + A w_a tan(theta)),
@@ -67,7 +67,7 @@ static ap_sim *start(const ap_model *m, ap_mode mode, const char *method, const 
   return bs_start(m, mode, method, RTOL, ATOL, q0, v0);
 }
 
-/* ---- energy over 10 s, and REFERENCES' equations --------------------------------------------- */
+/* ---- energy over 10 s, and the reference's equations ----------------------------------------- */
 
 static void test_energy_and_equations(void) {
   bs_disk p = bs_disk_default();
@@ -78,14 +78,14 @@ static void test_energy_and_equations(void) {
   AP_CHECK_EQ_INT(bs_disk_state(m, d, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, q0, v0), AP_OK);
   bs_disk_read(q0, v0, &th, &thd, &wa, &wn);
   double E0 = bs_energy(m, d, q0, v0), Er = ref_energy(&p, th, thd, wa, wn);
-  printf("rolling disk: theta %.3f theta' %.3f w_a %.3f w_n %.3f; energy %.15f (REFERENCES: "
+  printf("rolling disk: theta %.3f theta' %.3f w_a %.3f w_n %.3f; energy %.15f (reference: "
          "%.15f)\n", th, thd, wa, wn, E0, Er);
   AP_CHECK_NEAR(E0, Er, 1e-14 * fabs(Er));
   AP_CHECK_NEAR(th, 0.25, 1e-14);
   AP_CHECK_NEAR(thd, 0.4, 1e-14);
 
   ap_system_def def = ap_system_def_default();
-  def.name = "REFERENCES 4", def.n = def.k = 3, def.metric = ref_metric, def.bias = ref_bias;
+  def.name = "reference 4", def.n = def.k = 3, def.metric = ref_metric, def.bias = ref_bias;
   def.force = ref_force, def.user = &p;
   ap_model *mr = NULL;
   char msg[256];
@@ -116,7 +116,7 @@ static void test_energy_and_equations(void) {
     }
     ap_sim_stats st;
     ap_sim_get_stats(s, &st);
-    printf("  %-9s %-9s 10 s: energy drift %.1e, REFERENCES' equations %.1e, residual %.1e, "
+    printf("  %-9s %-9s 10 s: energy drift %.1e, the reference's equations %.1e, residual %.1e, "
            "steps %ld, switches %ld\n", mode ? "projected" : "minimal", methods[mode], dE, dref,
            st.max_residual, st.steps, st.partition_switches);
     AP_CHECK_LE(dE, 1e-9);

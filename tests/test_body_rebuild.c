@@ -6,7 +6,7 @@
  * round-off (ROUND = 1e-13 relative to max(1, |entry|): both sides evaluate the same closed
  * expressions through different sums of a few O(1) products, so differences are a few ulps).
  * Then the body models are integrated at rtol 1e-11 and compared with the closed forms of
- * REFERENCES.md (POS_TOL = 1e-8, the target REFERENCES.md gives for rtol 1e-11 over these
+ * docs/references.md (POS_TOL = 1e-8, the target docs/references.md gives for rtol 1e-11 over these
  * times) or, for Hoffmann's pendulum, with the hand-derived reduced system integrated the same
  * way:
  *   skate on an incline     planar joint on an inclined frame + knife edge + gravity
@@ -169,7 +169,7 @@ static void test_sleigh(void) {
   }
   printf("sleigh:    g h Q A a0 gamma agree to %.1e\n", e);
   AP_CHECK_LE(e, ROUND);
-  /* REFERENCES.md §2 sample: m = I = a = 1, u0 = 0.1, w0 = 0.2, theta0 = pi, at t = 15 */
+  /* docs/references.md §2 sample: m = I = a = 1, u0 = 0.1, w0 = 0.2, theta0 = pi, at t = 15 */
   const double ref[5] = {-1.5814737061340092, -3.0441567427652534, 4.672022704815886,
                          0.29668571025517837, 0.03144510558402052};
   double q0[3], v0[3];

@@ -179,6 +179,36 @@ static void test_targets(void) {
   AP_CHECK_EQ_INT(files_like("link.csv"), 0);
 }
 
+/* appell linearize --csv to a FIFO is written in place (the eigenvalue table reaches the
+ * reader), and to a link to a regular file through the link: its temporary file renamed over
+ * the target replaced the FIFO (and, run as root, /dev/null or /dev/full) with a regular
+ * file, and the link with a file. */
+static void test_linearize_targets(void) {
+  char disk[1200], fifo[1300], file[1300], link[1300];
+  ct_source(disk, sizeof disk, "examples/scenes", "rolling_disk.yaml");
+  snprintf(fifo, sizeof fifo, "%s/eig.fifo", ct_tmp);
+  snprintf(file, sizeof file, "%s/eig.csv", ct_tmp);
+  snprintf(link, sizeof link, "%s/eig-link.csv", ct_tmp);
+  AP_CHECK_EQ_INT(mkfifo(fifo, 0600), 0);
+  int fd = open(fifo, O_RDONLY | O_NONBLOCK);
+  const char *to_fifo[] = {ct_bin, "linearize", disk, "--csv", fifo, NULL};
+  AP_CHECK_EQ_INT(ct_run(to_fifo), 0);
+  char buf[32] = "";
+  AP_CHECK(fd >= 0 && read(fd, buf, 17) == 17 && strncmp(buf, "index,re,im,rcond", 17) == 0);
+  struct stat st;
+  AP_CHECK(lstat(fifo, &st) == 0 && S_ISFIFO(st.st_mode));
+  if (fd >= 0) close(fd);
+  unlink(fifo);
+  FILE *old = fopen(file, "w");
+  if (old) fputs("old\n", old), fclose(old);
+  AP_CHECK_EQ_INT(symlink("eig.csv", link), 0);
+  const char *to_link[] = {ct_bin, "linearize", disk, "--csv", link, NULL};
+  AP_CHECK_EQ_INT(ct_run(to_link), 0);
+  AP_CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
+  AP_CHECK_EQ_INT(strncmp(first_line(file), "index,re,im,", 12), 0);
+  unlink(link), unlink(file);
+}
+
 static void set_umask(void *user) { umask((mode_t)(size_t)user); }
 
 static void test_full_and_modes(void) {
@@ -217,6 +247,7 @@ int main(void) {
   snprintf(out, sizeof out, "%s/long.csv", ct_tmp);
   test_targets();
   test_full_and_modes();
+  test_linearize_targets();
   test_signals();
   ct_finish();
   return ap_check_finish("test_cli_output");

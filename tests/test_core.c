@@ -389,7 +389,7 @@ static void test_initial_speeds(void) {
 }
 
 /* CVODE in projected mode: BDF projects natively (no restarts, history kept), Adams is refused
- * with a message saying why. The sleigh against its closed form (REFERENCES.md §2). */
+ * with a message saying why. The sleigh against its closed form (docs/references.md §2). */
 static void test_cvode_projected(void) {
   rs_sleigh sp = {1.0, 1.0, 1.0};
   double q0[3], v0[3], qe[3];

@@ -12,7 +12,7 @@
  * The DAE's velocity-constraint residual is what IDA's Newton leaves: 10 (rtol |v| + atol).
  *
  * Also: consistent initialization leaves the DAE residual at round-off at t0, and the knife
- * edge's multiplier equals the closed form lambda = -m w u - m G sin(phi) (REFERENCES.md §1)
+ * edge's multiplier equals the closed form lambda = -m w u - m G sin(phi) (docs/references.md §1)
  * in every mode. */
 #include <math.h>
 #include <stdio.h>
@@ -129,7 +129,7 @@ static void test_consistent_initialization(void) {
   ap_model_free(m);
 }
 
-/* The knife edge's multiplier against REFERENCES.md §1 in each mode. */
+/* The knife edge's multiplier against docs/references.md §1 in each mode. */
 static void test_knife_multiplier(void) {
   rs_knife kp = {1.5, 0.2, 9.81, 0.3};
   double q0[3], v0[3];

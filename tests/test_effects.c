@@ -1,4 +1,4 @@
-/* test_effects: the library does only the work a scene asks for (DESIGN.md §1 "Effects:
+/* test_effects: the library does only the work a scene asks for (docs/design.md §1 "Effects:
  * simulate only what the scene calls for"; issue 5 "Effects"). Proven by the counters of the
  * data struct (ap_data.cnt) and of the effects (ap_body_effect_count), never by timing:
  *

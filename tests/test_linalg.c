@@ -1,6 +1,6 @@
-/* Tests of lib/linalg (DESIGN.md §1 "Choosing B"): partitioned and orthonormal null-space bases
- * with their particular solutions, rank decisions and consistency residuals, Cholesky with its
- * condition estimate, the congruence B^T g B, the reactions' least squares, gemv.
+/* Tests of lib/linalg (docs/design.md §1 "Choosing B"): partitioned and orthonormal null-space
+ * bases with their particular solutions, rank decisions and consistency residuals, Cholesky with
+ * its condition estimate, the congruence B^T g B, the reactions' least squares, gemv.
  *
  * Two paths: the whole suite runs twice, on the LAPACK/BLAS path (ap_la_set_small_limit(0)) and
  * on the native small-size kernels (limit INT_MAX), from the same generator seed, so both meet

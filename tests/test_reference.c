@@ -1,4 +1,4 @@
-/* Reference problems (REFERENCES.md) against the engine.
+/* Reference problems (docs/references.md) against the engine.
  *
  * Part 1 checks the hand-written systems of refsys.c on their own, without integrating: the
  * closed forms satisfy q' = v, the constraints and the equations of motion (g v' + h - Q lies in
@@ -11,7 +11,7 @@
  *   - positions within POS_TOL = 1e3 * rtol of the closed form, per component relative to
  *     max(1, |q_exact|) (the integrator controls the local error to ~rtol per unit step; 1e3
  *     allows for the accumulation over ~1e3-1e4 steps and the growth of errors along the
- *     flow, and equals the 1e-8 target of REFERENCES.md at rtol 1e-11);
+ *     flow, and equals the 1e-8 target of docs/references.md at rtol 1e-11);
  *   - the velocity-constraint residual max |A v + a0| <= 1e-12 (minimal) or 1e-10 (projected)
  *     relative to max(1, sum_j |A_ij v_j| + |a0_i|), recomputed here from the callbacks;
  *   - conserved quantities within 1e-9 relative;
@@ -638,7 +638,7 @@ static void test_turntable(void) {
              (rs_turntable){1.0, 0.1, 0.4, 0.5, 0.1}, 0.3, -0.1, 1.0, -2.0, 3.0);
   turn_setup(&tc[3], &c[3], "turntable-rheo", "turntable Omega(t) hollow",
              (rs_turntable){2.0, 0.2, 2.0 / 3.0, -1.0, 0.15}, 0.5, 0.5, 0.3, 0.8, 0.0);
-  /* The constant-Omega closed form is REFERENCES' circle: radius |z0'|/kappa, centre
+  /* The constant-Omega closed form is the reference's circle: radius |z0'|/kappa, centre
    * z0 + i z0'/kappa. */
   {
     double kap = 0.4 / 1.4 * 2.0, q[5], v[5];

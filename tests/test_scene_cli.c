@@ -66,6 +66,27 @@ static void test_good_run(const char *csv) {
   AP_CHECK_EQ_INT(stray_files(), 0);
 }
 
+/* An output interval longer than t_end - t0 by more than 1e9: the rows are t0 and t_end, and
+ * the run goes to t_end (a row count of ceil(T / dt - 1e-9) = 0 wrote the t0 row only and
+ * reported success without simulating). */
+static void test_long_interval(const char *csv) {
+  char scene[1200];
+  ct_source(scene, sizeof scene, "examples/scenes", "rolling_disk.yaml");
+  const char *argv[] = {ct_bin, "run", scene, "--t-end", "0.5", "--interval", "1e9", "--out",
+                        csv, NULL};
+  AP_CHECK_EQ_INT(ct_run(argv), 0);
+  AP_CHECK(ct_log_has("t = 0 .. 0.5, 2 rows"));
+  FILE *f = fopen(csv, "r");
+  AP_CHECK(f != NULL);
+  if (!f) return;
+  char line[8192], last[8192] = "";
+  int rows = -1;
+  while (fgets(line, sizeof line, f)) rows++, memcpy(last, line, sizeof last);
+  fclose(f);
+  AP_CHECK_EQ_INT(rows, 2);
+  AP_CHECK(strncmp(last, "0.5,", 4) == 0);
+}
+
 static void expect_failure(const char *scene, const char *extra, int code, const char *csv) {
   const char *argv[] = {ct_bin, "run", scene, "--out", csv, "--quiet", extra ? "--set" : NULL,
                         extra, NULL};
@@ -166,6 +187,19 @@ static void test_plot(const char *csv) {
   AP_CHECK(ct_log_has("did you mean 'disk.contact.x'?") || ct_log_has("did you mean 'disk.contact.y'?"));
   const char *ext[] = {ct_bin, "plot", csv, "--y", "energy", "-o", "fig.jpg", NULL};
   AP_CHECK_EQ_INT(ct_run(ext), 2);
+  /* A figure in a missing directory, or a directory: refused before gnuplot runs (gnuplot
+   * could not open it and wrote the PNG to standard output, onto the terminal, exit 1). */
+  char nodir[1200], isdir[1200];
+  snprintf(nodir, sizeof nodir, "%s/no/such/dir/x.png", ct_tmp);
+  snprintf(isdir, sizeof isdir, "%s/d.png", ct_tmp);
+  const char *missing[] = {ct_bin, "plot", csv, "--y", "energy", "-o", nodir, NULL};
+  AP_CHECK_EQ_INT(ct_run(missing), 2);
+  AP_CHECK(ct_log_has("no such directory") && !ct_log_has("PNG"));
+  AP_CHECK(mkdir(isdir, 0700) == 0);
+  const char *dir[] = {ct_bin, "plot", csv, "--y", "energy", "-o", isdir, NULL};
+  AP_CHECK_EQ_INT(ct_run(dir), 2);
+  AP_CHECK(ct_log_has("is a directory"));
+  rmdir(isdir);
   if (system("command -v gnuplot >/dev/null 2>&1") != 0) {
     printf("gnuplot not installed: plot drawing not tested\n");
     return;
@@ -256,6 +290,7 @@ int main(void) {
   snprintf(csv, sizeof csv, "%s/disk.csv", ct_tmp);
   test_help();
   test_good_run(csv);
+  test_long_interval(csv);
   test_failures();
   test_check();
   test_not_finite();

@@ -10,7 +10,7 @@
  *                     the first form coasting likewise (same closed form)
  *  car_ackermann      the rear-axle midpoint on the circle of radius L / tan(delta); parallel
  *                     steering refused with the contradicting row named
- *  sleigh_wheel       the Chaplygin sleigh's closed form (REFERENCES §2), m = I = a = 1
+ *  sleigh_wheel       the Chaplygin sleigh's closed form (docs/references.md §2), m = I = a = 1
  *  skate_wheel        the knife edge on an incline's closed form (§1)
  * Each in minimal and projected mode; the errors are asserted against bounds that follow from
  * rtol (stated with each check), and the step counts are printed. The DAE mode of the robots

@@ -38,6 +38,8 @@ static const char help[] =
     "  --free A,B,...      state variables the Newton may move (steady motions)\n"
     "  --inputs A,B,...    model speeds receiving an input force or torque (columns of B)\n"
     "  --keep-cyclic       keep the cyclic coordinates in the eigenvalue problem\n"
+    "  --derivatives complex-step|ridders   how A is differentiated (default: complex step,\n"
+    "                      exact to round-off, where the model allows it; else Ridders')\n"
     "  --csv FILE          write the eigenvalues as CSV (a sweep: one row per value)\n"
     "  --plot FIG.png|svg  draw real and imaginary parts against the swept parameter\n"
     "  --set PATH=VALUE    override a scalar of the scene (repeatable)\n"
@@ -87,8 +89,8 @@ static int list_opt(char ***dst, const char *v) {
 
 static int parse(int argc, char **argv, lin_opts *o) {
   static const char *const known[] = {"--about", "--speed", "--sweep", "--states", "--free",
-                                      "--inputs", "--keep-cyclic", "--csv", "--plot", "--set",
-                                      "--help", NULL};
+                                      "--inputs", "--keep-cyclic", "--derivatives", "--csv",
+                                      "--plot", "--set", "--help", NULL};
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;
     int r = 0;
@@ -112,6 +114,11 @@ static int parse(int argc, char **argv, lin_opts *o) {
       if (list_opt(&o->free, v)) return -1;
     } else if (r == 0 && (r = cli_opt(argc, argv, &i, "--inputs", &v)) > 0) {
       if (list_opt(&o->inputs, v)) return -1;
+    } else if (r == 0 && (r = cli_opt(argc, argv, &i, "--derivatives", &v)) > 0) {
+      if (strcmp(v, "complex-step") && strcmp(v, "ridders"))
+        return fprintf(stderr, "appell linearize: --derivatives complex-step or ridders, not "
+                       "'%s'\n", v), -1;
+      o->method = strcmp(v, "ridders") == 0 ? AP_LIN_RIDDERS : AP_LIN_COMPLEX_STEP;
     } else if (r == 0 && (r = cli_opt(argc, argv, &i, "--csv", &v)) > 0) o->csv = v;
     else if (r == 0 && (r = cli_opt(argc, argv, &i, "--plot", &v)) > 0) o->plot = v;
     else if (r == 0 && (r = cli_opt(argc, argv, &i, "--set", &v)) > 0) {

@@ -20,6 +20,7 @@ typedef struct lin_opts {
   int count;
   char **states, **free, **inputs;   /* NULL-terminated, or NULL */
   int keep_cyclic;
+  int method;              /* --derivatives: ap_lin_method; 0 = AP_LIN_AUTO (the default) */
 } lin_opts;
 
 int lin_run(lin_opts *o);

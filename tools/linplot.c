@@ -1,12 +1,17 @@
 /* appell linearize: CSV files and the eigenvalue figure.
  *
- * CSV files are written to a temporary file and renamed over the target only when complete.
+ * CSV files are written to a temporary file and renamed over the target only when complete;
+ * a FIFO or a device (/dev/null) is written in place, and a link to a regular file keeps being
+ * a link (the file it names is replaced), as appell run --out does.
  * Sweep CSV: the parameter, then re_i and im_i of each tracked eigenvalue (row i of the sweep
  * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension)
  * draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
  * the same colour, with a vertical line at each characteristic point: the classic picture of
  * eigenvalues against speed. */
+#define _XOPEN_SOURCE 700   /* realpath */
+
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,11 +24,14 @@
 #include "linearize.h"
 
 /* Output files are written to FILE.appell-tmp.PID and renamed over FILE only when complete,
- * so that no partial file is left as if it were whole. */
+ * so that no partial file is left as if it were whole. A target that exists and is not a
+ * regular file is written in place (direct): renaming over /dev/null, run as root, would
+ * replace the device with a regular file. */
 typedef struct out_file {
-  const char *target;
-  char tmp[4200];
+  char target[4200];
+  char tmp[4300];
   FILE *f;
+  int direct;
 } out_file;
 
 int lin_check_target(const char *opt, const char *file, const char *scene) {
@@ -41,9 +49,14 @@ int lin_check_target(const char *opt, const char *file, const char *scene) {
 }
 
 static FILE *open_out(out_file *o, const char *file) {
-  o->target = file;
-  snprintf(o->tmp, sizeof o->tmp, "%s.appell-tmp.%ld", file, (long)getpid());
-  o->f = fopen(o->tmp, "w");
+  struct stat st;
+  char real[PATH_MAX];
+  snprintf(o->target, sizeof o->target, "%s", file);
+  o->direct = stat(file, &st) == 0 && !S_ISREG(st.st_mode);
+  if (!o->direct && lstat(file, &st) == 0 && S_ISLNK(st.st_mode) && realpath(file, real))
+    snprintf(o->target, sizeof o->target, "%s", real);   /* the link stays; its file is new */
+  snprintf(o->tmp, sizeof o->tmp, "%s.appell-tmp.%ld", o->target, (long)getpid());
+  o->f = fopen(o->direct ? o->target : o->tmp, "w");
   if (!o->f) fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
   return o->f;
 }
@@ -51,9 +64,10 @@ static FILE *open_out(out_file *o, const char *file) {
 static int close_out(out_file *o) {
   int bad = ferror(o->f) != 0;
   bad |= fclose(o->f) != 0;
-  if (!bad && rename(o->tmp, o->target) == 0) return 0;
-  fprintf(stderr, "appell linearize: cannot write %s: %s\n", o->target, strerror(errno));
-  remove(o->tmp);
+  if (!bad && (o->direct || rename(o->tmp, o->target) == 0)) return 0;
+  fprintf(stderr, "appell linearize: cannot write %s: %s\n", o->target,
+          strerror(errno ? errno : EIO));
+  if (!o->direct) remove(o->tmp);
   return -1;
 }
 

@@ -98,6 +98,7 @@ static int create(run *r) {
   r->def.independent = (const char *const *)r->sec.independent;
   r->def.inputs = (const char *const *)(o->inputs ? o->inputs : r->sec.inputs);
   r->def.speed_dir = r->sec.nspeed ? r->dir : NULL;
+  r->def.method = (ap_lin_method)o->method;
   int rc = ap_lin_create(ap_scene_model(r->sc), &r->def, sr.t0, r->q,
                          r->sec.nspeed ? r->v0 : r->v, &r->L);
   if (rc != AP_OK) snprintf(r->msg, sizeof r->msg, "%s", ap_lin_message(r->L));
@@ -155,8 +156,15 @@ static void print_point(const run *r) {
     printf(" %s%s", ap_lin_state_name(L, i), ap_lin_is_cyclic(L, i) ? " (cyclic)" : "");
   printf("\nrates        (non-zero only for cyclic coordinates at a steady motion)\n");
   for (int i = 0; i < nx; i++) printf("  %-24s %14.6g\n", ap_lin_state_name(L, i), F[i]);
-  printf("state matrix A = dF/dx (row: rate of the state, column: the state); largest Ridders "
-         "error estimate %.3g (largest entry %.3g)\n", max_abs(E, (size_t)nx * nx),
+  if (ap_lin_method_used(L) == AP_LIN_COMPLEX_STEP)
+    printf("derivatives  complex step (exact to round-off)\n");
+  else if (ap_lin_fallback(L)[0])
+    printf("derivatives  Ridders' extrapolated differences: no complex step, %s\n",
+           ap_lin_fallback(L));
+  else
+    printf("derivatives  Ridders' extrapolated differences\n");
+  printf("state matrix A = dF/dx (row: rate of the state, column: the state); largest error "
+         "estimate %.3g (largest entry %.3g)\n", max_abs(E, (size_t)nx * nx),
          max_abs(A, (size_t)nx * nx));
   for (int i = 0; i < nx; i++) {
     printf("  %-24s", ap_lin_state_name(L, i));

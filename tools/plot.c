@@ -3,12 +3,16 @@
  * Reads the header row, checks every requested column (with "did you mean"), writes a gnuplot
  * script to gnuplot's standard input (pngcairo or svg terminal, chosen by the extension of
  * -o) and waits for it. Columns are addressed by number in the script, so names need no
- * quoting; file names are refused if they contain a quote or a newline. Exit 2 for bad input,
- * 1 when gnuplot is missing or fails. */
+ * quoting; file names are refused if they contain a quote or a newline, and a figure whose
+ * directory is missing, or that is a directory, before gnuplot runs (gnuplot would go on and
+ * write the figure to its standard output, which is sent to /dev/null in any case). Exit 2 for
+ * bad input, 1 when gnuplot is missing or fails. */
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -124,6 +128,8 @@ static int gnuplot(const plot_opts *o, int xc, const int *yc) {
   if (pid == 0) {
     dup2(fd[0], STDIN_FILENO);
     close(fd[0]), close(fd[1]);
+    int null = open("/dev/null", O_WRONLY);   /* never the figure on the terminal */
+    if (null >= 0) dup2(null, STDOUT_FILENO), close(null);
     execlp("gnuplot", "gnuplot", (char *)NULL);
     fprintf(stderr, "appell plot: cannot run gnuplot (%s); install the Debian package "
             "gnuplot-nox\n", strerror(errno));
@@ -147,6 +153,23 @@ static int gnuplot(const plot_opts *o, int xc, const int *yc) {
   return EXIT_OK;
 }
 
+/* The figure's directory exists and the figure is not a directory; else a message, exit 2. */
+static int check_figure(const char *out) {
+  struct stat st;
+  if (stat(out, &st) == 0 && S_ISDIR(st.st_mode))
+    return fprintf(stderr, "appell plot: -o %s: is a directory\n", out), EXIT_INPUT;
+  char dir[4096];
+  const char *slash = strrchr(out, '/');
+  size_t len = slash ? (size_t)(slash - out) : 0;
+  if (len >= sizeof dir) return EXIT_OK;
+  snprintf(dir, sizeof dir, "%.*s", (int)len, out);
+  if (slash && len == 0) snprintf(dir, sizeof dir, "/");
+  if (slash && (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)))
+    return fprintf(stderr, "appell plot: -o %s: no such directory '%s'\n", out, dir),
+           EXIT_INPUT;
+  return EXIT_OK;
+}
+
 int cmd_plot(int argc, char **argv) {
   plot_opts o = {.x = "t"};
   int rc = parse(argc, argv, &o);
@@ -158,6 +181,7 @@ int cmd_plot(int argc, char **argv) {
   if (!safe_name(o.csv) || !safe_name(o.out) || (o.title && !safe_name(o.title)))
     return fprintf(stderr, "appell plot: file names and titles must not contain quotes, "
                    "backslashes or newlines\n"), EXIT_INPUT;
+  if (check_figure(o.out) != EXIT_OK) return EXIT_INPUT;
   header h = {0};
   int code = read_header(o.csv, &h) == 0 ? EXIT_OK : EXIT_INPUT;
   int xc = code == EXIT_OK ? column(&h, o.csv, o.x) : 0, yc[MAX_Y];

@@ -202,6 +202,7 @@ static int write_failed(const cli_out *out) {
 
 static int loop(run_state *rs, cli_out *out) {
   long nrows = (long)ceil((rs->run.t_end - rs->run.t0) / rs->run.interval - 1e-9);
+  if (nrows < 1) nrows = 1;   /* an interval past t_end: still the row at t_end (t_end > t0) */
   double last_draw = 0.0;
   int rc = write_row(rs, out->f);
   if (cli_out_failed(out)) return write_failed(out);

@@ -1,5 +1,5 @@
-// bench_simbody: the ball on a turntable (REFERENCES.md §3) and the rolling disk in Simbody 3.7,
-// the C++ multibody engine with nonholonomic constraints, scored like bench_wp scores Appell.
+// bench_simbody: the ball on a turntable (docs/references.md §3) and the rolling disk in Simbody
+// 3.7, the C++ multibody engine with nonholonomic constraints, scored like bench_wp scores Appell.
 //
 // Model: a turntable (MobilizedBody::Pin about ground z, its angle prescribed: Motion::Steady
 // for constant Omega, a Motion::Custom for Omega(t) = Omega0 + dOmega t), and a uniform solid

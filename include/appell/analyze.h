@@ -27,14 +27,22 @@
  * Gauss-Newton drives the speed rows of F and the rows of the freed coordinates to zero.
  * The speed parameter s sets the speeds v_base + s v_dir first (def.speed_dir).
  *
- * Linearization: A = dF/dx by Ridders' extrapolated central differences with an error estimate
- * per entry (works for every model, user callbacks included); the input matrix B = dF/dtau for
- * generalized forces tau on the speeds named in def.inputs, exact (F is affine in tau).
+ * Linearization: A = dF/dx column by column, each entry with an error estimate. By default the
+ * complex step: F evaluated once on x0 + i h e_j (h = 1e-100) through the model's complex-step
+ * build gives column j exactly to round-off, and a second evaluation with another rounding
+ * estimates that round-off. Models with C callbacks of doubles (math-level systems, user
+ * constraints and user effects, state functions without partial derivatives) fall back to
+ * Ridders' extrapolated central differences (ap_lin_method_used and ap_lin_fallback say which
+ * and why); def.method chooses either. The input matrix B = dF/dtau for generalized forces tau
+ * on the speeds named in def.inputs is exact (F is affine in tau).
  * Cyclic coordinates: the largest set C of coordinate states whose columns of A vanish outside
  * the rows of C; the operating point must be steady in the other rows. Eigenvalues, eigenvectors
  * and their reciprocal condition numbers come from LAPACK's dgeevx.
  *
- * All functions return AP_OK or a negative AP_ERR_* code; ap_lin_message has the details. */
+ * All functions return AP_OK or a negative AP_ERR_* code; ap_lin_message has the details. With
+ * L NULL (or an index out of range) the queries give NULL, 0, -1 or, for ap_lin_message, a
+ * fixed text, and the others AP_ERR_ARG; ap_lin_create takes def and v NULL as the defaults
+ * and zero speeds. */
 #ifndef APPELL_ANALYZE_H
 #define APPELL_ANALYZE_H
 
@@ -53,6 +61,14 @@ typedef enum ap_lin_about {
   AP_LIN_EQUILIBRIUM = 1   /* independent speeds zero; every independent coordinate free */
 } ap_lin_about;
 
+/* How the Jacobian A = dF/dx is computed. */
+typedef enum ap_lin_method {
+  AP_LIN_AUTO = 0,         /* complex step where the model has it, else Ridders (default) */
+  AP_LIN_COMPLEX_STEP = 1, /* complex step; AP_ERR_UNSUPPORTED (the message names the element)
+                              when the model cannot be evaluated that way */
+  AP_LIN_RIDDERS = 2       /* Ridders' extrapolated central differences */
+} ap_lin_method;
+
 typedef struct ap_lin_def {
   ap_lin_about about;      /* default AP_LIN_STEADY */
   const char *const *free; /* NULL-terminated names of state variables the Newton may move
@@ -69,6 +85,7 @@ typedef struct ap_lin_def {
   double zero_tol;         /* an entry of A is a structural zero when |A_ij| is within
                               4 times its error estimate plus zero_tol max|A|; default 1e-9 */
   double h0;               /* Ridders' first step, times max(1, |x_j|); default 0.01 */
+  ap_lin_method method;    /* default AP_LIN_AUTO */
 } ap_lin_def;
 
 AP_API ap_lin_def ap_lin_def_default(void);
@@ -109,13 +126,20 @@ AP_API int ap_lin_is_cyclic(const ap_lin *L, int i);
 /* Index of a state by name, -1 if none. */
 AP_API int ap_lin_find_state(const ap_lin *L, const char *name);
 
-/* Column-major matrices after ap_lin_linearize: A (nx x nx), Aerr (nx x nx: Ridders' error
- * estimate of each entry), B (nx x nu), F(x0) (nx: the rates at the point; non-zero only in
- * cyclic rows for a steady motion). */
+/* Column-major matrices after ap_lin_linearize: A (nx x nx), Aerr (nx x nx: the error estimate
+ * of each entry, complex step's round-off or Ridders'), B (nx x nu), F(x0) (nx: the rates at the
+ * point; non-zero only in cyclic rows for a steady motion). */
 AP_API const double *ap_lin_A(const ap_lin *L);
 AP_API const double *ap_lin_A_error(const ap_lin *L);
 AP_API const double *ap_lin_B(const ap_lin *L);
 AP_API const double *ap_lin_rates(const ap_lin *L);
+/* The method of the last linearization: AP_LIN_COMPLEX_STEP or AP_LIN_RIDDERS (AP_LIN_AUTO
+ * before any). */
+AP_API ap_lin_method ap_lin_method_used(const ap_lin *L);
+/* Why the last linearization under AP_LIN_AUTO used Ridders' method (the element that has no
+ * complex-step evaluation: "effect 'drag' is a user effect (a C callback of doubles)"), or ""
+ * when it did not fall back. */
+AP_API const char *ap_lin_fallback(const ap_lin *L);
 
 /* Eigenvalues of the subsystem on the states sel[0..ns-1] (NULL: every state, or the
  * non-cyclic ones when drop_cyclic). The subsystem must be closed: no state outside it may

@@ -14,7 +14,9 @@
  * data and simulation, and the rows do not depend on the number of threads, on the order in
  * which runs finish, or on how a plan is split into slices.
  *
- * docs/sweeps.md describes `appell sweep` and the Python and Dask front ends built on this. */
+ * docs/sweeps.md describes `appell sweep` and the Python and Dask front ends built on this.
+ * NULL or out-of-range arguments: AP_ERR_ARG from the functions that return a status (a NULL
+ * among the overrides included), 0 or NULL from the counts and names. */
 #ifndef APPELL_BATCH_H
 #define APPELL_BATCH_H
 

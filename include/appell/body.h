@@ -9,7 +9,7 @@
  *     g = sum_b J_b^T M_b J_b,   h = sum_b J_b^T (M_b a_b + [w_b x I_b w_b; 0]),   Q,
  *     A, a0 and gamma = -(A' v + a0')
  *
- * from the bodies (DESIGN.md §1 "Holonomic reduction from bodies"; docs/bodies.md).
+ * from the bodies (docs/design.md §1 "Holonomic reduction from bodies"; docs/bodies.md).
  *
  * Conventions: SI units; world z is up and the ground plane is z = 0; vectors "in body axes"
  * are components in the body frame, everything else in world axes; 3 x 3 matrices are
@@ -113,8 +113,8 @@ typedef struct ap_body_def {
 
 AP_API ap_body_def ap_body_def_default(void);
 /* Set mass and the inertia of a uniform solid of def->shape (disk: a thin lamina) about its
- * centre, and put the centre of mass at the body origin. AP_ERR_ARG for a point or no shape,
- * or a non-positive mass. */
+ * centre, and put the centre of mass at the body origin. AP_ERR_ARG for a NULL def, a point,
+ * no shape or an unknown kind, or a mass that is not positive and finite. */
 AP_API int ap_body_def_uniform(ap_body_def *def, double mass);
 
 /* ------------------------------------------------------------------------------------------ */
@@ -319,28 +319,33 @@ AP_API ap_effect_def ap_effect_def_default(void);
 
 typedef struct ap_builder ap_builder;
 
+/* name may be NULL ("bodies"); AP_ERR_ARG when out is NULL. */
 AP_API int ap_builder_create(const char *name, ap_builder **out);
-AP_API void ap_builder_free(ap_builder *b);
+AP_API void ap_builder_free(ap_builder *b);   /* NULL: nothing */
 /* Add an element; *id (may be NULL) receives its id. Definitions are copied (names too);
- * user pointers are kept. Validation happens in ap_builder_compile. */
+ * user pointers are kept. Validation happens in ap_builder_compile. AP_ERR_ARG when b or def
+ * is NULL. */
 AP_API int ap_builder_add_body(ap_builder *b, const ap_body_def *def, int *id);
 AP_API int ap_builder_add_joint(ap_builder *b, const ap_joint_def *def, int *id);
 AP_API int ap_builder_add_constraint(ap_builder *b, const ap_constraint_def *def, int *id);
 AP_API int ap_builder_add_effect(ap_builder *b, const ap_effect_def *def, int *id);
 /* Validate and compile. On failure *out is NULL, the status is AP_ERR_ARG (or AP_ERR_NOMEM)
- * and ap_builder_message names the element and the offending number. The builder may be
- * compiled again or freed; the model does not refer to it. */
+ * and ap_builder_message names the element and the offending number (ids and kinds out of
+ * range included). AP_ERR_ARG when b or out is NULL. The builder may be compiled again or
+ * freed; the model does not refer to it. */
 AP_API int ap_builder_compile(ap_builder *b, ap_model **out);
-AP_API const char *ap_builder_message(const ap_builder *b);
+AP_API const char *ap_builder_message(const ap_builder *b);   /* "" when b is NULL */
 
 /* ------------------------------------------------------------------------------------------ */
-/* Queries on a compiled body model (AP_ERR_ARG for math-level models or bad ids).             */
+/* Queries on a compiled body model (AP_ERR_ARG for a NULL or math-level model, bad ids, NULL  */
+/* required pointers, or a data struct made for another model).                              */
 
-AP_API int ap_model_is_body_model(const ap_model *m);
+AP_API int ap_model_is_body_model(const ap_model *m);   /* 0 for NULL */
 AP_API int ap_model_body_count(const ap_model *m);
-AP_API int ap_model_find_body(const ap_model *m, const char *name);    /* -1 if none */
-AP_API int ap_model_find_coord(const ap_model *m, const char *name);   /* -1 if none */
-AP_API int ap_model_find_speed(const ap_model *m, const char *name);   /* -1 if none */
+/* -1 if none (or m or name is NULL). */
+AP_API int ap_model_find_body(const ap_model *m, const char *name);
+AP_API int ap_model_find_coord(const ap_model *m, const char *name);
+AP_API int ap_model_find_speed(const ap_model *m, const char *name);
 /* Index in q (v) of the joint's first free coordinate (speed); -1 when it has none. */
 AP_API int ap_joint_coord_index(const ap_model *m, int joint);
 AP_API int ap_joint_speed_index(const ap_model *m, int joint);
@@ -372,7 +377,7 @@ AP_API int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body,
 /* Kinetic energy (from the full body velocities) and potential energy of the gravity and
  * spring effects at the data's (t, q, v). Evaluates the kinematics itself. */
 AP_API int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *potential);
-/* How many times effect `effect` was evaluated with this data. */
+/* How many times effect `effect` was evaluated with this data; -1 for bad arguments. */
 AP_API long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect);
 /* A joint force or motor effect at the data's (t, q, v): it adds *tau to Q[*col]. The exact
  * partial derivatives of tau (each output may be NULL): dtau_dq (n entries), dtau_dv (k),
@@ -424,7 +429,7 @@ typedef struct ap_contact_force {
 AP_API int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
                                  int constraint, ap_contact_force *out);
 
-/* Quaternion helpers ([w x y z]). */
+/* Quaternion helpers ([w x y z]). Nothing is written when an argument is NULL. */
 AP_API void ap_quat_from_axis_angle(const double axis[3], double angle, double q[4]);
 AP_API void ap_quat_mul(const double a[4], const double b[4], double out[4]);
 AP_API void ap_quat_to_matrix(const double q[4], double R[9]);

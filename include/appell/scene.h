@@ -60,7 +60,8 @@ AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
  * So does a scene that a simulation would refuse at t0: an expression (drive, ground motion,
  * prescribed speed, applied force) that is not finite at t0 with its first and second
  * derivatives (`1/t`, `log(t-1)`, `abs(t)` at t0 = 0), or equations of motion that are not
- * finite at the initial state (speeds that overflow); msg then names FILE:LINE:COLUMN. */
+ * finite at the initial state (speeds that overflow); msg then names FILE:LINE:COLUMN.
+ * AP_ERR_ARG when s, q0 or v0 is NULL; report and msg may be NULL. */
 AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *report,
                                   size_t report_len, char *msg, size_t msg_len);
 
@@ -73,19 +74,21 @@ AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *rep
 AP_API int ap_scene_check_time(const ap_scene *s, double t, char *msg, size_t msg_len);
 
 /* Output channels: column names of a row (column 0 is "t") and their values at the
- * simulation's current state. */
+ * simulation's current state. Count 0 and name NULL when s is NULL or i out of range; the row
+ * is AP_ERR_ARG for a NULL argument or a simulation of another model. */
 AP_API int ap_scene_output_count(const ap_scene *s);
 AP_API const char *ap_scene_output_name(const ap_scene *s, int i);
 AP_API int ap_scene_output_row(ap_scene *s, ap_sim *sim, double *row);
 
 /* Total mechanical energy (kinetic + potential of gravity and springs) at (t, q, v), and the
- * largest |A v + a0| there. */
+ * largest |A v + a0| there. AP_ERR_ARG when an argument is NULL. */
 AP_API int ap_scene_energy(ap_scene *s, double t, const double *q, const double *v, double *E);
 AP_API int ap_scene_residual(ap_scene *s, double t, const double *q, const double *v,
                              double *resid);
 
 /* 1 when nothing in the scene adds or removes energy: no drivers, damping, applied forces,
- * prescribed non-zero speeds or moving ground; the energy drift then measures the error. */
+ * prescribed non-zero speeds or moving ground; the energy drift then measures the error.
+ * 0 when s is NULL. */
 AP_API int ap_scene_conserves_energy(const ap_scene *s);
 
 /* Outputs of one run, for many runs of one scene at once. ap_scene_output_row, ap_scene_energy
@@ -95,6 +98,7 @@ AP_API int ap_scene_conserves_energy(const ap_scene *s);
  * rows of one scene from different threads at once (the scene and its model are only read;
  * ap_scene_initial_state and ap_sim_create only read them too). The scene must outlive them. */
 typedef struct ap_scene_out ap_scene_out;
+/* (AP_ERR_ARG for a NULL argument, or a simulation of another model.) */
 
 AP_API int ap_scene_out_create(const ap_scene *s, ap_scene_out **out);
 /* The row of ap_scene_output_row (ap_scene_output_count values, column 0 = t) at the
@@ -118,10 +122,12 @@ typedef enum ap_scene_section {
   AP_SCENE_CHANNELS = 4    /* the output channels asked for (coordinates, energy, ...) */
 } ap_scene_section;
 
+/* 0, NULL, NULL when s is NULL, sec unknown or i out of range. */
 AP_API int ap_scene_count(const ap_scene *s, ap_scene_section sec);
 AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec, int i);
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
-/* The scene's name (name: key, default the file name without directory and extension). */
+/* The scene's name (name: key, default the file name without directory and extension); NULL
+ * when s is NULL. */
 AP_API const char *ap_scene_name(const ap_scene *s);
 
 /* The scene's linearize: section (docs/linearize.md): how to find its operating point and what

@@ -1,6 +1,6 @@
 /* Appell: simulation drivers.
  *
- * A simulation integrates one model from an initial state, in one of the modes of DESIGN.md:
+ * A simulation integrates one model from an initial state, in one of the modes of docs/design.md:
  *
  *   AP_MODE_MINIMAL    state (q, e'), partitioned basis frozen during a step, re-partitioned
  *                      between steps when R11 degrades; the constraints hold to round-off.
@@ -75,21 +75,27 @@ typedef struct ap_sim ap_sim;
 
 /* Create a simulation at time t0 with coordinates q0 (n) and speeds v0 (k). Speeds slightly off
  * the constraint set are projected (stats.init_correction says by how much); speeds far off it
- * are refused with AP_ERR_INCONSISTENT. On failure *out is NULL and msg names the problem. */
+ * are refused with AP_ERR_INCONSISTENT. On failure *out is NULL and msg (may be NULL) names
+ * the problem: AP_ERR_ARG for a NULL m, def, q0, v0 or out, an unknown mode or method, or a
+ * setting out of its range. */
 AP_API int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
                          const double *v0, ap_sim **out, char *msg, size_t msg_len);
 
-/* Integrate to tout (>= current time). The stepper stops exactly at tout. On failure the state
- * is left at the last time reached and ap_sim_message says what failed. */
+/* Integrate to tout (finite, >= current time; AP_ERR_ARG otherwise or when s is NULL). The
+ * stepper stops exactly at tout. On failure the state is left at the last time reached and
+ * ap_sim_message says what failed. */
 AP_API int ap_sim_advance(ap_sim *s, double tout);
 
+/* Queries; with s NULL: NaN, NULL, NULL, NULL. */
 AP_API double ap_sim_time(const ap_sim *s);
 AP_API const double *ap_sim_q(const ap_sim *s);    /* (n) */
 AP_API const double *ap_sim_v(const ap_sim *s);    /* (k) */
 /* The pipeline evaluated at the current state (accelerations, metric, basis, ...). */
 AP_API const ap_data *ap_sim_data(const ap_sim *s);
-/* Multipliers at the current state (b entries). */
+/* Multipliers at the current state (b entries) into *lambda (lambda may be NULL); AP_ERR_ARG
+ * when s is NULL. */
 AP_API int ap_sim_reactions(ap_sim *s, const double **lambda);
+/* *st zeroed when s is NULL; nothing written when st is NULL. */
 AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
 
 /* Interrupting a long advance. ap_sim_advance calls poll(t, user) before every internal step,
@@ -99,18 +105,19 @@ AP_API void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st);
  * caller's thread and should be cheap: read a flag (set by a signal handler or another thread
  * through an atomic or sig_atomic_t variable), check a deadline, draw progress. The library
  * installs no signal handler and reads no global state of its own. poll = NULL (the default)
- * removes it. */
+ * removes it. Nothing happens when s is NULL. */
 typedef int (*ap_sim_poll_fn)(double t, void *user);
 AP_API void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user);
+/* The last message; "" when s is NULL. */
 AP_API const char *ap_sim_message(const ap_sim *s);
-/* The first warning of the run, or "" when there is none. A warning is issued when the
- * condition number of G (or R11) times the machine epsilon exceeds rtol: the linear solves
- * then cannot deliver the requested accuracy. It names the matrix, the condition number and
- * the time. */
+/* The first warning of the run, or "" when there is none (or s is NULL). A warning is issued
+ * when the condition number of G (or R11) times the machine epsilon exceeds rtol: the linear
+ * solves then cannot deliver the requested accuracy. It names the matrix, the condition
+ * number and the time. */
 AP_API const char *ap_sim_warning(const ap_sim *s);
-AP_API void ap_sim_free(ap_sim *s);
+AP_API void ap_sim_free(ap_sim *s);   /* NULL: nothing */
 
-/* The cross-check (DESIGN.md §1): the same model run in minimal, projected and DAE modes with
+/* The cross-check (docs/design.md §1): the same model run in minimal, projected and DAE modes with
  * the same tolerances, compared at n_out equally spaced times in (t0, t_end]. Differences are
  * absolute, the largest over all compared times and entries. */
 typedef struct ap_crosscheck_report {
@@ -124,7 +131,9 @@ typedef struct ap_crosscheck_report {
 } ap_crosscheck_report;
 
 /* Run all three modes from (t0, q0, v0) to t_end. def gives the tolerances and the stepper of
- * the two Appell modes (def->mode is ignored). On failure the message names the mode. */
+ * the two Appell modes (def->mode is ignored). On failure the message names the mode;
+ * AP_ERR_ARG for a NULL argument (msg may be NULL), n_out < 1 or t_end not finite and after
+ * t0. */
 AP_API int ap_crosscheck(const ap_model *m, const ap_sim_def *def, double t0,
                          const double *q0, const double *v0, double t_end, int n_out,
                          ap_crosscheck_report *rep, char *msg, size_t msg_len);
@@ -138,9 +147,11 @@ typedef struct ap_method_info {
 } ap_method_info;
 
 AP_API int ap_method_count(void);
-/* Fill *info for method i (0 <= i < ap_method_count()); AP_ERR_ARG when out of range. */
+/* Fill *info for method i (0 <= i < ap_method_count()); AP_ERR_ARG when out of range or info
+ * is NULL. */
 AP_API int ap_method_get(int i, ap_method_info *info);
-/* Fill *info for the method called name; AP_ERR_ARG when there is none. */
+/* Fill *info for the method called name; AP_ERR_ARG when there is none or an argument is
+ * NULL. */
 AP_API int ap_method_find(const char *name, ap_method_info *info);
 
 #ifdef __cplusplus

@@ -29,7 +29,7 @@ enum {
   AP_ERR_INTERRUPTED = -11    /* the caller's poll function asked to stop (ap_sim_set_poll) */
 };
 
-/* A short, static text for a status code. */
+/* A short, static text for a status code ("unknown status" for any other int). */
 AP_API const char *ap_strerror(int status);
 
 #ifdef __cplusplus

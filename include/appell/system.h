@@ -1,6 +1,7 @@
 /* Appell: math-level systems, the model, the data, and the Appell solve.
  *
- * A math-level system is the founding paper's objects handed over as callbacks (DESIGN.md §1):
+ * A math-level system is the founding paper's objects handed over as callbacks
+ * (docs/design.md §1):
  *
  *     q' = N(q) v                          kinematics (N = I when v = q')
  *     g(q,t) v' + h(q,v,t) = Q(q,v,t)      unconstrained equations of motion, k speeds
@@ -44,11 +45,15 @@ typedef enum ap_bias_source {
   AP_BIAS_ZERO = 2          /* h = 0: the metric is constant and nothing else contributes */
 } ap_bias_source;
 
+/* The largest n, k and b a model may have (dense k x k and n k^2 buffers stay addressable). */
+#define AP_MAX_SIZE 65536
+
 typedef struct ap_system_def {
   const char *name;            /* for messages; default "system" */
-  int n;                       /* number of coordinates q (>= 1) */
-  int k;                       /* number of speeds v (>= 1); n == k unless kinematic is given */
-  int b;                       /* number of constraint rows (>= 0) */
+  int n;                       /* number of coordinates q (1 .. AP_MAX_SIZE) */
+  int k;                       /* number of speeds v (1 .. AP_MAX_SIZE); n == k unless
+                                  kinematic is given */
+  int b;                       /* number of constraint rows (0 .. AP_MAX_SIZE) */
   ap_metric_fn metric;         /* required */
   ap_metric_deriv_fn metric_deriv; /* required for AP_BIAS_CHRISTOFFEL */
   ap_bias_fn bias;             /* required for AP_BIAS_CALLBACK */
@@ -70,15 +75,17 @@ AP_API ap_system_def ap_system_def_default(void);
 typedef struct ap_model ap_model;
 
 /* Validate a math-level system and compile it into a model. On failure *out is NULL and, if
- * msg is not NULL, a message of at most msg_len bytes names the offending field. */
+ * msg is not NULL, a message of at most msg_len bytes names the offending field; AP_ERR_ARG
+ * for a NULL def or out, sizes out of range or a missing callback. */
 AP_API int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg,
                                 size_t msg_len);
-AP_API void ap_model_free(ap_model *m);
+AP_API void ap_model_free(ap_model *m);   /* NULL: nothing */
 
-/* Sizes of a compiled model. */
+/* Sizes of a compiled model; AP_ERR_ARG when m is NULL. */
 AP_API int ap_model_n(const ap_model *m);
 AP_API int ap_model_k(const ap_model *m);
 AP_API int ap_model_b(const ap_model *m);
+/* Names (owned by the model); "?" when m is NULL or the index is out of range. */
 AP_API const char *ap_model_name(const ap_model *m);
 AP_API const char *ap_model_coord_name(const ap_model *m, int i);
 AP_API const char *ap_model_speed_name(const ap_model *m, int i);
@@ -175,9 +182,11 @@ typedef struct ap_data {
   void *internal;      /* scratch arena and factorizations, owned by the data */
 } ap_data;
 
-/* Allocate a data struct for a model (all buffers, scratch sized once). */
-AP_API int ap_data_create(const ap_model *m, ap_data **out);
-AP_API void ap_data_free(ap_data *d);
+/* Allocate a data struct for a model (all buffers, scratch sized once). A data struct belongs
+ * to the model it was made for: every function below that takes (m, d) returns AP_ERR_ARG
+ * when m or d is NULL or d was made for another model. */
+AP_API int ap_data_create(const ap_model *m, ap_data **out);   /* AP_ERR_ARG: m or out NULL */
+AP_API void ap_data_free(ap_data *d);                          /* NULL: nothing */
 
 /* Pick the partition of the speeds by pivoted QR of A at (d->t, d->q): writes perm, rank, l,
  * redundant, redundant_manifold. Redundant rows that are consistent are dropped (and named in
@@ -199,13 +208,13 @@ AP_API int ap_forward(const ap_model *m, ap_data *d);
 
 /* Project speeds onto the constraint set A v + a0 = 0, nearest in the metric g:
  * v <- b0 + B G^-1 B^T g (v - b0). Runs the position stage at (d->t, d->q). On return
- * *change is the g-norm of the correction. */
+ * *change (may be NULL) is the g-norm of the correction. AP_ERR_ARG when v is NULL. */
 AP_API int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change);
 
-/* Largest |A v + a0| at the data's position stage for the speeds v. */
+/* Largest |A v + a0| at the data's position stage for the speeds v; NaN when d or v is NULL. */
 AP_API double ap_constraint_residual(const ap_data *d, const double *v);
 
-/* Kinetic energy 1/2 v^T g v at the data's position stage. */
+/* Kinetic energy 1/2 v^T g v at the data's position stage; NaN when d or v is NULL. */
 AP_API double ap_kinetic_energy(const ap_data *d, const double *v);
 
 #ifdef __cplusplus

@@ -3,6 +3,7 @@
  *
  * Layout of the layer (docs/linearize.md is the user's reference):
  *   chart.c      the chart of the configuration about a reference point and the heading frames
+ *   chart_map.c  the chart's maps (q from delta, its Jacobian, rates, heading frames)
  *   reduced.c    F(x): holonomic rows solved, speeds completed, the Appell solve, rates
  *   ridders.c    Ridders' extrapolated central differences for a column of a Jacobian
  *   point.c      the partitions and the operating point (Gauss-Newton)
@@ -13,15 +14,34 @@
  * Variables: the nc chart coordinates (index c), then the k speeds (index nc + s). The state x
  * holds the independent ones: x[i] is variable xvar[i]. Invariant: after a successful
  * ap_lin_operating_point the chart is centred on the point (q_ref, v_ref), so the state there is
- * x0 = (0, v_ref[independent speeds]). */
+ * x0 = (0, v_ref[independent speeds]).
+ *
+ * Generic scalar (linalg/scalar.h): chart_map.c and reduced.c are compiled twice; the
+ * complex-step build (*_cs.c) evaluates F on x0 + i h e_j for exact Jacobian columns, with its
+ * own data (ap_data_cs) and scratch (an_ws_cs). The declarations below marked "generic" name
+ * the *_cs functions in that build. */
 #ifndef AP_ANALYZE_INT_H
 #define AP_ANALYZE_INT_H
 
 #include <float.h>
 #include <stddef.h>
 
+#define AP_SC_EXPLICIT_DATA 1   /* this layer spells AP_SC(ap_data) (core/core.h) */
 #include "appell/analyze.h"
 #include "core/core.h"
+
+#ifdef AP_SC_COMPLEX   /* the complex-step build's names of the generic functions */
+#define ap_an_chart_apply ap_an_chart_apply_cs
+#define ap_an_chart_jacobian ap_an_chart_jacobian_cs
+#define ap_an_chart_rates ap_an_chart_rates_cs
+#define ap_an_frame_to_u ap_an_frame_to_u_cs
+#define ap_an_frame_to_v ap_an_frame_to_v_cs
+#define ap_an_frame_rates ap_an_frame_rates_cs
+#define ap_an_frame_matrix ap_an_frame_matrix_cs
+#define ap_an_state ap_an_state_cs
+#define ap_an_rates ap_an_rates_cs
+#define ap_an_rates_full ap_an_rates_full_cs
+#endif
 
 /* ---- the chart (chart.c) ---------------------------------------------------------------- */
 
@@ -57,24 +77,39 @@ int ap_an_chart_build(const ap_model *m, an_chart *ch, char *msg, size_t len);
  * d = unit(e_z x n0). keep_axis: keep the spin axis chosen before while it stays regular. */
 void ap_an_chart_centre(an_chart *ch, const double *q_ref, int keep_axis);
 void ap_an_chart_free(an_chart *ch);
-/* q = chart(q_ref, delta). */
-void ap_an_chart_apply(const an_chart *ch, int n, const double *q_ref, const double *delta,
-                       double *q);
+/* The maps (chart_map.c, generic). q = chart(q_ref, delta). */
+void ap_an_chart_apply(const an_chart *ch, int n, const double *q_ref, const ap_sc *delta,
+                       ap_sc *q);
 /* dq/ddelta (n x nc, ld n) at delta (body models; math-level: identity). */
-void ap_an_chart_jacobian(const an_chart *ch, int n, const double *q, const double *delta,
-                          double *J);
+void ap_an_chart_jacobian(const an_chart *ch, int n, const ap_sc *q, const ap_sc *delta,
+                          ap_sc *J);
 /* Chart rates from the model speeds v (body models): scalar c' = v_c, rotation vector
  * rates from the angular speeds. */
-void ap_an_chart_rates(const an_chart *ch, const double *delta, const double *v, double *dd);
+void ap_an_chart_rates(const an_chart *ch, const ap_sc *delta, const ap_sc *v, ap_sc *dd);
 /* Heading-frame speeds u = S(delta) v, and back v = S^T u (in place allowed). */
-void ap_an_frame_to_u(const an_chart *ch, const double *delta, const double *v, double *u);
-void ap_an_frame_to_v(const an_chart *ch, const double *delta, const double *u, double *v);
+void ap_an_frame_to_u(const an_chart *ch, const ap_sc *delta, const ap_sc *v, ap_sc *u);
+void ap_an_frame_to_v(const an_chart *ch, const ap_sc *delta, const ap_sc *u, ap_sc *v);
 /* Rates of the heading-frame speeds: u' = S v' + S' v, with the chart rates dd. */
-void ap_an_frame_rates(const an_chart *ch, const double *delta, const double *dd,
-                       const double *v, const double *vdot, double *udot);
+void ap_an_frame_rates(const an_chart *ch, const ap_sc *delta, const ap_sc *dd,
+                       const ap_sc *v, const ap_sc *vdot, ap_sc *udot);
 /* The constraint matrix on the heading-frame speeds: Au = A S^T (b x k, ld b). */
-void ap_an_frame_matrix(const an_chart *ch, const double *delta, int b, const double *A,
-                        double *Au);
+void ap_an_frame_matrix(const an_chart *ch, const ap_sc *delta, int b, const ap_sc *A,
+                        ap_sc *Au);
+
+/* ---- the scratch of one evaluation of F (reduced.c), in each build's scalar ---------------- */
+
+/* The double one points into the linearizer's own arrays (point.c uses them too); the complex
+ * one is allocated when exact derivatives are first asked for. Sizes as alloc_all's. */
+typedef struct an_ws {
+  ap_data *d;
+  double *delta, *dq, *Jh, *phi, *Phi_q, *Au, *Bu, *b0u, *F, *tau, *u, *dd, *work, *full;
+} an_ws;
+
+typedef struct an_ws_cs {
+  ap_data_cs *d;
+  double _Complex *delta, *dq, *Jh, *phi, *Phi_q, *Au, *Bu, *b0u, *F, *tau, *u, *dd, *work;
+  double _Complex *full;
+} an_ws_cs;
 
 /* ---- the linearizer ---------------------------------------------------------------------- */
 
@@ -116,6 +151,11 @@ struct ap_lin {
   double *ridders;          /* Ridders' tableau */
   int *iwork;
   size_t nwork;
+  an_ws ws;                 /* views of the arrays above for reduced.c */
+  an_ws_cs ws_cs;           /* the complex-step build's (ws_cs.d NULL until first needed) */
+  double _Complex *xc, *fc; /* (nx) complex-step state and rates */
+  ap_lin_method used;       /* the method of the last linearization */
+  char fallback[512];       /* why Ridders' method was used under AP_LIN_AUTO ("" otherwise) */
   char msg[512];
 };
 
@@ -135,11 +175,22 @@ int ap_an_find_var(const ap_lin *L, const char *name);
 /* Put the state x into (delta, q, v): dependent chart coordinates by Newton on the holonomic
  * rows, dependent speeds from the velocity constraints, in the heading frames; runs the
  * position stage. On return L->d holds q and v. */
-int ap_an_state(ap_lin *L, const double *x);
-/* F(x) (nx): rates of the states. Leaves L->d after a full forward solve at x. */
-int ap_an_rates(ap_lin *L, const double *x, double *f);
-/* Rates of every variable (nc chart rates, then k speed rates) at x, into full (nc + k). */
-int ap_an_rates_full(ap_lin *L, const double *x, double *full);
+int ap_an_state(ap_lin *L, const ap_sc *x);   /* generic */
+/* F(x) (nx): rates of the states. Leaves L->d after a full forward solve at x (generic). */
+int ap_an_rates(ap_lin *L, const ap_sc *x, ap_sc *f);
+/* Rates of every variable (nc chart rates, then k speed rates) at x, into full (nc + k)
+ * (generic). */
+int ap_an_rates_full(ap_lin *L, const ap_sc *x, ap_sc *full);
+/* F on complex-step states (reduced_cs.c), for jacobian.c. */
+int ap_an_rates_cs(ap_lin *L, const double _Complex *x, double _Complex *f);
+
+/* ---- the Jacobian (jacobian.c) ------------------------------------------------------------ */
+
+/* L->A and L->Aerr at L->x0 by the method of def.method (complex step or Ridders; L->used,
+ * L->fallback). Leaves the data anywhere: evaluate at x0 after it. */
+int ap_an_jacobian(ap_lin *L);
+/* Frees the complex-step workspace (ap_lin_free). */
+void ap_an_ws_cs_free(ap_lin *L);
 
 /* ---- Ridders (ridders.c) ------------------------------------------------------------------ */
 

@@ -1,10 +1,11 @@
 /* The linearizer (include/appell/analyze.h): creation, the operating point, the linearization
  * and its queries.
  *
- * A = dF/dx at the operating point x0 column by column with Ridders' method (ridders.c), first
- * step h0 max(1, |x0_j|); Aerr holds the estimates, whose round-off floor comes from the noise
- * of F measured at x0 (ap_an_noise: near a steady motion F is small while the terms it is made
- * of are not, so a noise relative to |F| would be far too small). B = dF/dtau for a generalized force tau on
+ * A = dF/dx at the operating point x0 column by column (jacobian.c): by complex step, exact to
+ * round-off, where the model allows it; else with Ridders' method (ridders.c), first step
+ * h0 max(1, |x0_j|), the round-off floor of its estimates from the noise of F measured at x0
+ * (ap_an_noise: near a steady motion F is small while the terms it is made of are not, so a
+ * noise relative to |F| would be far too small). Aerr holds the estimates. B = dF/dtau for a generalized force tau on
  * model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
  * the core's basis B_c and the factor of G = B_c^T g B_c left by the evaluation at x0, and at x0
  * the heading frames are the identity (du'/dtau = dv'/dtau); coordinate rows are zero.
@@ -32,6 +33,7 @@ ap_lin_def ap_lin_def_default(void) {
   d.max_iter = 40;
   d.zero_tol = 1e-9;
   d.h0 = 0.01;
+  d.method = AP_LIN_AUTO;
   return d;
 }
 
@@ -102,6 +104,8 @@ static int alloc_all(ap_lin *L) {
   int *ip = L->iwork + ap_la_iwork_size((int)mb, (int)mk);
   L->cperm = ip, ip += nv + 1, L->uperm = ip, ip += nv + 1, L->xvar = ip, ip += nv + 1;
   L->cyclic = ip;
+  L->ws = (an_ws){L->d,  L->delta, L->dq, L->Jh,  L->phi,  L->Bu, L->Au,
+                  L->Bu, L->b0u,   L->F,  L->tau, L->u,    L->dd, L->work, L->f2};
   L->inputs = calloc((size_t)k + 1, sizeof *L->inputs);
   return L->inputs ? ap_an_eigen_alloc(L) : AP_ERR_NOMEM;
 }
@@ -179,6 +183,7 @@ int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, const doub
 void ap_lin_free(ap_lin *L) {
   if (!L) return;
   ap_data_free(L->d);
+  ap_an_ws_cs_free(L);
   ap_an_chart_free(&L->ch);
   ap_an_eigen_free(L);
   free(L->q_ref);
@@ -218,10 +223,6 @@ const double *ap_lin_q(const ap_lin *L) { return L ? L->q_ref : NULL; }
 const double *ap_lin_v(const ap_lin *L) { return L ? L->v_ref : NULL; }
 
 /* ---- the linearization ------------------------------------------------------------------- */
-
-static int rates_fn(const double *x, double *f, void *user) {
-  return ap_an_rates((ap_lin *)user, x, f);
-}
 
 static double max_abs(const double *x, size_t n) {
   double m = 0.0;
@@ -306,17 +307,10 @@ int ap_lin_linearize(ap_lin *L) {
   int rc = L->parted ? AP_OK : ap_lin_operating_point(L, NAN);
   if (rc != AP_OK) return rc;
   L->msg[0] = '\0';
-  int nx = L->nx;
+  L->linearized = 0;
   rc = ap_an_rates(L, L->x0, L->F0);
   if (rc == AP_OK) rc = check_autonomous(L);
-  double *x = L->f1, *noise = L->noise;   /* not touched by ap_an_rates */
-  if (rc == AP_OK) rc = ap_an_noise(rates_fn, L, nx, L->x0, nx, noise, L->ridders);
-  for (int j = 0; j < nx && rc == AP_OK; j++) {
-    memcpy(x, L->x0, sizeof *x * (size_t)nx);
-    double h = L->def.h0 * fmax(1.0, fabs(L->x0[j]));
-    rc = ap_an_ridders(rates_fn, L, nx, x, j, h, AP_AN_EPSF, noise, nx, L->A + (size_t)j * nx,
-                       L->Aerr + (size_t)j * nx, L->ridders);
-  }
+  if (rc == AP_OK) rc = ap_an_jacobian(L);
   if (rc == AP_OK) rc = ap_an_rates(L, L->x0, L->F0);   /* leaves the data at x0 */
   if (rc != AP_OK) return rc;
   input_matrix(L);
@@ -353,3 +347,7 @@ const double *ap_lin_A(const ap_lin *L) { return L && L->linearized ? L->A : NUL
 const double *ap_lin_A_error(const ap_lin *L) { return L && L->linearized ? L->Aerr : NULL; }
 const double *ap_lin_B(const ap_lin *L) { return L && L->linearized ? L->Bm : NULL; }
 const double *ap_lin_rates(const ap_lin *L) { return L && L->linearized ? L->F0 : NULL; }
+ap_lin_method ap_lin_method_used(const ap_lin *L) {
+  return L && L->linearized ? L->used : AP_LIN_AUTO;
+}
+const char *ap_lin_fallback(const ap_lin *L) { return L ? L->fallback : ""; }

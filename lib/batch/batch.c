@@ -110,9 +110,13 @@ static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
 
 static int copy_def(ap_batch *b, const ap_batch_def *def, char *msg, size_t len) {
   b->def = def ? *def : ap_batch_def_default();
-  if (b->def.threads < 0 || b->def.nchannels < 0 || b->def.ntimes < 0 ||
-      (b->def.nchannels && !b->def.channels) || (b->def.ntimes && !b->def.times))
-    return say(msg, len, AP_ERR_ARG, "invalid batch definition");
+  if (b->def.threads < 0)
+    return say(msg, len, AP_ERR_ARG, "invalid batch definition: threads %d (need >= 0; 0: one "
+               "per processor)", b->def.threads);
+  if (b->def.nchannels < 0 || b->def.ntimes < 0 || (b->def.nchannels && !b->def.channels) ||
+      (b->def.ntimes && !b->def.times))
+    return say(msg, len, AP_ERR_ARG, "invalid batch definition: nchannels %d, ntimes %d (need "
+               ">= 0, and the arrays when positive)", b->def.nchannels, b->def.ntimes);
   b->channels = copy_strings(b->def.channels, b->def.nchannels);
   b->times = malloc(sizeof *b->times * (size_t)(b->def.ntimes + 1));
   b->order = malloc(sizeof *b->order * (size_t)(b->def.ntimes + 1));
@@ -136,7 +140,9 @@ int ap_batch_create(const char *text, size_t len, const char *name, const char *
   if (msg && msg_len) msg[0] = '\0';
   if (!out) return AP_ERR_ARG;
   *out = NULL;
-  if (!text || nsets < 0 || (nsets && !sets))
+  int null_set = 0;
+  for (int i = 0; sets && i < nsets; i++) null_set |= !sets[i];
+  if (!text || nsets < 0 || (nsets && !sets) || null_set)
     return say(msg, msg_len, AP_ERR_ARG, "NULL scene text or overrides");
   ap_batch *b = calloc(1, sizeof *b);
   if (!b) return say(msg, msg_len, AP_ERR_NOMEM, "out of memory");

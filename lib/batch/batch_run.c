@@ -108,6 +108,7 @@ static int loop(one_run *r) {
   const ap_batch *b = r->b;
   double t0 = r->run.t0, dt = r->run.interval, tol = 1e-9 * dt;
   long nrows = (long)ceil((r->run.t_end - t0) / dt - 1e-9);
+  if (nrows < 1) nrows = 1;   /* an interval past t_end: still the stop at t_end (t_end > t0) */
   while (r->next < b->def.ntimes && b->times[b->order[r->next]] < t0 - tol) r->next++;
   int rc = record(r, t0, 1, tol);
   for (long i = 1; rc == AP_OK && i <= nrows; i++) {

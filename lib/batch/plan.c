@@ -174,12 +174,23 @@ static void drop_param(ap_plan *p, plan_param *q, int grid) {
   p->npar--, p->ngrid -= grid;
 }
 
+/* A path may vary once: a second grid or random value for it would override the first in
+ * every run while the table still listed the first's values as used. */
+static int unique_path(const ap_plan *p, const plan_param *q, char *msg, size_t len) {
+  for (int i = 0; i < p->npar; i++)
+    if (&p->par[i] != q && p->par[i].path && strcmp(p->par[i].path, q->path) == 0)
+      return say(msg, len, "'%s' is varied twice (one --grid or --random per path)%s", q->path,
+                 "");
+  return AP_OK;
+}
+
 int ap_plan_add_grid(ap_plan *p, const char *spec, char *msg, size_t len) {
   if (!p || !spec) return say(msg, len, "NULL argument%s%s", "", "");
   plan_param *q = new_param(p, 1, msg, len);
   if (!q) return AP_ERR_ARG;
   const char *rest = NULL;
   int rc = split_spec(spec, q, &rest, msg, len);
+  if (rc == AP_OK) rc = unique_path(p, q, msg, len);
   if (rc == AP_OK) rc = strchr(rest, ':') ? parse_range(spec, rest, q, msg, len)
                                           : parse_list(spec, rest, q, msg, len);
   if (rc == AP_OK && ap_plan_count(p) < 0)
@@ -214,6 +225,7 @@ int ap_plan_add_random(ap_plan *p, const char *spec, char *msg, size_t len) {
   if (!q) return AP_ERR_ARG;
   const char *rest = NULL;
   int rc = split_spec(spec, q, &rest, msg, len);
+  if (rc == AP_OK) rc = unique_path(p, q, msg, len);
   if (rc == AP_OK) {
     while (isspace((unsigned char)*rest)) rest++;
     q->kind = PL_NORMAL;

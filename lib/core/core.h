@@ -1,14 +1,26 @@
 /* Appell core (internal): the compiled model and the data's private scratch.
  *
- * The model is a validated copy of a math-level system definition (DESIGN.md §2, "Math-level
+ * The model is a validated copy of a math-level system definition (docs/design.md §2, "Math-level
  * systems"); the body layer will compile into the same struct. The data's internal arena holds
- * the factorizations and scratch of the pipeline, sized once in ap_data_create. */
+ * the factorizations and scratch of the pipeline, sized once in ap_data_create.
+ *
+ * Generic scalar (linalg/scalar.h). The per-evaluation code of lib/core (data.c, forward.c) and
+ * lib/model is written once in ap_sc and compiled twice; the complex-step build works on
+ * ap_data_cs, an internal mirror of ap_data whose value arrays are double _Complex (same
+ * fields, same meaning; t, the decision outputs (growth, rcond_*, resid_*), the partition and
+ * the counters stay double / int). Inside a file compiled with AP_SC_COMPLEX the names ap_data
+ * and ap_scratch denote the mirrors (see the end of this header), so the generic source reads
+ * as the double one; its public names get _cs (AP_SC). The analysis layer creates a mirror with
+ * ap_data_create_cs when it wants exact derivatives. */
 #ifndef AP_CORE_H
 #define AP_CORE_H
 
 #include <stddef.h>
 
 #include "appell/system.h"
+#include "linalg/scalar.h"
+
+typedef struct ap_data_cs ap_data_cs;
 
 /* A model compiled from bodies (lib/model) evaluates its own g, N, A, a0 and h, Q, gamma in
  * place of user callbacks. Its per-data scratch (ev.scratch doubles) lives in the data, so one
@@ -36,6 +48,17 @@ typedef struct ap_evaluator {
   int (*check_q)(const ap_model *m, ap_data *d, const double *q, double *scratch);
   void (*destroy)(void *impl);   /* frees impl with the model */
   void *impl;
+  /* The complex-step build of position, velocity and phi (same contracts on ap_data_cs and
+   * double _Complex scratch of the same length). NULL when the model has none: math-level
+   * systems (their callbacks are C functions of doubles). */
+  int (*position_cs)(const ap_model *m, ap_data_cs *d, double _Complex *scratch);
+  int (*velocity_cs)(const ap_model *m, ap_data_cs *d, double _Complex *scratch);
+  int (*phi_cs)(const ap_model *m, ap_data_cs *d, double _Complex *scratch,
+                double _Complex *phi, double _Complex *Phi_q);
+  /* Whether the complex-step build can evaluate this model: 0, or -1 with a message of at most
+   * len bytes naming the element that offers only a C callback of doubles (a user constraint
+   * or user effect). May be NULL when position_cs is NULL. */
+  int (*cs_blocker)(const ap_model *m, char *msg, size_t len);
 } ap_evaluator;
 
 struct ap_model {
@@ -66,7 +89,26 @@ typedef struct ap_scratch {
   double *work;             /* linalg scratch, ap_la_work_size(b, k) doubles */
   double *ev;               /* evaluator scratch, m->ev.scratch doubles (may be NULL) */
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
+  const ap_model *model;    /* the model the data was made for (buffers sized for it) */
 } ap_scratch;
+
+/* 1 when m and d are not NULL and d was made by ap_data_create for m: the public functions
+ * that take (m, d) return AP_ERR_ARG otherwise. */
+static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {
+  return m && d && d->internal && ((const ap_scratch *)d->internal)->model == m;
+}
+
+/* Relative size beyond which a redundant constraint row is called inconsistent when the
+ * redundancy holds for every q (structural: the residual is round-off) and the rows are judged
+ * at every evaluation. Redundancy that holds only on the manifold of the implicit holonomic
+ * rows (loops, wheel contacts) is judged against d->manifold_rtol at accepted states instead:
+ * a stepper's trial states lie off that manifold by O(h^2), and there the dropped rows are
+ * neither dependent nor consistent (least squares over all rows keeps the solve smooth). */
+#define AP_CONSISTENCY_RTOL 1e-8
+
+/* The position stage's objects g, N, A, a0 without the basis and without counting a stage
+ * (forward.c; ap_partition evaluates nearby states with it). */
+int ap_core_position_objects(const ap_model *m, ap_data *d);
 
 /* Largest magnitude a model quantity may have: the steppers' error norms square the state's
  * derivatives, and past 1e154 the square overflows (the step size, then the time, become NaN). */
@@ -102,5 +144,80 @@ void ap_core_msg(ap_data *d, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)))
 #endif
     ;
+
+/* ---- the complex-step mirror ------------------------------------------------------------- */
+
+/* ap_data with double _Complex value arrays (field by field as in appell/system.h). */
+struct ap_data_cs {
+  int n, k, b;
+  double t;
+  double _Complex *q, *v, *e;
+  ap_basis basis;
+  int speeds_from_e, want_reactions, estimate_cond;   /* estimate_cond must stay 0 */
+  double rank_rtol, manifold_rtol;
+  int *perm;
+  int rank, l, redundant, redundant_manifold;
+  double _Complex *g, *N, *A, *a0, *B, *b0;
+  double growth, rcond_R, resid_a0;
+  double _Complex *h, *Q, *gamma, *w;
+  double resid_gamma;
+  double _Complex *G, *Phi;
+  double rcond_G;
+  double _Complex *edd, *vdot, *qdot, *lambda;
+  ap_counters cnt;
+  char msg[512];
+  void *internal;
+};
+
+/* Every field of ap_data has its mirror: a field added to one and not the other changes the
+ * size of one of them. */
+_Static_assert(sizeof(struct ap_data_cs) == sizeof(ap_data), "ap_data_cs mirrors ap_data");
+
+typedef struct ap_scratch_cs {
+  double _Complex *F, *tau;
+  int *jpvt;
+  double _Complex *Qf, *dg, *gB, *tk1, *tk2, *tl, *tn, *work, *ev;
+  int *iwork;
+  const ap_model *model;
+} ap_scratch_cs;
+
+static inline int ap_core_data_ok_cs(const ap_model *m, const ap_data_cs *d) {
+  return m && d && d->internal && ((const ap_scratch_cs *)d->internal)->model == m;
+}
+
+/* The complex-step build's entry points (forward.c, data.c compiled with AP_SC_COMPLEX). The
+ * partition (perm, rank, l, redundant, redundant_manifold) is not chosen here: copy it from a
+ * double data at the real part (ap_core_copy_partition). The basis is AP_BASIS_PARTITIONED or
+ * AP_BASIS_NONE; reactions and condition estimates are not available. AP_ERR_UNSUPPORTED for a
+ * model without the complex build (ev.position_cs NULL) and for the orthonormal basis. */
+int ap_data_create_cs(const ap_model *m, ap_data_cs **out);
+void ap_data_free_cs(ap_data_cs *d);
+int ap_core_position_objects_cs(const ap_model *m, ap_data_cs *d);
+int ap_fwd_position_cs(const ap_model *m, ap_data_cs *d);
+int ap_fwd_velocity_cs(const ap_model *m, ap_data_cs *d);
+int ap_fwd_acceleration_cs(const ap_model *m, ap_data_cs *d);
+int ap_forward_cs(const ap_model *m, ap_data_cs *d);
+void ap_core_speeds_cs(const ap_model *m, ap_data_cs *d);
+int ap_core_check_finite_cs(const ap_model *m, ap_data_cs *d, const char *what,
+                            const double _Complex *x, int rows, int cols);
+void ap_core_msg_cs(ap_data_cs *d, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+/* The partition and tolerances of src (a double data of the same model) into dst. */
+void ap_core_copy_partition(const ap_data *src, ap_data_cs *dst);
+/* 1 when the model can be evaluated by the complex-step build; otherwise 0 and a message of at
+ * most len bytes that names why (a math-level system, a user callback). */
+int ap_core_has_cs(const ap_model *m, char *msg, size_t len);
+
+/* Inside the complex-step build of a generic file of lib/core and lib/model, ap_data and
+ * ap_scratch name the mirrors. (lib/analyze holds both kinds in one struct: its generic files
+ * define AP_SC_EXPLICIT_DATA and spell AP_SC(ap_data).) */
+#if defined(AP_SC_COMPLEX) && !defined(AP_SC_EXPLICIT_DATA)
+#define ap_data ap_data_cs
+#define ap_scratch ap_scratch_cs
+#define ap_core_data_ok ap_core_data_ok_cs
+#endif
 
 #endif

@@ -1,8 +1,10 @@
 /* The data struct: state, pipeline intermediates, scratch (include/appell/system.h).
  *
- * Layout: one block of doubles and one of ints, carved into the fields in the order they are
+ * Layout: one block of scalars and one of ints, carved into the fields in the order they are
  * declared; sizes are fixed by the model, so no stage ever allocates. The identity basis
- * (b == 0) and identity N (no kinematic callback) are written here once and never touched. */
+ * (b == 0) and identity N (no kinematic callback) are written here once and never touched.
+ * Generic in the scalar (linalg/scalar.h): data_cs.c compiles this file again into
+ * ap_data_create_cs, which makes the complex-step mirror ap_data_cs (core/core.h). */
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,12 +15,12 @@
 
 typedef struct ap_data_block {
   ap_scratch s;
-  double *dbl;
+  ap_sc *dbl;
   int *ints;
 } ap_data_block;
 
-static double *carve(double **p, size_t count) {
-  double *out = *p;
+static ap_sc *carve(ap_sc **p, size_t count) {
+  ap_sc *out = *p;
   *p += count;
   return out;
 }
@@ -29,8 +31,11 @@ static int *carve_int(int **p, size_t count) {
   return out;
 }
 
-int ap_data_create(const ap_model *m, ap_data **out) {
+int AP_SC(ap_data_create)(const ap_model *m, ap_data **out) {
   if (!m || !out) return AP_ERR_ARG;
+#ifdef AP_SC_COMPLEX
+  if (!m->ev.position_cs) return AP_ERR_UNSUPPORTED;
+#endif
   *out = NULL;
   size_t n = (size_t)m->n, k = (size_t)m->k, b = (size_t)m->b;
   size_t nb = b > 0 ? b : 1, mk = b > k ? b : k;
@@ -44,13 +49,13 @@ int ap_data_create(const ap_model *m, ap_data **out) {
 
   ap_data *d = calloc(1, sizeof *d);
   ap_data_block *blk = calloc(1, sizeof *blk);
-  double *dbl = calloc(nd, sizeof *dbl);
+  ap_sc *dbl = calloc(nd, sizeof *dbl);
   int *ints = calloc(ni, sizeof *ints);
   if (!d || !blk || !dbl || !ints) {
     free(d), free(blk), free(dbl), free(ints);
     return AP_ERR_NOMEM;
   }
-  double *p = dbl;
+  ap_sc *p = dbl;
   int *ip = ints;
   d->n = m->n, d->k = m->k, d->b = m->b;
   d->q = carve(&p, n), d->v = carve(&p, k), d->e = carve(&p, k);
@@ -65,6 +70,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   s->gB = carve(&p, k * k), s->tk1 = carve(&p, k), s->tk2 = carve(&p, k), s->tl = carve(&p, k);
   s->work = carve(&p, lw), s->tn = carve(&p, n);
   s->ev = m->ev.scratch ? carve(&p, m->ev.scratch) : NULL;
+  s->model = m;
   d->perm = carve_int(&ip, k), s->jpvt = carve_int(&ip, nb), s->iwork = carve_int(&ip, liw);
   blk->dbl = dbl, blk->ints = ints;
   d->internal = blk;
@@ -82,7 +88,7 @@ int ap_data_create(const ap_model *m, ap_data **out) {
   return AP_OK;
 }
 
-void ap_data_free(ap_data *d) {
+void AP_SC(ap_data_free)(ap_data *d) {
   if (!d) return;
   ap_data_block *blk = d->internal;
   if (blk) {
@@ -93,9 +99,18 @@ void ap_data_free(ap_data *d) {
   free(d);
 }
 
-void ap_core_msg(ap_data *d, const char *fmt, ...) {
+void AP_SC(ap_core_msg)(ap_data *d, const char *fmt, ...) {
   va_list ap;
   va_start(ap, fmt);
   vsnprintf(d->msg, sizeof d->msg, fmt, ap);
   va_end(ap);
 }
+
+#ifndef AP_SC_COMPLEX
+void ap_core_copy_partition(const ap_data *src, ap_data_cs *dst) {
+  dst->rank_rtol = src->rank_rtol, dst->manifold_rtol = src->manifold_rtol;
+  dst->rank = src->rank, dst->l = src->l, dst->redundant = src->redundant;
+  dst->redundant_manifold = src->redundant_manifold;
+  memcpy(dst->perm, src->perm, sizeof *dst->perm * (size_t)src->k);
+}
+#endif

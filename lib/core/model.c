@@ -63,6 +63,9 @@ static int validate(const ap_system_def *d, char *msg, size_t len) {
   if (d->n < 1 || d->k < 1 || d->b < 0)
     return fail(msg, len, "system '%s': sizes n = %d, k = %d, b = %d (need n >= 1, k >= 1, "
                 "b >= 0)", nm, d->n, d->k, d->b);
+  if (d->n > AP_MAX_SIZE || d->k > AP_MAX_SIZE || d->b > AP_MAX_SIZE)
+    return fail(msg, len, "system '%s': sizes n = %d, k = %d, b = %d (at most %d each)", nm,
+                d->n, d->k, d->b, AP_MAX_SIZE);
   if (!d->kinematic && d->n != d->k)
     return fail(msg, len, "system '%s': n = %d coordinates but k = %d speeds and no kinematic "
                 "callback N(q): with N = I they must be equal", nm, d->n, d->k);
@@ -133,17 +136,26 @@ void ap_model_free(ap_model *m) {
   free(m);
 }
 
-int ap_model_n(const ap_model *m) { return m->n; }
-int ap_model_k(const ap_model *m) { return m->k; }
-int ap_model_b(const ap_model *m) { return m->b; }
-const char *ap_model_name(const ap_model *m) { return m->name; }
+int ap_model_n(const ap_model *m) { return m ? m->n : AP_ERR_ARG; }
+int ap_model_k(const ap_model *m) { return m ? m->k : AP_ERR_ARG; }
+int ap_model_b(const ap_model *m) { return m ? m->b : AP_ERR_ARG; }
+const char *ap_model_name(const ap_model *m) { return m ? m->name : "?"; }
 
 const char *ap_model_coord_name(const ap_model *m, int i) {
-  return i >= 0 && i < m->n ? m->coord_names[i] : "?";
+  return m && i >= 0 && i < m->n ? m->coord_names[i] : "?";
 }
 const char *ap_model_speed_name(const ap_model *m, int i) {
-  return i >= 0 && i < m->k ? m->speed_names[i] : "?";
+  return m && i >= 0 && i < m->k ? m->speed_names[i] : "?";
 }
 const char *ap_model_constraint_name(const ap_model *m, int s) {
-  return s >= 0 && s < m->b ? m->constraint_names[s] : "?";
+  return m && s >= 0 && s < m->b ? m->constraint_names[s] : "?";
+}
+
+int ap_core_has_cs(const ap_model *m, char *msg, size_t len) {
+  if (!m->ev.position_cs) {
+    snprintf(msg, len, "model '%s' is a math-level system: its callbacks are C functions of "
+             "doubles", m->name);
+    return 0;
+  }
+  return !m->ev.cs_blocker || m->ev.cs_blocker(m, msg, len) == 0;
 }

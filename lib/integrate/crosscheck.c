@@ -47,7 +47,7 @@ static int compare(ap_sim *sim[3], const ap_model *m, ap_crosscheck_report *r) {
 int ap_crosscheck(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
                   const double *v0, double t_end, int n_out, ap_crosscheck_report *rep,
                   char *msg, size_t msg_len) {
-  if (!m || !def || !q0 || !v0 || !rep || n_out < 1 || !(t_end > t0)) {
+  if (!m || !def || !q0 || !v0 || !rep || n_out < 1 || !(t_end > t0) || !isfinite(t_end)) {
     if (msg && msg_len) snprintf(msg, msg_len, "ap_crosscheck: bad arguments");
     return AP_ERR_ARG;
   }

@@ -1,4 +1,4 @@
-/* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (DESIGN.md §1, "The DAE
+/* The DAE cross-check: SUNDIALS IDA with Lagrange multipliers (docs/design.md §1, "The DAE
  * cross-check").
  *
  * Variables y = (q, v, Lambda, M), n + k + bs + nps of them, and the residual
@@ -112,6 +112,7 @@ struct ap_dae {
   long nres;                /* residual evaluations, the Newton matrix's included */
   long base_steps, base_netf, base_ncf;   /* IDA's counters before its last restart */
   int res_status;           /* last failure of the residual */
+  int nomem;                /* SUNDIALS reported a failed allocation */
   char res_msg[512];
   char msg[1024];
 };
@@ -313,6 +314,9 @@ static void err_handler(int code, const char *module, const char *function, char
                         void *user) {
   ap_dae *s = user;
   snprintf(s->msg, sizeof s->msg, "%s.%s (flag %d): %s", module, function, code, text);
+  if ((code == IDA_MEM_FAIL && !strcmp(module, "IDA")) ||
+      (code == IDALS_MEM_FAIL && !strcmp(module, "IDALS")))
+    s->nomem = 1;
 }
 
 /* ---- creation ------------------------------------------------------------------------------ */
@@ -386,7 +390,7 @@ static int choose_rows(ap_dae *s, double rank_rtol) {
  * least squares on A_s^T lambda = g v' + h - Q (= F_v at lambda = 0), mu = 0. */
 static int initial_multipliers(ap_dae *s, double t0) {
   int n = s->n, k = s->k, bs = s->bs;
-  N_Vector rr = N_VClone(s->yy);
+  N_Vector rr = N_VNew_Serial(s->ny, s->ctx);   /* N_VClone crashes when it cannot allocate */
   if (!rr) return AP_ERR_NOMEM;
   double *y = N_VGetArrayPointer(s->yy), *y1 = N_VGetArrayPointer(s->yp);
   double *r = N_VGetArrayPointer(rr);
@@ -463,12 +467,17 @@ static int setup_ida(ap_dae *s, double t0, const ap_step_opts *o) {
   return ok;
 }
 
+static int ap_dae_nomem(const ap_model *m, char *msg, size_t msg_len) {
+  if (msg && msg_len) snprintf(msg, msg_len, "IDA setup for system '%s': out of memory", m->name);
+  return AP_ERR_NOMEM;
+}
+
 int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
                   const double *yp0, const ap_step_opts *o, double rank_rtol, ap_dae **out,
                   char *msg, size_t msg_len) {
   *out = NULL;
   ap_dae *s = calloc(1, sizeof *s);
-  if (!s) return AP_ERR_NOMEM;
+  if (!s) return ap_dae_nomem(m, msg, msg_len);
   s->m = m, s->d = d, s->n = m->n, s->k = m->k, s->b = m->b;
   s->rtol = ap_dae_rtol(o->rtol), s->atol = o->atol * s->rtol / o->rtol;
   s->nphi = m->ev.phi ? m->nphi : 0;
@@ -476,7 +485,7 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
   if (rc == AP_OK) rc = choose_rows(s, rank_rtol);
   if (rc != AP_OK) {
     ap_dae_free(s);
-    return rc;
+    return rc == AP_ERR_NOMEM ? ap_dae_nomem(m, msg, msg_len) : rc;
   }
   int n = s->n, k = s->k, nd = n + k;
   s->ny = nd + s->bs + s->nps;
@@ -501,12 +510,13 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     rc = initial_multipliers(s, t0);
     ok = rc == AP_OK && setup_ida(s, t0, o);
   }
-  if (!ok) {
+  if (!ok) {   /* no message from IDA: an object could not be allocated */
+    if (rc == AP_OK) rc = s->nomem || !s->msg[0] ? AP_ERR_NOMEM : AP_ERR_SOLVER;
     if (msg && msg_len)
       snprintf(msg, msg_len, "IDA setup failed for system '%s': %.300s", m->name,
                s->msg[0] ? s->msg : "out of memory");
     ap_dae_free(s);
-    return rc != AP_OK ? rc : AP_ERR_SOLVER;
+    return rc;
   }
   *out = s;
   return AP_OK;
@@ -531,7 +541,7 @@ void ap_dae_state(const ap_dae *s, double *y) {
  * never evaluated. Evaluate the residual at the current state at t + 2 h, t + 4 h, ... up to
  * tout; the first failure is the cause, reported with its own message and status. */
 static int probe_ahead(ap_dae *s, double t, double tout, double h) {
-  N_Vector rr = N_VClone(s->yy);
+  N_Vector rr = N_VNew_Serial(s->ny, s->ctx);   /* N_VClone crashes when it cannot allocate */
   if (!rr) return AP_OK;
   int rc = AP_OK;
   for (double dt = 2.0 * h; rc == AP_OK && dt < 2.0 * (tout - t); dt *= 2.0) {
@@ -587,7 +597,10 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
     return AP_ERR_SOLVER;
   double tret = *t;
   int flag = IDASolve(s->mem, stop, &tret, s->yy, s->yp, IDA_ONE_STEP);
-  if (flag < 0) return step_failed(s, tret, tout, hmin);
+  if (flag < 0) {
+    int rc = step_failed(s, tret, tout, hmin);
+    return flag == IDA_MEM_FAIL && rc == AP_ERR_SOLVER ? AP_ERR_NOMEM : rc;
+  }
   *t = tret;
   ap_dae_state(s, y);
   return AP_OK;

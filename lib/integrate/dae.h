@@ -1,5 +1,5 @@
 /* Appell DAE integrator (internal): SUNDIALS IDA on (q, v, lambda, mu) with the index-2
- * residual of DESIGN.md §1 and GGL rows for implicit holonomic constraints (dae.c). Used by
+ * residual of docs/design.md §1 and GGL rows for implicit holonomic constraints (dae.c). Used by
  * sim.c for AP_MODE_DAE. No SUNDIALS type in this header.
  *
  * Redundant rows. IDA carries multipliers only for the independent rows of A, chosen once at

@@ -1,4 +1,4 @@
-/* Simulation drivers: minimal, projected, plain and DAE modes (DESIGN.md §1 "Choosing B",
+/* Simulation drivers: minimal, projected, plain and DAE modes (docs/design.md §1 "Choosing B",
  * "The DAE cross-check", §2).
  *
  * Minimal mode integrates y = (q, e') with the partitioned basis frozen during a step. After
@@ -231,6 +231,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   double *buf = s ? calloc(4 * nk + (size_t)m->n + (size_t)m->k + nphi, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
+    if (msg && msg_len) snprintf(msg, msg_len, "system '%s': out of memory", m->name);
     return AP_ERR_NOMEM;
   }
   s->m = m, s->n = m->n, s->k = m->k, s->b = m->b;
@@ -267,6 +268,7 @@ void ap_sim_free(ap_sim *s) {
 /* ---- advancing ----------------------------------------------------------------------------- */
 
 int ap_sim_advance(ap_sim *s, double tout) {
+  if (!s) return AP_ERR_ARG;
   if (s->failed) return s->failed;              /* s->msg still says why */
   if (!(tout >= s->t) || !isfinite(tout))
     return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is not a finite time at or "
@@ -309,12 +311,12 @@ int ap_sim_advance(ap_sim *s, double tout) {
 
 /* ---- queries ------------------------------------------------------------------------------ */
 
-double ap_sim_time(const ap_sim *s) { return s->t; }
-const double *ap_sim_q(const ap_sim *s) { return s->q; }
-const double *ap_sim_v(const ap_sim *s) { return s->v; }
-const ap_data *ap_sim_data(const ap_sim *s) { return s->d; }
-const char *ap_sim_message(const ap_sim *s) { return s->msg; }
-const char *ap_sim_warning(const ap_sim *s) { return s->warning; }
+double ap_sim_time(const ap_sim *s) { return s ? s->t : NAN; }
+const double *ap_sim_q(const ap_sim *s) { return s ? s->q : NULL; }
+const double *ap_sim_v(const ap_sim *s) { return s ? s->v : NULL; }
+const ap_data *ap_sim_data(const ap_sim *s) { return s ? s->d : NULL; }
+const char *ap_sim_message(const ap_sim *s) { return s ? s->msg : ""; }
+const char *ap_sim_warning(const ap_sim *s) { return s ? s->warning : ""; }
 
 void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user) {
   if (!s) return;
@@ -322,6 +324,7 @@ void ap_sim_set_poll(ap_sim *s, ap_sim_poll_fn poll, void *user) {
 }
 
 int ap_sim_reactions(ap_sim *s, const double **lambda) {
+  if (!s) return AP_ERR_ARG;
   if (s->dae) {   /* IDA's own multipliers: the cross-check compares them with Appell's */
     if (lambda) *lambda = s->y + s->n + s->k;
     return AP_OK;
@@ -333,6 +336,11 @@ int ap_sim_reactions(ap_sim *s, const double **lambda) {
 }
 
 void ap_sim_get_stats(const ap_sim *s, ap_sim_stats *st) {
+  if (!st) return;
+  if (!s) {
+    memset(st, 0, sizeof *st);
+    return;
+  }
   ap_step_stats ss;
   if (s->dae) ap_dae_stats(s->dae, &ss);
   else ap_step_get_stats(s->st, &ss);

@@ -1,5 +1,5 @@
 /* Simulation drivers, per mode: the right-hand side handed to the stepper and the work after
- * each accepted step (DESIGN.md §1 "Choosing B"; the modes are described in sim.c).
+ * each accepted step (docs/design.md §1 "Choosing B"; the modes are described in sim.c).
  *
  * Minimal: re-partition when the frozen basis has degraded (growth past switch_growth) and
  * restart from e'_new. Projected: v onto A v + a0 = 0 nearest in g (inside CVODE's step via

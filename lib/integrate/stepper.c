@@ -230,8 +230,10 @@ void ap_step_sun_message(ap_stepper *s, const char *function, const char *msg) {
 
 int ap_step_fail(ap_stepper *s, int sun_flag, const char *flag_name) {
   int status = s->rhs_neg ? AP_ERR_CALLBACK : s->rhs_nan ? AP_ERR_NAN : AP_ERR_SOLVER;
+  int nomem = flag_name && strstr(flag_name, "MEM_FAIL");   /* ARK_, CV_MEM_FAIL */
   char why[96];
-  if (s->rhs_neg)
+  if (nomem) status = AP_ERR_NOMEM, snprintf(why, sizeof why, "out of memory");
+  else if (s->rhs_neg)
     snprintf(why, sizeof why, "the right-hand side returned %d (stop)", s->rhs_code);
   else if (s->rhs_nan)
     snprintf(why, sizeof why, "NaN or Inf in the right-hand side or the solution");

@@ -146,11 +146,14 @@ static int ark_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user
   if (flag == ARK_SUCCESS) flag = ark_configure(s);
   if (flag != ARK_SUCCESS) {
     char *name = ERKStepGetReturnFlagName(flag);
+    /* ERKStepSetTable returns ARK_MEM_NULL when its copy of the table cannot be allocated */
+    int nomem = flag == ARK_MEM_FAIL || flag == ARK_MEM_NULL;
     if (msg && msg_len)
-      snprintf(msg, msg_len, "%s: ERKStep setup failed (%s): %s", meth->name, name, s->sun_msg);
+      snprintf(msg, msg_len, "%s: %sERKStep setup failed (%s): %s", meth->name,
+               nomem ? "out of memory: " : "", name, s->sun_msg);
     free(name);
     ark_destroy(s);
-    return flag == ARK_MEM_FAIL ? AP_ERR_NOMEM : AP_ERR_SOLVER;
+    return nomem ? AP_ERR_NOMEM : AP_ERR_SOLVER;
   }
   *out = s;
   return AP_OK;

@@ -61,7 +61,8 @@ static int cv_solver(ap_stepper *s) {
   SUNMatrix A = SUNDenseMatrix(s->n, s->n, s->ctx);
   SUNLinearSolver ls = A ? SUNLinSol_Dense(s->y, A, s->ctx) : NULL;
   s->obj[0] = A, s->obj[1] = ls;
-  return ls ? CVodeSetLinearSolver(s->mem, ls, A) : CV_MEM_FAIL;
+  int flag = ls ? CVodeSetLinearSolver(s->mem, ls, A) : CV_MEM_FAIL;
+  return flag == CVLS_MEM_FAIL ? CV_MEM_FAIL : flag;   /* CVLS_MEM_FAIL is CV_CONV_FAILURE's -4 */
 }
 
 /* Native projection: CVODE projects the corrected state and its error estimate itself, so
@@ -105,11 +106,13 @@ static int cv_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user,
   if (flag == CV_SUCCESS) flag = cv_configure(s, t0);
   if (flag != CV_SUCCESS) {
     char *name = CVodeGetReturnFlagName(flag);
+    int nomem = flag == CV_MEM_FAIL || flag == CV_MEM_NULL;
     if (msg && msg_len)
-      snprintf(msg, msg_len, "%s: CVODE setup failed (%s): %s", meth->name, name, s->sun_msg);
+      snprintf(msg, msg_len, "%s: %sCVODE setup failed (%s): %s", meth->name,
+               nomem ? "out of memory: " : "", name, s->sun_msg);
     free(name);
     cv_destroy(s);
-    return flag == CV_MEM_FAIL ? AP_ERR_NOMEM : AP_ERR_SOLVER;
+    return nomem ? AP_ERR_NOMEM : AP_ERR_SOLVER;
   }
   *out = s;
   return AP_OK;

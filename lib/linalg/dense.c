@@ -1,6 +1,6 @@
 /* Appell linear algebra: the small dense kernels of the Appell solve.
  *
- * DESIGN.md §1: G e'' = Phi - B^T (h + g w) with G = B^T g B (l x l, SPD). This file forms G
+ * docs/design.md §1: G e'' = Phi - B^T (h + g w) with G = B^T g B (l x l, SPD). This file forms G
  * (ap_la_congruence, G made exactly symmetric), factors it G = L L^T (ap_la_chol, with a
  * reciprocal condition estimate on request: dlansy for ||G||_1 before factoring, dpocon after),
  * solves with the factor, and computes y = M x and y = M^T x.

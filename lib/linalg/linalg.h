@@ -12,7 +12,7 @@
  * lstsq_At always use LAPACK. The condition estimates (dtrcon, dpocon) are LAPACK on both paths
  * and are skipped when rcond is NULL.
  *
- * Notation (DESIGN.md §1): A is b x k (b constraint rows, k speeds), r = numerical rank of A,
+ * Notation (docs/design.md §1): A is b x k (b constraint rows, k speeds), r = numerical rank of A,
  * l = k - r free speeds. Return values: AP_OK, or AP_ERR_SINGULAR / AP_ERR_ARG.
  * AP_ERR_ARG: bad sizes, rtol negative or not finite, or a non-finite entry of A in the routines
  * that decide the rank (pivot_select, orth_basis, lstsq_At). AP_ERR_SINGULAR: a triangular
@@ -29,7 +29,7 @@ size_t ap_la_work_size(int b, int k);
 /* Ints of scratch that suffice for every routine below with these sizes. */
 size_t ap_la_iwork_size(int b, int k);
 
-/* ---- Partitioned basis (DESIGN.md "Choosing B", the paper's construction) ---------------- */
+/* ---- Partitioned basis (docs/design.md "Choosing B", the paper's construction) ------------ */
 
 /* Choose dependent and independent speeds by pivoted QR (dgeqp3) of A.
  * perm (k): the column order; perm[0..rank-1] are the dependent speeds (pivot order),

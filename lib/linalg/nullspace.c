@@ -1,12 +1,12 @@
 /* Appell linear algebra: bases of the null space of the constraint matrix, by QR.
  *
- * DESIGN.md §1 "Choosing B". Admissible speeds v = B e' + b0 with A B = 0 and A b0 = -a0;
+ * docs/design.md §1 "Choosing B". Admissible speeds v = B e' + b0 with A B = 0 and A b0 = -a0;
  * accelerations v' = B e'' + w with A w = gamma. A is b x k, r = rank A, l = k - r.
  *  - Partitioned basis (the paper's construction). A pivoted QR of A chooses the r dependent
  *    speeds (ap_la_pivot_select). With the partition frozen, the QR of the dependent columns
  *    alone, Ad = A[:, perm[0..r-1]] = Q R11, gives
  *      B = P [-R11^-1 Q1^T A_i ; I],  b0 = P [-R11^-1 Q1^T a0 ; 0],  w = P [R11^-1 Q1^T gamma ; 0]
- *    (DESIGN's P [-R11^-1 R12 ; I] when b == r). Invariant: rows perm[r..k-1] of B are the
+ *    (docs/design.md's P [-R11^-1 R12 ; I] when b == r). Invariant: rows perm[r..k-1] of B are the
  *    identity, so e' = v_i. Rows r..b-1 of Q^T [A_i a0] measure the redundant rows' consistency.
  *  - Orthonormal basis: pivoted QR of A^T, A^T P = Q R; Z = Q[:, r..k-1]; the particular
  *    solutions are minimum-norm, x = Q1 R11^-T (P^T rhs)_{0..r-1}.
@@ -149,8 +149,10 @@ static int small(int b, int k) { return imax(b, k) <= ap_la_small_limit(); }
 #define LA(call) (call) /* a LAPACK / BLAS call: compiled in the double build only */
 #else
 static int small(int b, int k) { return (void)b, (void)k, 1; }
-#define LA(call) 1      /* never reached: the complex-step build is always native (1, not -1:
-                          clang warns of other constants in && and ||) */
+/* never reached: the complex-step build is always native. A function, not the constant -1:
+ * clang's -Wconstant-logical-operand (an error with -Werror) rejects `r > 0 && (-1)`. */
+static int la_native_only(void) { return -1; }
+#define LA(call) la_native_only()
 #endif
 
 #include "linalg/householder.inc"

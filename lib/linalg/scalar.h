@@ -7,7 +7,8 @@
  * that h^2 underflows against the values (AP_CS_STEP), complex arithmetic is exactly dual-number
  * arithmetic: real parts are the double results, imaginary parts carry the derivative.
  *
- * The convention (lib/linalg today; lib/core and lib/model may follow it):
+ * The convention (lib/linalg, and the per-evaluation code of lib/core, lib/model and the
+ * linearization's reduced equations; core/core.h says how the data is mirrored):
  *  - A file that wants both versions is written once with the type ap_sc and the SC_* macros
  *    below, and compiled twice: as itself (double, the normal names) and from a one-line
  *    wrapper "#define AP_SC_COMPLEX 1 / #include "dir/file.c"" (complex-step, every public
@@ -54,9 +55,12 @@ typedef double _Complex ap_sc;
 #define SC_MAG(x) fabs(creal(x))
 #define SC_SQRT(x) csqrt(x)
 #define SC_FINITE(x) (isfinite(creal(x)) && isfinite(cimag(x)))
+#define SC_IM_FINITE(x) isfinite(cimag(x))
 static inline ap_sc sc_abs_(ap_sc x) { return creal(x) < 0.0 ? -x : x; }
 #define SC_ABS(x) sc_abs_(x)
 #define SC_HYPOT(a, b) csqrt((a) * (a) + (b) * (b))
+#define SC_COS(x) ccos(x)
+#define SC_SIN(x) csin(x)
 #else
 typedef double ap_sc;
 #define AP_SC(name) name
@@ -65,8 +69,11 @@ typedef double ap_sc;
 #define SC_MAG(x) fabs(x)
 #define SC_SQRT(x) sqrt(x)
 #define SC_FINITE(x) isfinite(x)
+#define SC_IM_FINITE(x) 1
 #define SC_ABS(x) fabs(x)
 #define SC_HYPOT(a, b) hypot((a), (b))
+#define SC_COS(x) cos(x)
+#define SC_SIN(x) sin(x)
 #endif
 
 #endif

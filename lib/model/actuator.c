@@ -14,19 +14,25 @@
  * The inputs x of a state function are gathered from q and v through indices resolved at
  * compile time (in_idx, in_v), in the order declared. Partial derivatives of tau follow by the
  * chain rule from the function's own partials df; while saturated they vanish.
- * Invariant: ap_act_force reads only t, q and v; it runs no kinematics. */
+ * Invariant: ap_act_force reads only t, q and v; it runs no kinematics.
+ * Generic in the scalar (model/model.h; actuator_cs.c): in the complex-step build a state
+ * function is called at the real parts of its inputs with df asked for, and its value becomes
+ * F + sum_i dF/dx_i (x_i - Re x_i), the exact first-order continuation (the imaginary parts of
+ * a complex step are first order); time functions give real values. Compile and the public
+ * partials are double build only. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "model/builder.h"
+
+/* ---- compile ------------------------------------------------------------------------------ */
+#ifndef AP_SC_COMPLEX
 
 #define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
 
 static const char *what(const ap_effect_def *d) {
   return d->kind == AP_EFFECT_MOTOR ? "motor" : "joint force";
 }
-
-/* ---- compile ------------------------------------------------------------------------------ */
 
 /* Input i of the state function: joint, kind of scalar, local index -> global index. */
 static int resolve_input(ap_builder *b, const ap_bmodel *M, ap_meff *ef, int i) {
@@ -104,6 +110,7 @@ int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef) {
   }
   return d->kind == AP_EFFECT_MOTOR ? check_motor(b, J, ef) : AP_OK;
 }
+#endif
 
 /* ---- evaluation --------------------------------------------------------------------------- */
 
@@ -121,16 +128,60 @@ static int not_finite(const ap_model *m, ap_data *d, const ap_meff *ef, const ch
   return AP_ERR_NAN;
 }
 
+#ifdef AP_SC_COMPLEX
+/* The state function's q and v: the real parts, in the data's n-vector scratch (2n doubles,
+ * which the complex-step stages leave unused; n >= k for a body model). */
+static void real_state(const ap_model *m, ap_data *d, const ap_sc *q, const ap_sc *v,
+                       const double **qr, const double **vr) {
+  double *buf = (double *)((ap_scratch *)d->internal)->tn;
+  for (int i = 0; i < m->n; i++) buf[i] = SC_RE(q[i]);
+  for (int i = 0; i < m->k; i++) buf[m->n + i] = SC_RE(v[i]);
+  *qr = buf, *vr = buf + m->n;
+}
+
+/* f = F(Re x) + sum_i dF/dx_i (x_i - Re x_i): the state function's value continued to the
+ * complex inputs through its exact partials (AP_ERR_UNSUPPORTED when it gives none). */
+static int state_cs(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const ap_sc *q,
+                    const ap_sc *v, ap_sc *f) {
+  const ap_effect_def *e = &ef->def;
+  double x[AP_STATE_MAX_INPUTS], df[1 + AP_STATE_MAX_INPUTS], f0 = 0.0;
+  const double *qr, *vr;
+  for (int i = 0; i < e->ninputs; i++)
+    x[i] = SC_RE(ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]]);
+  for (int i = 0; i <= e->ninputs; i++) df[i] = NAN;
+  real_state(m, d, q, v, &qr, &vr);
+  ap_state_args a = {t, x, e->ninputs, qr, vr};
+  int rc = e->state_fn(&a, &f0, df, e->user);
+  if (rc != 0) return callback_fail(m, d, ef, "state function", rc, t);
+  if (!isfinite(f0)) return not_finite(m, d, ef, "state function", t);
+  *f = f0;
+  for (int i = 0; i < e->ninputs; i++) {
+    if (!isfinite(df[1 + i])) {
+      AP_BM_MSG(d, "model '%s': effect '%s': its state function gives no finite partial "
+                "derivative df[%d] (%g) at t = %.17g, which the complex-step evaluation needs",
+                m->name, ef->name, 1 + i, df[1 + i], t);
+      return AP_ERR_UNSUPPORTED;
+    }
+    const ap_sc xi = ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]];
+    *f += df[1 + i] * (xi - SC_RE(xi));
+  }
+  return AP_OK;
+}
+#endif
+
 /* The value F (joint force) or set-point s (motor): f[0], and f[1], f[2] its first and second
  * time derivatives when it is a function of time alone (0 otherwise). With df (1 + ninputs
- * entries), the partial derivatives: the state function's, or df[0] = f[1] for a function of
- * time (0 for a constant). */
-static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
-                  const double *v, double f[3], double *df) {
+ * entries; double build), the partial derivatives: the state function's, or df[0] = f[1] for a
+ * function of time (0 for a constant). */
+static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const ap_sc *q,
+                  const ap_sc *v, ap_sc f[3], double *df) {
   const ap_effect_def *e = &ef->def;
   f[0] = e->value, f[1] = f[2] = 0.0;
   if (df) memset(df, 0, (size_t)(1 + e->ninputs) * sizeof *df);
   if (e->state_fn) {
+#ifdef AP_SC_COMPLEX
+    return state_cs(m, d, ef, t, q, v, f);
+#else
     double x[AP_STATE_MAX_INPUTS];
     for (int i = 0; i < e->ninputs; i++) x[i] = ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]];
     ap_state_args a = {t, x, e->ninputs, q, v};
@@ -139,32 +190,36 @@ static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, co
     int ok = isfinite(f[0]);
     for (int i = 0; df && i <= e->ninputs; i++) ok = ok && isfinite(df[i]);
     return ok ? AP_OK : not_finite(m, d, ef, "state function", t);
+#endif
   }
   if (!e->value_fn) return AP_OK;
-  int rc = e->value_fn(t, f, e->user);
+  double fv[3] = {e->value, 0.0, 0.0};   /* a function of the real time */
+  int rc = e->value_fn(t, fv, e->user);
   if (rc != 0) return callback_fail(m, d, ef, "value function", rc, t);
-  if (!isfinite(f[0]) || !isfinite(f[1]) || !isfinite(f[2]))
+  if (!isfinite(fv[0]) || !isfinite(fv[1]) || !isfinite(fv[2]))
     return not_finite(m, d, ef, "value function", t);
-  if (df) df[0] = f[1];
+  f[0] = fv[0], f[1] = fv[1], f[2] = fv[2];
+  if (df) df[0] = fv[1];
   return AP_OK;
 }
 
-/* tau from the source value; *sat = 1 when the motor's limit holds it. */
-static double law(const ap_meff *ef, const double *q, const double *v, const double f[3],
-                  int *sat) {
+/* tau from the source value; *sat = 1 when the motor's limit holds it (the decision is taken
+ * on the real part: a saturated torque is constant). */
+static ap_sc law(const ap_meff *ef, const ap_sc *q, const ap_sc *v, const ap_sc f[3],
+                 int *sat) {
   const ap_effect_def *e = &ef->def;
   *sat = 0;
   if (e->kind == AP_EFFECT_JOINT_FORCE) return f[0];
-  double u = e->motor == AP_MOTOR_RATE
-                 ? e->kd * (f[0] - v[ef->col])
-                 : e->kp * (f[0] - q[ef->qcol]) + e->kd * (f[1] - v[ef->col]);
-  if (fabs(u) > e->max_effort) *sat = 1, u = copysign(e->max_effort, u);
+  ap_sc u = e->motor == AP_MOTOR_RATE
+                ? e->kd * (f[0] - v[ef->col])
+                : e->kp * (f[0] - q[ef->qcol]) + e->kd * (f[1] - v[ef->col]);
+  if (SC_MAG(u) > e->max_effort) *sat = 1, u = copysign(e->max_effort, SC_RE(u));
   return u;
 }
 
-int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
-                 const double *v, double *Q) {
-  double f[3];
+int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const ap_sc *q,
+                 const ap_sc *v, ap_sc *Q) {
+  ap_sc f[3];
   int sat, rc = source(m, d, ef, t, q, v, f, NULL);
   if (rc != AP_OK) return rc;
   Q[ef->col] += law(ef, q, v, f, &sat);
@@ -172,6 +227,7 @@ int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, con
 }
 
 /* ---- partial derivatives -------------------------------------------------------------------- */
+#ifndef AP_SC_COMPLEX
 
 /* dtau = g dF + (the PD law's own terms); g = 1 (joint force), kd (rate), kp (angle). */
 static void chain(const ap_meff *ef, const double f[3], const double *df, double *dq,
@@ -187,7 +243,9 @@ static void chain(const ap_meff *ef, const double f[3], const double *df, double
 
 int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *col, double *tau,
                               double *dtau_dq, double *dtau_dv, double *dtau_dt) {
-  if (!ap_model_is_body_model(m) || !d || effect < 0 || effect >= ap_bm(m)->ne) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || effect < 0 ||
+      effect >= ap_bm(m)->ne)
+    return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   const ap_meff *ef = &M->effs[effect];
   if (ef->def.kind != AP_EFFECT_JOINT_FORCE && ef->def.kind != AP_EFFECT_MOTOR) return AP_ERR_ARG;
@@ -208,3 +266,4 @@ int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *co
   free(dq);
   return rc;
 }
+#endif

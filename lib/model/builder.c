@@ -113,6 +113,11 @@ int ap_builder_fail(ap_builder *b, const char *fmt, ...) {
   return AP_ERR_ARG;
 }
 
+static int ap_builder_nomem(ap_builder *b, const char *what) {
+  snprintf(b->msg, sizeof b->msg, "model '%s': out of memory adding a %s", b->name, what);
+  return AP_ERR_NOMEM;
+}
+
 /* Grow an array of `size`-byte entries to hold one more; NULL on failure. */
 static void *grow(void *arr, int count, int *cap, size_t size) {
   if (count < *cap) return arr;
@@ -135,7 +140,7 @@ static int copy_name(ap_builder *b, char *dst, const char *src, const char *what
   do {                                                                                    \
     if (!b || !def) return AP_ERR_ARG;                                                    \
     T *p_ = grow(b->arr, b->cnt, &b->cap, sizeof(T));                                     \
-    if (!p_) return AP_ERR_NOMEM;                                                         \
+    if (!p_) return ap_builder_nomem(b, what);                                            \
     b->arr = p_;                                                                          \
     T *e_ = &b->arr[b->cnt];                                                              \
     e_->def = *def;                                                                       \

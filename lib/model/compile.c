@@ -345,7 +345,7 @@ static int name_rows(const ap_bmodel *M, ap_model *m) {
 
 static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   ap_model *m = calloc(1, sizeof *m);
-  if (!m) return AP_ERR_NOMEM;
+  if (!m) return ap_bm_destroy(M), AP_ERR_NOMEM;
   m->n = M->n, m->k = M->k, m->b = M->b;
   snprintf(m->name, sizeof m->name, "%s", b->name);
   m->coord_names = calloc((size_t)M->n + 1, sizeof(char *));
@@ -376,6 +376,9 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->nphi = M->nloop + M->nquat;
   m->nhol = M->nloop;
   if (m->nphi > 0) m->ev.phi = ap_bm_phi;
+  m->ev.position_cs = ap_bm_position_cs, m->ev.velocity_cs = ap_bm_velocity_cs;
+  if (m->nphi > 0) m->ev.phi_cs = ap_bm_phi_cs;
+  m->ev.cs_blocker = ap_bm_cs_blocker;
   *out = m;
   return AP_OK;
 }
@@ -422,9 +425,9 @@ int ap_builder_compile(ap_builder *b, ap_model **out) {
   b->msg[0] = '\0';
   if (b->nb < 1) FAIL("model '%s': no bodies", b->name);
   ap_bmodel *M = calloc(1, sizeof *M);
-  if (!M) return AP_ERR_NOMEM;
-  int rc = compile_all(b, M);
-  if (rc == AP_OK) return make_model(b, M, out);
-  ap_bm_destroy(M);
+  int rc = M ? compile_all(b, M) : AP_ERR_NOMEM;
+  if (rc == AP_OK) rc = make_model(b, M, out);   /* M is the model's (or freed) from here */
+  else ap_bm_destroy(M);
+  if (rc == AP_ERR_NOMEM) snprintf(b->msg, sizeof b->msg, "model '%s': out of memory", b->name);
   return rc;
 }

@@ -1,4 +1,4 @@
-/* Constraint kinds: rows of A v + a0 = 0 and gamma = -(A' v + a0') (DESIGN.md §1).
+/* Constraint kinds: rows of A v + a0 = 0 and gamma = -(A' v + a0') (docs/design.md §1).
  *
  * With a point's Jacobian JP (3 x K1, column k = rheonomic part) a row c . (JP [v; 1]) gives
  * A = c^T JP[:, 0..k-1] and a0 = c . JP[:, k] minus the ground surface's velocity. The ground
@@ -14,14 +14,17 @@
  *            phi' = n . (vA - vB) + (n x d) . wB, d = xA - xB;
  *            gamma = -((alB x n + wB x (wB x n)) . d + 2 (wB x n) . (vA - vB) + n . (aA - aB)).
  *
- * Per-constraint scratch (CON_STRIDE): Omega, Omega', Vx, Vy, Vx', Vy', f, f' at t. */
+ * Per-constraint scratch (CON_STRIDE): Omega, Omega', Vx, Vy, Vx', Vy', f, f' at t.
+ * Generic in the scalar (model/model.h; constraint_cs.c): time functions give real values;
+ * a user constraint (C callbacks of doubles) makes the complex-step build fail with
+ * AP_ERR_UNSUPPORTED naming it; the subtree forces are double build only. */
 #include <string.h>
 
 #include "model/model.h"
 
 enum { G_OM = AP_G_OM, G_DOM = AP_G_DOM, G_VX, G_VY, G_DVX, G_DVY, G_F, G_FD };
 
-static double *con_scr(const ap_bmodel *M, double *S, int c) {
+static ap_sc *con_scr(const ap_bmodel *M, ap_sc *S, int c) {
   return S + M->off_con + (size_t)c * CON_STRIDE;
 }
 
@@ -44,7 +47,7 @@ static int time_call(const ap_model *m, ap_data *d, const ap_mcon *c, const char
   return AP_OK;
 }
 
-static int ground_time(const ap_model *m, ap_data *d, const ap_mcon *c, double t, double *G) {
+static int ground_time(const ap_model *m, ap_data *d, const ap_mcon *c, double t, ap_sc *G) {
   const ap_ground_motion *g = &c->def.ground;
   double f[3];
   int rc = AP_OK;
@@ -66,12 +69,13 @@ static int ground_time(const ap_model *m, ap_data *d, const ap_mcon *c, double t
   return rc;
 }
 
-int ap_con_time(const ap_model *m, ap_data *d, double t, double *S) {
+int ap_con_time(const ap_model *m, ap_data *d, double t, ap_sc *S) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
     if (!c->timed) continue;
-    double *G = con_scr(M, S, ci), f[3];
+    ap_sc *G = con_scr(M, S, ci);
+    double f[3];
     memset(G, 0, CON_STRIDE * sizeof *G);
     int rc = ground_time(m, d, c, t, G);
     if (rc == AP_OK && c->def.kind == AP_CON_PRESCRIBED_SPEED) {
@@ -88,7 +92,7 @@ int ap_con_time(const ap_model *m, ap_data *d, double t, double *S) {
 
 /* A fixed ground (c->timed == 0) has no surface velocity or acceleration: those rheonomic terms
  * are skipped, not evaluated as zeros. */
-void ap_con_ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg) {
+void ap_con_ground_velocity(const ap_mcon *c, const ap_sc *G, const ap_sc *x, ap_sc *Vg) {
   const double *ctr = c->def.ground.center;
   Vg[2] = 0.0;
   if (!c->timed) {
@@ -99,8 +103,8 @@ void ap_con_ground_velocity(const ap_mcon *c, const double *G, const double *x, 
   Vg[1] = G[G_VY] + G[G_OM] * (x[0] - ctr[0]);
 }
 
-void ap_con_ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
-                         double *Ag) {
+void ap_con_ground_accel(const ap_mcon *c, const ap_sc *G, const ap_sc *x, const ap_sc *xd,
+                         ap_sc *Ag) {
   const double *ctr = c->def.ground.center;
   Ag[2] = 0.0;
   if (!c->timed) {
@@ -114,7 +118,7 @@ void ap_con_ground_accel(const ap_mcon *c, const double *G, const double *x, con
 /* ---- loop rows ---------------------------------------------------------------------------- */
 
 /* The world normal of loop row s and whether it turns with body2. */
-static int loop_normal(const ap_bmodel *M, double *S, const ap_mcon *c, int s, double *n) {
+static int loop_normal(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int s, ap_sc *n) {
   const double *nb = c->dir;
   if (c->def.kind == AP_CON_COINCIDENT) {
     int axis = -1;
@@ -126,26 +130,26 @@ static int loop_normal(const ap_bmodel *M, double *S, const ap_mcon *c, int s, d
   }
   if (c->def.kind == AP_CON_POINT_ON_LINE) nb = s == 0 ? c->n1 : c->n2;
   if (c->def.body2 < 0) {
-    v3_copy(nb, n);
+    v3_copy_d(nb, n);
     return 0;
   }
   kbody B = ap_kin_body(M, S, c->def.body2);
-  m3_mul_v(B.R, nb, n);
+  m3_mul_v_d(B.R, nb, n);
   return 1;
 }
 
 /* Row s of a loop: residual phi and the K1 coefficients of [v; 1] in row. */
-static double loop_row(const ap_bmodel *M, double *S, const ap_mcon *c, int s, double *row) {
-  double *JA = S + M->off_tmp, *JB = JA + 3 * M->K1;
-  double n[3], xA[3], xB[3], dd[3], nxd[3];
+static ap_sc loop_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int s, ap_sc *row) {
+  ap_sc *JA = S + M->off_tmp, *JB = JA + 3 * M->K1;
+  ap_sc n[3], xA[3], xB[3], dd[3], nxd[3];
   int rot = loop_normal(M, S, c, s, n);
-  ap_kin_point(M, S, c->def.body, c->def.point, xA, NULL, JA);
-  ap_kin_point(M, S, c->def.body2, c->def.point2, xB, NULL, JB);
+  ap_kin_point_d(M, S, c->def.body, c->def.point, xA, NULL, JA);
+  ap_kin_point_d(M, S, c->def.body2, c->def.point2, xB, NULL, JB);
   for (int i = 0; i < 3; i++) dd[i] = xA[i] - xB[i];
   v3_cross(n, dd, nxd);
-  const double *JwB = rot ? ap_kin_body(M, S, c->def.body2).Jw : NULL;
+  const ap_sc *JwB = rot ? ap_kin_body(M, S, c->def.body2).Jw : NULL;
   for (int col = 0; col < M->K1; col++) {
-    double r = 0.0;
+    ap_sc r = 0.0;
     for (int i = 0; i < 3; i++) r += n[i] * (JA[i + 3 * col] - JB[i + 3 * col]);
     if (JwB) r += v3_dot(nxd, JwB + 3 * col);
     row[col] = r;
@@ -153,21 +157,21 @@ static double loop_row(const ap_bmodel *M, double *S, const ap_mcon *c, int s, d
   return v3_dot(n, dd);
 }
 
-static double loop_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, int s) {
-  double n[3], xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], aA[3], aB[3], dd[3], dv[3];
+static ap_sc loop_gamma(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int s) {
+  ap_sc n[3], xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], aA[3], aB[3], dd[3], dv[3];
   int rot = loop_normal(M, S, c, s, n);
-  ap_kin_point(M, S, c->def.body, c->def.point, xA, rA, NULL);
-  ap_kin_point(M, S, c->def.body2, c->def.point2, xB, rB, NULL);
+  ap_kin_point_d(M, S, c->def.body, c->def.point, xA, rA, NULL);
+  ap_kin_point_d(M, S, c->def.body2, c->def.point2, xB, rB, NULL);
   ap_kin_point_motion(M, S, c->def.body, rA, vA, aA);
   ap_kin_point_motion(M, S, c->def.body2, rB, vB, aB);
-  double g = 0.0;
+  ap_sc g = 0.0;
   for (int i = 0; i < 3; i++) {
     dd[i] = xA[i] - xB[i], dv[i] = vA[i] - vB[i];
     g += n[i] * (aA[i] - aB[i]);
   }
   if (rot) {
     kbody B = ap_kin_body(M, S, c->def.body2);
-    double wn[3], t1[3], t2[3];
+    ap_sc wn[3], t1[3], t2[3];
     v3_cross(B.w, n, wn);
     v3_cross(B.al, n, t1);
     v3_cross(B.w, wn, t2);
@@ -176,8 +180,8 @@ static double loop_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, int s)
   return -g;
 }
 
-void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT) {
-  double *row = S + M->off_tmp + 6 * (size_t)M->K1;
+void ap_con_loops(const ap_bmodel *M, ap_sc *S, ap_sc *phi, ap_sc *JlT) {
+  ap_sc *row = S + M->off_tmp + 6 * (size_t)M->K1;
   int s = 0;
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
@@ -191,26 +195,36 @@ void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT) {
 /* ---- rows A, a0 ---------------------------------------------------------------------------- */
 
 /* Row r of A and a0 from K1 coefficients minus a free velocity term. */
-static void put_row(const ap_bmodel *M, double *A, double *a0, int r, const double *c3,
-                    const double *J, int stride, double minus) {
+static void put_row(const ap_bmodel *M, ap_sc *A, ap_sc *a0, int r, const ap_sc *c3,
+                    const ap_sc *J, int stride, ap_sc minus) {
   int k = M->k, b = M->b;
   for (int col = 0; col <= k; col++) {
-    double s = c3 ? v3_dot(c3, J + 3 * col) : J[(size_t)col * stride];
+    ap_sc s = c3 ? v3_dot(c3, J + 3 * col) : J[(size_t)col * stride];
     if (col < k) A[r + (size_t)col * b] = s;
     else a0[r] = s - minus;
   }
 }
 
-static void knife_rows(const ap_bmodel *M, double *S, int ci, double *A, double *a0) {
+static void knife_rows(const ap_bmodel *M, ap_sc *S, int ci, ap_sc *A, ap_sc *a0) {
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
-  double *JP = S + M->off_tmp, x[3], n[3], Vg[3];
-  ap_kin_point(M, S, c->def.body, c->def.point, x, NULL, JP);
-  m3_mul_v(C.R, c->dir, n);
+  ap_sc *JP = S + M->off_tmp, x[3], n[3], Vg[3];
+  ap_kin_point_d(M, S, c->def.body, c->def.point, x, NULL, JP);
+  m3_mul_v_d(C.R, c->dir, n);
   ap_con_ground_velocity(c, con_scr(M, S, ci), x, Vg);
   put_row(M, A, a0, c->row, n, JP, 0, v3_dot(n, Vg));
 }
 
+#ifdef AP_SC_COMPLEX
+/* A user constraint's callbacks are C functions of doubles: no complex-step evaluation. */
+static int user_cs(const ap_model *m, ap_data *d, int ci) {
+  AP_BM_MSG(d, "model '%s': constraint '%s': a user constraint (C callbacks of doubles) has no "
+            "complex-step evaluation", m->name, ap_bm(m)->cons[ci].name);
+  return AP_ERR_UNSUPPORTED;
+}
+#define user_rows(m, d, ci, t, q, S, A, a0) ((void)(t), (void)(q), user_cs(m, d, ci))
+#define user_gamma(m, d, ci, t, q, v, S, gamma) ((void)(t), (void)(q), (void)(v), user_cs(m, d, ci))
+#else
 static int user_rows(const ap_model *m, ap_data *d, int ci, double t, const double *q,
                      double *S, double *A, double *a0) {
   const ap_bmodel *M = ap_bm(m);
@@ -231,11 +245,12 @@ static int user_rows(const ap_model *m, ap_data *d, int ci, double t, const doub
   }
   return AP_OK;
 }
+#endif
 
-int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double *S, double *A,
-                double *a0) {
+int ap_con_rows(const ap_model *m, ap_data *d, double t, const ap_sc *q, ap_sc *S, ap_sc *A,
+                ap_sc *a0) {
   const ap_bmodel *M = ap_bm(m);
-  double *row = S + M->off_tmp + 6 * (size_t)M->K1;
+  ap_sc *row = S + M->off_tmp + 6 * (size_t)M->K1;
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
     int rc = AP_OK;
@@ -266,18 +281,18 @@ int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double
 
 /* ---- gamma --------------------------------------------------------------------------------- */
 
-void ap_con_rolling_gamma(const ap_bmodel *M, double *S, int ci, int surface, double *gamma) {
+void ap_con_rolling_gamma(const ap_bmodel *M, ap_sc *S, int ci, int surface, ap_sc *gamma) {
   ap_con_contact_gamma(M, S, ci, con_scr(M, S, ci), surface, gamma);
 }
 
-static void knife_gamma(const ap_bmodel *M, double *S, int ci, double *gamma) {
+static void knife_gamma(const ap_bmodel *M, ap_sc *S, int ci, ap_sc *gamma) {
   const ap_mcon *c = &M->cons[ci];
-  const double *G = con_scr(M, S, ci);
+  const ap_sc *G = con_scr(M, S, ci);
   kbody C = ap_kin_body(M, S, c->def.body);
-  double x[3], r[3], vP[3], aP[3], n[3], wn[3], Vg[3], Ag[3], g = 0.0;
-  ap_kin_point(M, S, c->def.body, c->def.point, x, r, NULL);
+  ap_sc x[3], r[3], vP[3], aP[3], n[3], wn[3], Vg[3], Ag[3], g = 0.0;
+  ap_kin_point_d(M, S, c->def.body, c->def.point, x, r, NULL);
   ap_kin_point_motion(M, S, c->def.body, r, vP, aP);
-  m3_mul_v(C.R, c->dir, n);
+  m3_mul_v_d(C.R, c->dir, n);
   v3_cross(C.w, n, wn);
   ap_con_ground_velocity(c, G, x, Vg);
   ap_con_ground_accel(c, G, x, vP, Ag);
@@ -285,6 +300,7 @@ static void knife_gamma(const ap_bmodel *M, double *S, int ci, double *gamma) {
   gamma[c->row] = -g;
 }
 
+#ifndef AP_SC_COMPLEX
 static int user_gamma(const ap_model *m, ap_data *d, int ci, double t, const double *q,
                       const double *v, double *S, double *gamma) {
   const ap_bmodel *M = ap_bm(m);
@@ -301,9 +317,10 @@ static int user_gamma(const ap_model *m, ap_data *d, int ci, double t, const dou
   memcpy(gamma + c->row, gu, (size_t)c->nrows * sizeof *gu);
   return AP_OK;
 }
+#endif
 
-int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                 double *S, double *gamma) {
+int ap_con_gamma(const ap_model *m, ap_data *d, double t, const ap_sc *q, const ap_sc *v,
+                 ap_sc *S, ap_sc *gamma) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
@@ -328,6 +345,7 @@ int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const
 }
 
 /* ---- reaction forces on a subtree (contact forces, evaluate.c) ----------------------------- */
+#ifndef AP_SC_COMPLEX
 
 /* Total force (world axes) that the constraint rows with multipliers lambda (g v' + h - Q =
  * A^T lambda) exert on the bodies of the subtree rooted at `root`, except constraint `skip`,
@@ -381,3 +399,4 @@ int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, in
   }
   return AP_OK;
 }
+#endif

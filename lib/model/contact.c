@@ -1,5 +1,5 @@
 /* Contacts of a body's shape with the ground plane z = 0: rolling and the wheel's knife edge
- * (DESIGN.md §1 "Constraint kinds"; docs/bodies.md "Wheel contacts").
+ * (docs/design.md §1 "Constraint kinds"; docs/bodies.md "Wheel contacts").
  *
  * The contact point is the shape's support point in the direction u = -R^T e_z (body axes):
  * c_b = grad sigma(u), with Hessian H = grad^2 sigma(u) (shape.c), contact vector rc = R c_b
@@ -25,16 +25,17 @@
  * and the ground's velocity at the rate Ag taken along the geometric contact point
  * x' = vP + R c_b'. Hence gamma_i = -e_i . (aP - Ag) (Ag_z = 0) and for the knife
  * gamma = -((w x n) . (vP - Vg) + n . (aP - Ag)). For a sphere w x R c_b' cancels
- * w x (w x rc) exactly (rc' = 0). */
+ * w x (w x rc) exactly (rc' = 0).
+ * Generic in the scalar (model/model.h; contact_cs.c); contact forces are double build only. */
 #include <string.h>
 
 #include "model/model.h"
 
-static const double EZ[3] = {0, 0, 1};
+static const ap_sc EZ[3] = {0, 0, 1};
 
-kwheel ap_contact_geom(const ap_bmodel *M, double *S, const ap_mcon *c) {
+kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c) {
   if (c->wheel >= 0) {
-    double *p = S + M->off_wheel + (size_t)c->wheel * WHEEL_STRIDE;
+    ap_sc *p = S + M->off_wheel + (size_t)c->wheel * WHEEL_STRIDE;
     kwheel W = {p, p + 3, p + 6, p + 15, p + 18};
     return W;
   }
@@ -45,7 +46,7 @@ kwheel ap_contact_geom(const ap_bmodel *M, double *S, const ap_mcon *c) {
 
 /* ---- position stage ------------------------------------------------------------------------ */
 
-int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S) {
+int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *c = &M->cons[ci];
@@ -53,7 +54,8 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S) {
     const ap_mbody *B = &M->bodies[c->def.body];
     kbody C = ap_kin_body(M, S, c->def.body);
     kwheel W = ap_contact_geom(M, S, c);
-    double sigma, flat;
+    ap_sc sigma;
+    double flat;
     W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
     if (ap_shape_support(&B->shape, W.u, &sigma, W.cb, W.H, &flat) != 0) {
       AP_BM_MSG(d, "model '%s': body '%s': the %s of constraint '%s' lies flat on the ground "
@@ -71,8 +73,8 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S) {
 
 /* ---- the contact row (holonomic) ----------------------------------------------------------- */
 
-double ap_contact_hol_row(const ap_bmodel *M, double *S, const ap_mcon *c, double *row) {
-  double *JP = S + M->off_tmp, x[3];
+ap_sc ap_contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row) {
+  ap_sc *JP = S + M->off_tmp, x[3];
   kwheel W = ap_contact_geom(M, S, c);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   for (int col = 0; col < M->K1; col++) row[col] = JP[2 + 3 * col];
@@ -82,20 +84,20 @@ double ap_contact_hol_row(const ap_bmodel *M, double *S, const ap_mcon *c, doubl
 /* ---- rows ------------------------------------------------------------------------------------ */
 
 /* Row r of A and a0: c3 . (JP [v; 1]) - minus. */
-static void put_row3(const ap_bmodel *M, double *A, double *a0, int r, const double *c3,
-                     const double *JP, double minus) {
+static void put_row3(const ap_bmodel *M, ap_sc *A, ap_sc *a0, int r, const ap_sc *c3,
+                     const ap_sc *JP, ap_sc minus) {
   int k = M->k, b = M->b;
   for (int col = 0; col < k; col++) A[r + (size_t)col * b] = v3_dot(c3, JP + 3 * col);
   a0[r] = v3_dot(c3, JP + 3 * k) - minus;
 }
 
-void ap_con_contact_rows(const ap_bmodel *M, double *S, int ci, const double *G, double *A,
-                         double *a0) {
-  static const double ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
+void ap_con_contact_rows(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
+                         ap_sc *a0) {
+  static const ap_sc ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
-  double *JP = S + M->off_tmp, x[3], Vg[3], n[3];
+  ap_sc *JP = S + M->off_tmp, x[3], Vg[3], n[3];
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   ap_con_ground_velocity(c, G, x, Vg);
   if (c->def.kind == AP_CON_ROLLING) {
@@ -113,14 +115,14 @@ void ap_con_contact_rows(const ap_bmodel *M, double *S, int ci, const double *G,
 
 /* Velocity vP and rate aP of the material contact point (with the surface term when surface),
  * geometric contact point x and its velocity xd. */
-static void contact_motion(const ap_bmodel *M, double *S, const ap_mcon *c, int surface,
-                           double *vP, double *aP, double *x, double *xd) {
+static void contact_motion(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int surface,
+                           ap_sc *vP, ap_sc *aP, ap_sc *x, ap_sc *xd) {
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
-  double Rcd[3] = {0, 0, 0};
+  ap_sc Rcd[3] = {0, 0, 0};
   ap_kin_point_motion(M, S, c->def.body, W.rc, vP, aP);   /* ao + al x rc + w x (w x rc) */
   if (surface) {
-    double wxe[3], ud[3], cd[3];
+    ap_sc wxe[3], ud[3], cd[3];
     v3_cross(C.w, EZ, wxe);
     m3t_mul_v(C.R, wxe, ud);                               /* u' = R^T (w x e_z) */
     m3_mul_v(W.H, ud, cd);                                 /* c_b' = H u' */
@@ -130,11 +132,11 @@ static void contact_motion(const ap_bmodel *M, double *S, const ap_mcon *c, int 
   for (int i = 0; i < 3; i++) x[i] = C.o[i] + W.rc[i], xd[i] = vP[i] + Rcd[i];
 }
 
-void ap_con_contact_gamma(const ap_bmodel *M, double *S, int ci, const double *G, int surface,
-                          double *gamma) {
+void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
+                          ap_sc *gamma) {
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
-  double vP[3], aP[3], x[3], xd[3], Ag[3];
+  ap_sc vP[3], aP[3], x[3], xd[3], Ag[3];
   contact_motion(M, S, c, surface, vP, aP, x, xd);
   ap_con_ground_accel(c, G, x, xd, Ag);
   if (c->def.kind == AP_CON_ROLLING) {
@@ -142,7 +144,7 @@ void ap_con_contact_gamma(const ap_bmodel *M, double *S, int ci, const double *G
     gamma[c->row + 1] = -(aP[1] - Ag[1]);
     if (c->def.no_spin) gamma[c->row + 2] = -(C.al[2] - G[1]);
   } else {
-    double n[3], wn[3], Vg[3], g = 0.0;
+    ap_sc n[3], wn[3], Vg[3], g = 0.0;
     m3_mul_v(C.R, EZ, n);
     v3_cross(C.w, n, wn);
     ap_con_ground_velocity(c, G, x, Vg);
@@ -153,6 +155,7 @@ void ap_con_contact_gamma(const ap_bmodel *M, double *S, int ci, const double *G
 }
 
 /* ---- forces on a subtree (contact forces) ----------------------------------------------------- */
+#ifndef AP_SC_COMPLEX
 
 void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
                           double *F) {
@@ -165,3 +168,4 @@ void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
   }
   if (c->nhol) F[2] += lam[c->hrow];
 }
+#endif

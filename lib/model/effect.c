@@ -10,13 +10,16 @@
  *   user            the callback adds to a zeroed k-vector
  *   joint force     Q_i += tau on one joint speed, motors likewise (actuator.c)
  * Each evaluation increments the effect's counter in the data's scratch (only listed effects
- * run: a model without springs never touches spring code). */
+ * run: a model without springs never touches spring code).
+ * Generic in the scalar (model/model.h; effect_cs.c): wrenches are functions of the real time;
+ * a user effect (a C callback of doubles) makes the complex-step build fail with
+ * AP_ERR_UNSUPPORTED naming it; the potential and the subtree forces are double build only. */
 #include <string.h>
 
 #include "model/model.h"
 
-static void add_JtF(const ap_bmodel *M, const ap_mbody *B, const double *J, const double *F,
-                    double *Q) {
+static void add_JtF(const ap_bmodel *M, const ap_mbody *B, const ap_sc *J, const ap_sc *F,
+                    ap_sc *Q) {
   for (int i = 0; i < B->ncols; i++) {
     int c = B->cols[i];
     Q[c] += v3_dot(J + 3 * c, F);
@@ -25,70 +28,69 @@ static void add_JtF(const ap_bmodel *M, const ap_mbody *B, const double *J, cons
 }
 
 /* The bodies a force between A and B (either may be the ground) can move: their union. */
-static void add_pair(const ap_bmodel *M, int a, int b, const double *JA, const double *JB,
-                     const double *F, double *Q) {
+static void add_pair(const ap_bmodel *M, int a, int b, const ap_sc *JA, const ap_sc *JB,
+                     const ap_sc *F, ap_sc *Q) {
   for (int c = 0; c < M->k; c++) {
-    double s = 0.0;
+    ap_sc s = 0.0;
     if (a >= 0) s += v3_dot(JA + 3 * c, F);
     if (b >= 0) s -= v3_dot(JB + 3 * c, F);
     Q[c] += s;
   }
 }
 
-static void gravity(const ap_bmodel *M, const ap_effect_def *e, double *S, double *Q) {
+static void gravity(const ap_bmodel *M, const ap_effect_def *e, ap_sc *S, ap_sc *Q) {
   for (int b = 0; b < M->nb; b++) {
     const ap_mbody *B = &M->bodies[b];
     kbody C = ap_kin_body(M, S, b);
-    double F[3] = {B->mass * e->gravity[0], B->mass * e->gravity[1], B->mass * e->gravity[2]};
+    ap_sc F[3] = {B->mass * e->gravity[0], B->mass * e->gravity[1], B->mass * e->gravity[2]};
     add_JtF(M, B, C.Jc, F, Q);
   }
 }
 
-static int spring(const ap_model *m, ap_data *d, const ap_meff *ef, double *S, double *Q) {
+static int spring(const ap_model *m, ap_data *d, const ap_meff *ef, ap_sc *S, ap_sc *Q) {
   const ap_bmodel *M = ap_bm(m);
   const ap_effect_def *e = &ef->def;
-  double *JA = S + M->off_tmp, *JB = JA + 3 * M->K1;
-  double xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], dd[3], dv[3], F[3];
-  ap_kin_point(M, S, e->body, e->point, xA, rA, JA);
-  ap_kin_point(M, S, e->body2, e->point2, xB, rB, JB);
+  ap_sc *JA = S + M->off_tmp, *JB = JA + 3 * M->K1;
+  ap_sc xA[3], xB[3], rA[3], rB[3], vA[3], vB[3], dd[3], dv[3], F[3];
+  ap_kin_point_d(M, S, e->body, e->point, xA, rA, JA);
+  ap_kin_point_d(M, S, e->body2, e->point2, xB, rB, JB);
   ap_kin_point_motion(M, S, e->body, rA, vA, NULL);
   ap_kin_point_motion(M, S, e->body2, rB, vB, NULL);
   for (int i = 0; i < 3; i++) dd[i] = xB[i] - xA[i], dv[i] = vB[i] - vA[i];
   if (e->rest_length == 0.0) {
     for (int i = 0; i < 3; i++) F[i] = e->stiffness * dd[i] + e->damping * dv[i];
   } else {
-    double L = v3_norm(dd);
-    if (!(L > 1e-12 * M->lscale)) {
+    ap_sc L = v3_norm(dd);
+    if (!(SC_RE(L) > 1e-12 * M->lscale)) {
       AP_BM_MSG(d, "model '%s': spring '%s': its two points coincide (length %g m) at "
-                "t = %.17g: the direction of its force is undefined", m->name, ef->name, L,
-                d->t);
+                "t = %.17g: the direction of its force is undefined", m->name, ef->name,
+                SC_RE(L), d->t);
       return AP_RECOVERABLE;
     }
-    double f = e->stiffness * (L - e->rest_length) + e->damping * v3_dot(dd, dv) / L;
+    ap_sc f = e->stiffness * (L - e->rest_length) + e->damping * v3_dot(dd, dv) / L;
     for (int i = 0; i < 3; i++) F[i] = f * dd[i] / L;
   }
   add_pair(M, e->body, e->body2, JA, JB, F, Q);
   return AP_OK;
 }
 
-static void joint_damping(const ap_bmodel *M, const ap_effect_def *e, const double *v,
-                          double *Q) {
+static void joint_damping(const ap_bmodel *M, const ap_effect_def *e, const ap_sc *v,
+                          ap_sc *Q) {
   const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
   for (int i = 0; i < j->nv; i++)
     if (j->vidx[i] >= 0) Q[j->vidx[i]] -= e->damping * v[j->vidx[i]];
 }
 
-static int applied(const ap_model *m, ap_data *d, const ap_meff *ef, double t, double *S,
-                   double *Q) {
+static int applied(const ap_model *m, ap_data *d, const ap_meff *ef, double t, ap_sc *S,
+                   ap_sc *Q) {
   const ap_bmodel *M = ap_bm(m);
   const ap_effect_def *e = &ef->def;
-  double F[3], T[3], *JP = S + M->off_tmp;
-  v3_copy(e->force, F);
-  v3_copy(e->torque, T);
-  if (e->wrench) {
-    memset(F, 0, sizeof F);
-    memset(T, 0, sizeof T);
-    int rc = e->wrench(t, F, T, e->user);
+  ap_sc F[3], T[3], *JP = S + M->off_tmp;
+  v3_copy_d(e->force, F);
+  v3_copy_d(e->torque, T);
+  if (e->wrench) {   /* a function of the real time: real values in both builds */
+    double Fw[3] = {0, 0, 0}, Tw[3] = {0, 0, 0};
+    int rc = e->wrench(t, Fw, Tw, e->user);
     if (rc != 0) {
       AP_BM_MSG(d, "model '%s': effect '%s': the wrench callback %s (returned %d) at "
                 "t = %.17g", m->name, ef->name, rc > 0 ? "asked for a smaller step" : "failed",
@@ -96,20 +98,31 @@ static int applied(const ap_model *m, ap_data *d, const ap_meff *ef, double t, d
       return rc > 0 ? AP_RECOVERABLE : AP_ERR_CALLBACK;
     }
     for (int i = 0; i < 3; i++)
-      if (!isfinite(F[i]) || !isfinite(T[i])) {
+      if (!isfinite(Fw[i]) || !isfinite(Tw[i])) {
         AP_BM_MSG(d, "model '%s': effect '%s': the wrench callback gave a non-finite value "
                   "at t = %.17g", m->name, ef->name, t);
         return AP_ERR_NAN;
       }
+    v3_copy_d(Fw, F), v3_copy_d(Tw, T);
   }
   const ap_mbody *B = &M->bodies[e->body];
   kbody C = ap_kin_body(M, S, e->body);
-  ap_kin_point(M, S, e->body, e->point, NULL, NULL, JP);
+  ap_kin_point_d(M, S, e->body, e->point, NULL, NULL, JP);
   add_JtF(M, B, JP, F, Q);
   add_JtF(M, B, C.Jw, T, Q);
   return AP_OK;
 }
 
+#ifdef AP_SC_COMPLEX
+/* A user effect's callback is a C function of doubles: no complex-step evaluation. */
+static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double t,
+                       const ap_sc *q, const ap_sc *v, ap_sc *S, ap_sc *Q) {
+  (void)t, (void)q, (void)v, (void)S, (void)Q;
+  AP_BM_MSG(d, "model '%s': effect '%s': a user effect (a C callback of doubles) has no "
+            "complex-step evaluation", m->name, ef->name);
+  return AP_ERR_UNSUPPORTED;
+}
+#else
 static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double t,
                        const double *q, const double *v, double *S, double *Q) {
   const ap_bmodel *M = ap_bm(m);
@@ -125,22 +138,24 @@ static int user_effect(const ap_model *m, ap_data *d, const ap_meff *ef, double 
   for (int c = 0; c < M->k; c++) Q[c] += Qu[c];
   return AP_OK;
 }
+#endif
 
 /* After each effect: Q must stay finite and integrable (AP_HUGE), or this effect is named. */
-static int check_effect(const ap_model *m, ap_data *d, const ap_meff *ef, const double *Q,
+static int check_effect(const ap_model *m, ap_data *d, const ap_meff *ef, const ap_sc *Q,
                         double t) {
   for (int c = 0; c < m->k; c++)
-    if (!(fabs(Q[c]) <= AP_HUGE)) {
+    if (!(SC_MAG(Q[c]) <= AP_HUGE && SC_IM_FINITE(Q[c]))) {
       AP_BM_MSG(d, "model '%s': effect '%s' gives the generalized force %g on speed '%s' at "
-                "t = %.17g%s", m->name, ef->name, Q[c], ap_model_speed_name(m, c), t,
-                isfinite(Q[c]) ? " (more than 1e150 in magnitude: too large to integrate)" : "");
+                "t = %.17g%s", m->name, ef->name, SC_RE(Q[c]), ap_model_speed_name(m, c), t,
+                SC_FINITE(Q[c]) ? " (more than 1e150 in magnitude: too large to integrate)"
+                                : "");
       return AP_ERR_NAN;
     }
   return AP_OK;
 }
 
-int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                  double *S, double *Q) {
+int ap_eff_forces(const ap_model *m, ap_data *d, double t, const ap_sc *q, const ap_sc *v,
+                  ap_sc *S, ap_sc *Q) {
   const ap_bmodel *M = ap_bm(m);
   for (int i = 0; i < M->ne; i++) {
     const ap_meff *ef = &M->effs[i];
@@ -161,6 +176,7 @@ int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, cons
   return AP_OK;
 }
 
+#ifndef AP_SC_COMPLEX
 double ap_eff_potential(const ap_bmodel *M, double *S) {
   double V = 0.0;
   for (int i = 0; i < M->ne; i++) {
@@ -249,3 +265,4 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
   }
   return AP_OK;
 }
+#endif

@@ -1,17 +1,14 @@
-/* The body model's evaluator hooks (core/core.h) and the public queries of body.h.
+/* The body model's evaluator hooks between steps (core/core.h) and the public queries of
+ * body.h (double build only; the per-evaluation hooks are in hooks.c).
  *
- * Position stage: kinematics at (t, q) -> g, N (quaternion blocks), A, a0.
- * Velocity stage: body velocities and bias accelerations at v -> h, Q, gamma.
  * project_q (after each accepted step): quaternions back to unit norm when they drifted by more
  * than AP_QUAT_TOL, then loop closures and wheel contacts phi(q, t) = 0 (the implicit
  * holonomic rows) by Gauss-Newton with minimum-norm steps dv (lstsq on their Jacobian) mapped
  * to q through N. Corrections below the tolerances are
  * not applied, so the stepper restarts only when something really moved.
  * Everything writes into the data's scratch; the model is never modified.
- * Counters (d->cnt, as the core counts a math-level system's callbacks): metric, kinematic
- * (n != k), constraint (b > 0) and rheonomic (drives or timed constraints only) per position
- * stage; bias, force (effects listed) and gamma (b > 0) per velocity stage; energy per
- * ap_body_energy. A stage's piece that the model does not have is skipped and not counted. */
+ * Counters: energy per ap_body_energy. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -20,31 +17,23 @@
 
 /* ---- hooks ------------------------------------------------------------------------------- */
 
-int ap_bm_position(const ap_model *m, ap_data *d, double *S) {
+/* The complex-step build evaluates the model unless a user callback (a C function of doubles)
+ * takes part. */
+int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len) {
   const ap_bmodel *M = ap_bm(m);
-  d->cnt.metric++;
-  d->cnt.kinematic += M->n != M->k;
-  d->cnt.constraint += M->b > 0;
-  d->cnt.rheonomic += M->rheonomic;
-  int rc = ap_kin_position(m, d, d->t, d->q, S);
-  if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
-  if (rc != AP_OK) return rc;
-  ap_kin_metric(M, S, d->g);
-  if (M->n != M->k)
-    for (int j = 0; j < M->nj; j++) ap_joint_fill_N(&M->joints[j], d->q, d->N, M->n);
-  return M->b ? ap_con_rows(m, d, d->t, d->q, S, d->A, d->a0) : AP_OK;
-}
-
-int ap_bm_velocity(const ap_model *m, ap_data *d, double *S) {
-  const ap_bmodel *M = ap_bm(m);
-  d->cnt.bias++;
-  d->cnt.force += M->ne > 0;
-  d->cnt.gamma += M->b > 0;
-  ap_kin_velocity(M, d->v, S);
-  ap_kin_bias(M, S, d->h);
-  int rc = M->ne ? ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q) : AP_OK;
-  if (rc == AP_OK && M->b) rc = ap_con_gamma(m, d, d->t, d->q, d->v, S, d->gamma);
-  return rc;
+  for (int ci = 0; ci < M->nc; ci++)
+    if (M->cons[ci].def.kind == AP_CON_USER) {
+      snprintf(msg, len, "constraint '%s' is a user constraint (C callbacks of doubles)",
+               M->cons[ci].name);
+      return -1;
+    }
+  for (int i = 0; i < M->ne; i++)
+    if (M->effs[i].def.kind == AP_EFFECT_USER) {
+      snprintf(msg, len, "effect '%s' is a user effect (a C callback of doubles)",
+               M->effs[i].name);
+      return -1;
+    }
+  return 0;
 }
 
 void ap_bm_destroy(void *impl) {
@@ -230,55 +219,6 @@ int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S) {
   return M->nquat || M->nwheel ? track_flat(m, d, q, S, 1, 0) : AP_OK;
 }
 
-/* ---- implicit holonomic constraints for the DAE mode (GGL) ----------------------------------
- *
- * Rows 0..nloop-1: the loop closures phi = n . (xA - xB) (constraint.c) and the wheel contacts'
- * rows .z, phi = the contact point's height (contact.c). Their Jacobian with
- * respect to the speeds, Jl = d phi' / d v = Phi_q N, comes from ap_con_loops; it is mapped to
- * q joint by joint: a scalar coordinate has N = 1 against its speed, so its column of Phi_q is
- * Jl's; a quaternion p enters phi only through R(p / |p|), so Phi_q p = 0, and
- * Phi_q N_p = Jl_w with N_p = 1/2 [0; w] (x) p, whose columns are orthogonal with norm |p| / 2:
- * the quaternion block of Phi_q is (4 / |p|^2) Jl_w N_p^T.
- * Rows nloop..nloop+nquat-1: |p|^2 - 1 = 0 for each quaternion joint, Jacobian 2 p^T. */
-
-/* Row s of Phi_q (ld nphi) from the speed Jacobian row jl (k entries, stride 1). */
-static void phi_row_to_q(const ap_bmodel *M, const double *q, const double *jl, int s,
-                         int nphi, double *Phi_q) {
-  for (int j = 0; j < M->nj; j++) {
-    const ap_mjoint *J = &M->joints[j];
-    for (int i = 0; i < J->ndrivable; i++)
-      if (J->qidx[i] >= 0) Phi_q[s + (size_t)J->qidx[i] * nphi] = jl[J->vidx[i]];
-    if (J->quat < 0) continue;
-    const double *p = q + J->qidx[J->quat], *jw = jl + J->vidx[J->wofs];
-    double N[12], pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
-    ap_quat_N(p, N, 4, 0, 0);
-    for (int r = 0; r < 4; r++)
-      Phi_q[s + (size_t)(J->qidx[J->quat] + r) * nphi] =
-          4.0 / pp * (N[r] * jw[0] + N[r + 4] * jw[1] + N[r + 8] * jw[2]);
-  }
-}
-
-int ap_bm_phi(const ap_model *m, ap_data *d, double *S, double *phi, double *Phi_q) {
-  const ap_bmodel *M = ap_bm(m);
-  int nl = M->nloop, nphi = m->nphi, k = M->k;
-  if (nl > 0) {
-    double *JlT = S + M->off_proj;   /* row s of Jl is column s of JlT: contiguous */
-    ap_con_loops(M, S, phi, JlT);
-    for (int s = 0; s < nl && Phi_q; s++)
-      phi_row_to_q(M, d->q, JlT + (size_t)s * k, s, nphi, Phi_q);
-  }
-  for (int j = 0, s = nl; j < M->nj; j++) {
-    const ap_mjoint *J = &M->joints[j];
-    if (J->quat < 0) continue;
-    const double *p = d->q + J->qidx[J->quat];
-    phi[s] = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] - 1.0;
-    for (int r = 0; r < 4 && Phi_q; r++)
-      Phi_q[s + (size_t)(J->qidx[J->quat] + r) * nphi] = 2.0 * p[r];
-    s++;
-  }
-  return AP_OK;
-}
-
 /* ---- public queries ------------------------------------------------------------------------ */
 
 int ap_model_is_body_model(const ap_model *m) {
@@ -340,7 +280,7 @@ int ap_constraint_row_index(const ap_model *m, int constraint) {
 }
 
 int ap_body_eval(const ap_model *m, ap_data *d) {
-  if (!ap_model_is_body_model(m) || !d) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d)) return AP_ERR_ARG;
   double *S = ap_bm_scratch(d);
   int rc = ap_kin_position(m, d, d->t, d->q, S);
   if (rc == AP_OK) ap_kin_velocity(ap_bm(m), d->v, S);
@@ -348,7 +288,8 @@ int ap_body_eval(const ap_model *m, ap_data *d) {
 }
 
 int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out) {
-  if (!ap_model_is_body_model(m) || !d || !out || body < 0 || body >= ap_bm(m)->nb)
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out || body < 0 ||
+      body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d);
@@ -374,7 +315,8 @@ int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_sta
 int ap_body_point_jacobian(const ap_model *m, const ap_data *d, int body, const double p[3],
                            double *Jw, double *Jv, double rw[3], double rv[3], double aw[3],
                            double av[3]) {
-  if (!ap_model_is_body_model(m) || !d || !p || body < 0 || body >= ap_bm(m)->nb)
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !p || body < 0 ||
+      body >= ap_bm(m)->nb)
     return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d), *JP = S + M->off_tmp, r[3];
@@ -410,12 +352,14 @@ int ap_body_energy(const ap_model *m, ap_data *d, double *kinetic, double *poten
 }
 
 long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect) {
-  if (!ap_model_is_body_model(m) || !d || effect < 0 || effect >= ap_bm(m)->ne) return -1;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || effect < 0 ||
+      effect >= ap_bm(m)->ne)
+    return -1;
   return (long)ap_bm_scratch(d)[ap_bm(m)->off_cnt + (size_t)effect];
 }
 
 int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) {
-  if (!ap_model_is_body_model(m) || !d || !q) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q) return AP_ERR_ARG;
   double ch = 0.0;
   int rc = ap_bm_project(m, d, q, ap_bm_scratch(d), &ch, 0);
   if (change) *change = ch;
@@ -423,7 +367,7 @@ int ap_body_project_q(const ap_model *m, ap_data *d, double *q, double *change) 
 }
 
 int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
-  if (!ap_model_is_body_model(m) || !d || !phi_max) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !phi_max) return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   *phi_max = 0.0;
   if (!M->nloop) return AP_OK;
@@ -438,7 +382,8 @@ int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
 /* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T. */
 int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
                             double *v) {
-  if (!ap_model_is_body_model(m) || !d || !q || !given || !v) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q || !given || !v)
+    return AP_ERR_ARG;
   int k = m->k, b = m->b, nf = 0;
   memcpy(d->q, q, (size_t)m->n * sizeof *q);
   memset(d->g, 0, (size_t)k * k * sizeof *d->g);
@@ -452,6 +397,7 @@ int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, cons
   int *iw = calloc(liw + 1, sizeof *iw);
   if (!AfT || !iw) {
     free(AfT), free(iw);
+    AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
     return AP_ERR_NOMEM;
   }
   double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 1.0;
@@ -518,7 +464,7 @@ static int wheel_force(const ap_bmodel *M, double *S, const ap_mcon *c, const do
  * a_b = Jc_b v' + ac_b the centre-of-mass accelerations at the data's v'. */
 int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
                           int constraint, ap_contact_force *out) {
-  if (!ap_model_is_body_model(m) || !d || !out) return AP_ERR_ARG;
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out) return AP_ERR_ARG;
   const ap_bmodel *M = ap_bm(m);
   if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
     return AP_ERR_ARG;

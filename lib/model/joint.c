@@ -13,11 +13,14 @@
  *
  * q' = N v: scalar coordinates have N = 1 against their own speed; a quaternion has the 4 x 3
  * block of q' = 1/2 [0; w] (x) q (rot.c). Local coordinate i < ndrivable is the scalar whose
- * rate is local speed i, which is what makes it drivable. */
+ * rate is local speed i, which is what makes it drivable.
+ * Generic in the scalar (model/model.h; joint_cs.c): columns, transforms and N; the counts and
+ * names are double build only. */
 #include <string.h>
 
 #include "model/model.h"
 
+#ifndef AP_SC_COMPLEX
 void ap_joint_counts(ap_joint_kind kind, int *nq, int *nv, int *ndrivable, int *quat,
                      int *wofs) {
   static const int tab[7][5] = {
@@ -35,12 +38,14 @@ void ap_joint_counts(ap_joint_kind kind, int *nq, int *nv, int *ndrivable, int *
   *wofs = tab[i][4];
 }
 
-void ap_joint_column(const ap_mjoint *j, int i, const double *rc, double *sw, double *sv) {
+#endif
+
+void ap_joint_column(const ap_mjoint *j, int i, const ap_sc *rc, ap_sc *sw, ap_sc *sv) {
   memset(sw, 0, 3 * sizeof *sw);
   memset(sv, 0, 3 * sizeof *sv);
   switch (j->kind) {
-    case AP_JOINT_REVOLUTE: v3_copy(j->axis, sw); break;
-    case AP_JOINT_PRISMATIC: v3_copy(j->axis, sv); break;
+    case AP_JOINT_REVOLUTE: v3_copy_d(j->axis, sw); break;
+    case AP_JOINT_PRISMATIC: v3_copy_d(j->axis, sv); break;
     case AP_JOINT_PLANAR:
       if (i < 2) sv[i] = 1.0;
       else sw[2] = 1.0;
@@ -54,7 +59,7 @@ void ap_joint_column(const ap_mjoint *j, int i, const double *rc, double *sw, do
       if (i < 2) {
         sv[i] = 1.0;
       } else {
-        double ez[3] = {0, 0, 1}, e[3];
+        ap_sc ez[3] = {0, 0, 1}, e[3];
         v3_cross(ez, rc, e);
         sw[i - 2] = 1.0;
         sv[2] = e[i - 2];
@@ -64,15 +69,15 @@ void ap_joint_column(const ap_mjoint *j, int i, const double *rc, double *sw, do
   }
 }
 
-void ap_joint_transform(const ap_mjoint *j, const double *ql, double *Rj, double *tj) {
-  static const double I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+void ap_joint_transform(const ap_mjoint *j, const ap_sc *ql, ap_sc *Rj, ap_sc *tj) {
+  static const ap_sc I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   static const double ez[3] = {0, 0, 1};
   memcpy(Rj, I3, sizeof I3);
   memset(tj, 0, 3 * sizeof *tj);
   switch (j->kind) {
     case AP_JOINT_FIXED: break;
     case AP_JOINT_REVOLUTE: ap_rot_axis_angle(j->axis, ql[0], Rj); break;
-    case AP_JOINT_PRISMATIC: v3_axpy(ql[0], j->axis, tj); break;
+    case AP_JOINT_PRISMATIC: v3_axpy_d(ql[0], j->axis, tj); break;
     case AP_JOINT_PLANAR:
       ap_rot_axis_angle(ez, ql[2], Rj);
       tj[0] = ql[0], tj[1] = ql[1];
@@ -89,13 +94,14 @@ void ap_joint_transform(const ap_mjoint *j, const double *ql, double *Rj, double
   }
 }
 
-void ap_joint_fill_N(const ap_mjoint *j, const double *q, double *N, int n) {
+void ap_joint_fill_N(const ap_mjoint *j, const ap_sc *q, ap_sc *N, int n) {
   for (int i = 0; i < j->ndrivable; i++)
     if (j->qidx[i] >= 0) N[j->qidx[i] + (size_t)j->vidx[i] * n] = 1.0;
   if (j->quat >= 0)
     ap_quat_N(q + j->qidx[j->quat], N, n, j->qidx[j->quat], j->vidx[j->wofs]);
 }
 
+#ifndef AP_SC_COMPLEX
 const char *ap_joint_kind_name(ap_joint_kind kind) {
   static const char *const names[] = {"free", "fixed", "revolute", "prismatic", "planar",
                                       "ball", "plane contact"};
@@ -130,3 +136,4 @@ const char *ap_joint_speed_name(ap_joint_kind kind, int i) {
     default: return "?";
   }
 }
+#endif

@@ -17,18 +17,20 @@
  * (Sv' vj is non-zero only for the plane contact: e_z ((e_z x rc') . w), rc' = w x rc + R H u',
  * u' = R^T (w x e_z): the contact point moving over the surface.) Exact; no differences.
  *
- * Convention for Appell's equations g v' + h = Q (DESIGN.md §1): with the com Jacobian
+ * Convention for Appell's equations g v' + h = Q (docs/design.md §1): with the com Jacobian
  * Jc = Jo - [R com]x Jw and the com bias ac = ao + al x rcom + w x (w x rcom),
  *   g = sum_b m Jc^T Jc + Jw^T Iw Jw,   h = sum_b m Jc^T ac + Jw^T (Iw al + w x Iw w),
- * Iw = R I R^T (inertia about the com in world axes): dS/dv' of the Gibbs-Appell function. */
+ * Iw = R I R^T (inertia about the com in world axes): dS/dv' of the Gibbs-Appell function.
+ * Generic in the scalar (model/model.h; kinematics_cs.c); the layout is double build only. */
 #include <stdio.h>
 #include <string.h>
 
 #include "linalg/linalg.h"
 #include "model/model.h"
 
-static const double ZERO3[3] = {0, 0, 0};
+static const ap_sc ZERO3[3] = {0, 0, 0};
 
+#ifndef AP_SC_COMPLEX
 void ap_kin_layout(ap_bmodel *M) {
   size_t K1 = (size_t)M->K1, k = (size_t)M->k, nl = (size_t)M->nloop;
   M->body_stride = 36 + 9 * K1;
@@ -46,17 +48,18 @@ void ap_kin_layout(ap_bmodel *M) {
   size_t proj = nl ? nl * k + 2 * nl + 2 * k + (size_t)M->n + M->proj_work + M->proj_iwork : 0;
   M->scratch = M->off_proj + proj;
 }
+#endif
 
-kbody ap_kin_body(const ap_bmodel *M, double *S, int b) {
-  double *p = S + M->off_body + (size_t)b * M->body_stride;
+kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int b) {
+  ap_sc *p = S + M->off_body + (size_t)b * M->body_stride;
   size_t K3 = 3 * (size_t)M->K1;
   kbody B = {p, p + 9, p + 12, p + 21, p + 36, p + 36 + K3, p + 36 + 2 * K3,
              p + 24, p + 27, p + 30, p + 33};
   return B;
 }
 
-kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j) {
-  double *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
+kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j) {
+  ap_sc *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
   kjoint J = {p, p + 7, p + 13, p + 22, p + 25, p + 28, p + 31, p + 34, p + 37,
               p + 46, p + 49, p + 58, p + 61, p + 64};
   return J;
@@ -64,11 +67,11 @@ kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j) {
 
 /* out[:, c] += J[:, c] x r for the first ncol columns (the velocity of an offset point). Without
  * drives ncol = k: the rheonomic column k is zero everywhere and is not touched. */
-static void cols_cross_r(int ncol, const double *J, const double *r, double *out) {
+static void cols_cross_r(int ncol, const ap_sc *J, const ap_sc *r, ap_sc *out) {
   for (int c = 0; c < ncol; c++) v3_cross_add(J + 3 * c, r, out + 3 * c);
 }
 
-void ap_kin_apply(int K1, const double *J, const double *v, double *out) {
+void ap_kin_apply(int K1, const ap_sc *J, const ap_sc *v, ap_sc *out) {
   int k = K1 - 1;
   v3_copy(J + 3 * k, out);
   for (int c = 0; c < k; c++) v3_axpy(v[c], J + 3 * c, out);
@@ -76,12 +79,12 @@ void ap_kin_apply(int K1, const double *J, const double *v, double *out) {
 
 /* ---- position stage ---------------------------------------------------------------------- */
 
+/* Drives are functions of the real time: their values are real in both builds. */
 static int call_drives(const ap_model *m, ap_data *d, const ap_mjoint *j, double t,
-                       double *drv) {
+                       ap_sc *drv) {
   for (int i = 0; i < j->ndrivable; i++) {
     if (!j->drive[i]) continue;
-    double *f = drv + 3 * i;
-    f[0] = f[1] = f[2] = 0.0;
+    double f[3] = {0.0, 0.0, 0.0};
     int rc = j->drive[i](t, f, j->drive_user[i]);
     const char *cn = ap_joint_coord_name(j->kind, i);
     if (rc != 0) {
@@ -95,13 +98,14 @@ static int call_drives(const ap_model *m, ap_data *d, const ap_mjoint *j, double
                 "t = %.17g", m->name, j->name, cn, f[0], f[1], f[2], t);
       return AP_ERR_NAN;
     }
+    drv[3 * i] = f[0], drv[3 * i + 1] = f[1], drv[3 * i + 2] = f[2];
   }
   return AP_OK;
 }
 
 /* Height and contact of a plane-contact body with rotation R: u = -R^T e_z. */
 static int plane_contact(const ap_model *m, ap_data *d, const ap_mbody *B, double t,
-                         const double *R, kjoint *J, double *z) {
+                         const ap_sc *R, kjoint *J, ap_sc *z) {
   double flat;
   J->u[0] = -R[2], J->u[1] = -R[5], J->u[2] = -R[8];
   if (ap_shape_support(&B->shape, J->u, z, J->cb, J->H, &flat) != 0) {
@@ -116,13 +120,13 @@ static int plane_contact(const ap_model *m, ap_data *d, const ap_mbody *B, doubl
 }
 
 /* The joint's own columns into Jw and Jo (world), driven ones into column k. */
-static void joint_columns(const ap_bmodel *M, const ap_mjoint *j, kjoint *J, double *Jw,
-                          double *Jo) {
+static void joint_columns(const ap_bmodel *M, const ap_mjoint *j, kjoint *J, ap_sc *Jw,
+                          ap_sc *Jo) {
   int k = M->k;
-  memset(J->adw, 0, 3 * sizeof(double));
-  memset(J->adv, 0, 3 * sizeof(double));
+  memset(J->adw, 0, 3 * sizeof(ap_sc));
+  memset(J->adv, 0, 3 * sizeof(ap_sc));
   for (int i = 0; i < j->nv; i++) {
-    double sw[3], sv[3], W[3], V[3];
+    ap_sc sw[3], sv[3], W[3], V[3];
     ap_joint_column(j, i, J->rc, sw, sv);
     m3_mul_v(J->RFP, sw, W);
     m3_mul_v(J->RFP, sv, V);
@@ -130,7 +134,7 @@ static void joint_columns(const ap_bmodel *M, const ap_mjoint *j, kjoint *J, dou
       v3_axpy(1.0, W, Jw + 3 * j->vidx[i]);
       v3_axpy(1.0, V, Jo + 3 * j->vidx[i]);
     } else {
-      double f1 = J->drv[3 * i + 1], f2 = J->drv[3 * i + 2];
+      ap_sc f1 = J->drv[3 * i + 1], f2 = J->drv[3 * i + 2];
       v3_axpy(f1, W, Jw + 3 * k), v3_axpy(f1, V, Jo + 3 * k);
       v3_axpy(f2, W, J->adw), v3_axpy(f2, V, J->adv);
     }
@@ -138,7 +142,7 @@ static void joint_columns(const ap_bmodel *M, const ap_mjoint *j, kjoint *J, dou
 }
 
 static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, double t,
-                          const double *q, double *S) {
+                          const ap_sc *q, ap_sc *S) {
   const ap_bmodel *M = ap_bm(m);
   size_t K3 = 3 * (size_t)M->K1;
   kjoint J = ap_kin_joint(M, S, (int)(j - M->joints));
@@ -147,13 +151,13 @@ static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, dou
   if (rc != AP_OK) return rc;
   for (int i = 0; i < j->nq; i++) J.qloc[i] = j->qidx[i] >= 0 ? q[j->qidx[i]] : J.drv[3 * i];
 
-  static const double I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  const double *Rp = I3, *op = ZERO3;
+  static const ap_sc I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  const ap_sc *Rp = I3, *op = ZERO3;
   kbody P = C;   /* replaced by the parent's view when there is one */
   if (j->parent >= 0) P = ap_kin_body(M, S, j->parent), Rp = P.R, op = P.o;
-  double Rj[9], tj[3], RFC[9], r12[3], oFC[3];
-  m3_mul(Rp, j->Rpf, J.RFP);
-  m3_mul_v(Rp, j->ppf, J.r1);
+  ap_sc Rj[9], tj[3], RFC[9], r12[3], oFC[3];
+  m3_mul_d(Rp, j->Rpf, J.RFP);
+  m3_mul_v_d(Rp, j->ppf, J.r1);
   ap_joint_transform(j, J.qloc, Rj, tj);
   if (j->kind == AP_JOINT_PLANE_CONTACT) {
     rc = plane_contact(m, d, &M->bodies[j->child], t, Rj, &J, &tj[2]);
@@ -161,8 +165,8 @@ static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, dou
   }
   m3_mul_v(J.RFP, tj, J.r2);
   m3_mul(J.RFP, Rj, RFC);
-  m3_mul_t(RFC, j->Rcf, C.R);
-  m3_mul_v(C.R, j->pcf, J.r3);
+  m3_mul_t_d(RFC, j->Rcf, C.R);
+  m3_mul_v_d(C.R, j->pcf, J.r3);
   for (int i = 0; i < 3; i++) {
     r12[i] = J.r1[i] + J.r2[i];
     oFC[i] = op[i] + r12[i];
@@ -170,12 +174,12 @@ static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, dou
   }
   /* Jacobians: transport the parent's, add the joint's columns, move to the child origin. */
   if (j->parent >= 0) {
-    memcpy(C.Jw, P.Jw, K3 * sizeof(double));
-    memcpy(C.Jo, P.Jo, K3 * sizeof(double));
+    memcpy(C.Jw, P.Jw, K3 * sizeof(ap_sc));
+    memcpy(C.Jo, P.Jo, K3 * sizeof(ap_sc));
     cols_cross_r(M->ncol, P.Jw, r12, C.Jo);
   } else {
-    memset(C.Jw, 0, K3 * sizeof(double));
-    memset(C.Jo, 0, K3 * sizeof(double));
+    memset(C.Jw, 0, K3 * sizeof(ap_sc));
+    memset(C.Jo, 0, K3 * sizeof(ap_sc));
   }
   joint_columns(M, j, &J, C.Jw, C.Jo);
   for (int c = 0; c < M->ncol; c++) v3_cross_add(J.r3, C.Jw + 3 * c, C.Jo + 3 * c);
@@ -184,15 +188,15 @@ static int joint_position(const ap_model *m, ap_data *d, const ap_mjoint *j, dou
 
 /* World inertia, com offset and com Jacobian of a body. */
 static void body_mass(const ap_bmodel *M, const ap_mbody *B, kbody *C) {
-  double T[9];
-  m3_mul(C->R, B->I, T);
+  ap_sc T[9];
+  m3_mul_d(C->R, B->I, T);
   m3_mul_t(T, C->R, C->Iw);
-  m3_mul_v(C->R, B->com, C->rcom);
-  memcpy(C->Jc, C->Jo, 3 * (size_t)M->K1 * sizeof(double));
+  m3_mul_v_d(C->R, B->com, C->rcom);
+  memcpy(C->Jc, C->Jo, 3 * (size_t)M->K1 * sizeof(ap_sc));
   cols_cross_r(M->ncol, C->Jw, C->rcom, C->Jc);
 }
 
-int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, double *S) {
+int ap_kin_position(const ap_model *m, ap_data *d, double t, const ap_sc *q, ap_sc *S) {
   const ap_bmodel *M = ap_bm(m);
   for (int j = 0; j < M->nj; j++) {
     int rc = joint_position(m, d, &M->joints[j], t, q, S);
@@ -208,9 +212,9 @@ int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, do
 /* ---- velocity stage ---------------------------------------------------------------------- */
 
 /* e_z ((e_z x rc') . w): the rate of the height's Jacobian row (plane contact). */
-static void plane_bias(const kbody *C, const kjoint *J, double *a) {
-  static const double ez[3] = {0, 0, 1};
-  double wxe[3], ud[3], cd[3], rcd[3], e[3];
+static void plane_bias(const kbody *C, const kjoint *J, ap_sc *a) {
+  static const ap_sc ez[3] = {0, 0, 1};
+  ap_sc wxe[3], ud[3], cd[3], rcd[3], e[3];
   v3_cross(C->w, ez, wxe);
   m3t_mul_v(C->R, wxe, ud);          /* u' = R^T (w x e_z) */
   m3_mul_v(J->H, ud, cd);            /* c' = H u' */
@@ -220,11 +224,11 @@ static void plane_bias(const kbody *C, const kjoint *J, double *a) {
   a[2] += v3_dot(e, C->w);
 }
 
-static void joint_velocity(const ap_bmodel *M, const ap_mjoint *j, const double *v,
-                           double *S) {
+static void joint_velocity(const ap_bmodel *M, const ap_mjoint *j, const ap_sc *v,
+                           ap_sc *S) {
   kjoint J = ap_kin_joint(M, S, (int)(j - M->joints));
   kbody C = ap_kin_body(M, S, j->child);
-  const double *wp = ZERO3, *vp = ZERO3, *alp = ZERO3, *ap = ZERO3;
+  const ap_sc *wp = ZERO3, *vp = ZERO3, *alp = ZERO3, *ap = ZERO3;
   if (j->parent >= 0) {
     kbody P = ap_kin_body(M, S, j->parent);
     wp = P.w, vp = P.vo, alp = P.al, ap = P.ao;
@@ -232,7 +236,7 @@ static void joint_velocity(const ap_bmodel *M, const ap_mjoint *j, const double 
   ap_kin_apply(M->K1, C.Jw, v, C.w);
   ap_kin_apply(M->K1, C.Jo, v, C.vo);
   for (int i = 0; i < j->nv; i++) J.vloc[i] = j->vidx[i] >= 0 ? v[j->vidx[i]] : J.drv[3 * i + 1];
-  double wrel[3], vrel[3], r12[3], a[3];
+  ap_sc wrel[3], vrel[3], r12[3], a[3];
   for (int i = 0; i < 3; i++) wrel[i] = C.w[i] - wp[i], r12[i] = J.r1[i] + J.r2[i];
   /* vrel = (vo_c + w_c x r3) - (vo_p + w_p x r1) - w_p x r2 */
   for (int i = 0; i < 3; i++) vrel[i] = C.vo[i] - vp[i];
@@ -243,7 +247,7 @@ static void joint_velocity(const ap_bmodel *M, const ap_mjoint *j, const double 
   v3_cross_add(wp, wrel, C.al);
   v3_axpy(1.0, J.adw, C.al);
   /* linear bias of the child frame origin, then of the body origin */
-  double wr[3];
+  ap_sc wr[3];
   v3_copy(ap, a);
   v3_cross_add(alp, r12, a);
   v3_cross(wp, r12, wr);
@@ -254,31 +258,31 @@ static void joint_velocity(const ap_bmodel *M, const ap_mjoint *j, const double 
   if (j->kind == AP_JOINT_PLANE_CONTACT) plane_bias(&C, &J, a);
   v3_cross(C.al, J.r3, wr);
   v3_axpy(-1.0, wr, a);
-  double w3[3];
+  ap_sc w3[3];
   v3_cross(C.w, J.r3, w3);
   v3_cross(C.w, w3, wr);
   v3_axpy(-1.0, wr, a);
   v3_copy(a, C.ao);
 }
 
-void ap_kin_velocity(const ap_bmodel *M, const double *v, double *S) {
+void ap_kin_velocity(const ap_bmodel *M, const ap_sc *v, ap_sc *S) {
   for (int j = 0; j < M->nj; j++) joint_velocity(M, &M->joints[j], v, S);
 }
 
 /* ---- g and h ----------------------------------------------------------------------------- */
 
-void ap_kin_metric(const ap_bmodel *M, double *S, double *g) {
+void ap_kin_metric(const ap_bmodel *M, ap_sc *S, ap_sc *g) {
   int k = M->k;
   for (int b = 0; b < M->nb; b++) {
     const ap_mbody *B = &M->bodies[b];
     kbody C = ap_kin_body(M, S, b);
     for (int ib = 0; ib < B->ncols; ib++) {
       int cb = B->cols[ib];
-      double IJ[3];
+      ap_sc IJ[3];
       m3_mul_v(C.Iw, C.Jw + 3 * cb, IJ);
       for (int ia = 0; ia <= ib; ia++) {
         int ca = B->cols[ia];
-        double s = B->mass * v3_dot(C.Jc + 3 * ca, C.Jc + 3 * cb) + v3_dot(C.Jw + 3 * ca, IJ);
+        ap_sc s = B->mass * v3_dot(C.Jc + 3 * ca, C.Jc + 3 * cb) + v3_dot(C.Jw + 3 * ca, IJ);
         g[ca + (size_t)cb * k] += s;
         if (ca != cb) g[cb + (size_t)ca * k] += s;
       }
@@ -286,11 +290,11 @@ void ap_kin_metric(const ap_bmodel *M, double *S, double *g) {
   }
 }
 
-void ap_kin_bias(const ap_bmodel *M, double *S, double *h) {
+void ap_kin_bias(const ap_bmodel *M, ap_sc *S, ap_sc *h) {
   for (int b = 0; b < M->nb; b++) {
     const ap_mbody *B = &M->bodies[b];
     kbody C = ap_kin_body(M, S, b);
-    double ac[3], t[3], hw[3], Iww[3];
+    ap_sc ac[3], t[3], hw[3], Iww[3];
     v3_copy(C.ao, ac);
     v3_cross_add(C.al, C.rcom, ac);
     v3_cross(C.w, C.rcom, t);
@@ -307,8 +311,8 @@ void ap_kin_bias(const ap_bmodel *M, double *S, double *h) {
 
 /* ---- points ------------------------------------------------------------------------------ */
 
-void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, double *x,
-                  double *r, double *JP) {
+void ap_kin_point(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *p, ap_sc *x, ap_sc *r,
+                  ap_sc *JP) {
   size_t K3 = 3 * (size_t)M->K1;
   if (body < 0) {
     if (x) v3_copy(p, x);
@@ -317,7 +321,7 @@ void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, doub
     return;
   }
   kbody C = ap_kin_body(M, S, body);
-  double rr[3];
+  ap_sc rr[3];
   m3_mul_v(C.R, p, rr);
   if (x) x[0] = C.o[0] + rr[0], x[1] = C.o[1] + rr[1], x[2] = C.o[2] + rr[2];
   if (r) v3_copy(rr, r);
@@ -327,15 +331,23 @@ void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, doub
   }
 }
 
-void ap_kin_point_motion(const ap_bmodel *M, double *S, int body, const double *r, double *vp,
-                         double *ap) {
+#ifdef AP_SC_COMPLEX
+void ap_kin_point_d(const ap_bmodel *M, ap_sc *S, int body, const double *p, ap_sc *x,
+                    ap_sc *r, ap_sc *JP) {
+  ap_sc pp[3] = {p[0], p[1], p[2]};
+  ap_kin_point(M, S, body, pp, x, r, JP);
+}
+#endif
+
+void ap_kin_point_motion(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *r, ap_sc *vp,
+                         ap_sc *ap) {
   if (body < 0) {
     if (vp) memset(vp, 0, 3 * sizeof *vp);
     if (ap) memset(ap, 0, 3 * sizeof *ap);
     return;
   }
   kbody C = ap_kin_body(M, S, body);
-  double t[3];
+  ap_sc t[3];
   if (vp) {
     v3_copy(C.vo, vp);
     v3_cross_add(C.w, r, vp);

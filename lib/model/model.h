@@ -17,7 +17,18 @@
  * Jacobians have K1 = k + 1 columns (3 x K1, column-major): columns 0..k-1 multiply the speeds,
  * column k holds the rheonomic part (driven coordinates), so a full velocity is J [v; 1].
  * Everything is in world axes. Invariant: the velocity stage reads what the position stage
- * wrote at the same (t, q). */
+ * wrote at the same (t, q).
+ *
+ * Generic scalar (linalg/scalar.h, core/core.h): every function on the per-evaluation path
+ * (rot, shape, joint, kinematics, constraint, contact, effect, actuator, evaluate) is written in
+ * ap_sc and compiled twice; the *_cs.c wrappers give the complex-step build, whose hooks are
+ * ev.position_cs, ev.velocity_cs and ev.phi_cs. Model parameters (masses, inertias, frames,
+ * axes, shapes) stay double in both builds: the helpers ending in _d take a double operand.
+ * Time is real: time functions (drives, ground motion, prescribed speeds, wrenches, value
+ * functions) are called with a double t and give doubles. A state function's value carries
+ * its exact partials (df) into the imaginary parts; user constraints and user effects are C
+ * functions of doubles and make the complex-step build unavailable (ev.cs_blocker). Compile,
+ * projection after steps, energies and contact forces are double only. */
 #ifndef AP_MODEL_MODEL_H
 #define AP_MODEL_MODEL_H
 
@@ -26,6 +37,49 @@
 
 #include "appell/body.h"
 #include "core/core.h"
+
+/* The complex-step build's names: every function of this layer on the per-evaluation path gets
+ * _cs there (the declarations below, the definitions and the calls alike). */
+#ifdef AP_SC_COMPLEX
+#define m3_mul m3_mul_cs
+#define m3_mul_t m3_mul_t_cs
+#define m3_mul_d m3_mul_d_cs
+#define m3_mul_t_d m3_mul_t_d_cs
+#define ap_rot_axis_angle ap_rot_axis_angle_cs
+#define ap_quat_normalized_matrix ap_quat_normalized_matrix_cs
+#define ap_quat_N ap_quat_N_cs
+#define ap_shape_support ap_shape_support_cs
+#define ap_joint_column ap_joint_column_cs
+#define ap_joint_transform ap_joint_transform_cs
+#define ap_joint_fill_N ap_joint_fill_N_cs
+#define ap_kin_body ap_kin_body_cs
+#define ap_kin_joint ap_kin_joint_cs
+#define ap_kin_position ap_kin_position_cs
+#define ap_kin_velocity ap_kin_velocity_cs
+#define ap_kin_metric ap_kin_metric_cs
+#define ap_kin_bias ap_kin_bias_cs
+#define ap_kin_point ap_kin_point_cs
+#define ap_kin_point_d ap_kin_point_d_cs
+#define ap_kin_point_motion ap_kin_point_motion_cs
+#define ap_kin_apply ap_kin_apply_cs
+#define ap_con_time ap_con_time_cs
+#define ap_con_rows ap_con_rows_cs
+#define ap_con_gamma ap_con_gamma_cs
+#define ap_con_rolling_gamma ap_con_rolling_gamma_cs
+#define ap_con_loops ap_con_loops_cs
+#define ap_con_ground_velocity ap_con_ground_velocity_cs
+#define ap_con_ground_accel ap_con_ground_accel_cs
+#define ap_contact_geom ap_contact_geom_cs
+#define ap_contact_position ap_contact_position_cs
+#define ap_contact_hol_row ap_contact_hol_row_cs
+#define ap_con_contact_rows ap_con_contact_rows_cs
+#define ap_con_contact_gamma ap_con_contact_gamma_cs
+#define ap_eff_forces ap_eff_forces_cs
+#define ap_act_force ap_act_force_cs
+#define ap_bm_position ap_bm_position_cs
+#define ap_bm_velocity ap_bm_velocity_cs
+#define ap_bm_phi ap_bm_phi_cs
+#endif
 
 /* ---- tolerances (docs/bodies.md) -------------------------------------------------------- */
 #define AP_QUAT_TOL 1e-9       /* re-normalize a quaternion when ||q| - 1| exceeds this: R is
@@ -116,90 +170,122 @@ typedef struct ap_bmodel {
 /* ---- views into the scratch ------------------------------------------------------------- */
 
 typedef struct kbody {
-  double *R, *o, *Iw, *rcom;  /* rotation, origin, inertia (world), R com   (position stage) */
-  double *Jw, *Jo, *Jc;       /* 3 x K1: angular, origin, com Jacobians    (position stage) */
-  double *w, *vo, *al, *ao;   /* angular velocity, origin velocity, bias accelerations
+  ap_sc *R, *o, *Iw, *rcom;   /* rotation, origin, inertia (world), R com   (position stage) */
+  ap_sc *Jw, *Jo, *Jc;        /* 3 x K1: angular, origin, com Jacobians    (position stage) */
+  ap_sc *w, *vo, *al, *ao;    /* angular velocity, origin velocity, bias accelerations
                                  (velocity stage) */
 } kbody;
 
 typedef struct kjoint {
-  double *qloc, *vloc;        /* local coordinates (7) and full speeds (6), driven included */
-  double *drv;                /* (3 x 3) value, rate, acceleration of each drivable coordinate */
-  double *r1, *r2, *r3;       /* R_p ppf, R_FP tj, R_c pcf (world) */
-  double *adw, *adv;          /* driven accelerations' angular / linear contributions */
-  double *RFP;                /* parent joint frame rotation (world) */
-  double *rc, *H, *u, *cb;    /* plane contact: contact vector (world), Hessian of sigma
+  ap_sc *qloc, *vloc;         /* local coordinates (7) and full speeds (6), driven included */
+  ap_sc *drv;                 /* (3 x 3) value, rate, acceleration of each drivable coordinate */
+  ap_sc *r1, *r2, *r3;        /* R_p ppf, R_FP tj, R_c pcf (world) */
+  ap_sc *adw, *adv;           /* driven accelerations' angular / linear contributions */
+  ap_sc *RFP;                 /* parent joint frame rotation (world) */
+  ap_sc *rc, *H, *u, *cb;     /* plane contact: contact vector (world), Hessian of sigma
                                  (body), u = -R^T e_z, contact point (body) */
-  double *track;              /* disk, torus: in-plane direction of u at the last accepted
+  ap_sc *track;               /* disk, torus: in-plane direction of u at the last accepted
                                  step (2), whether it is set (1), its time (1) (project_q) */
 } kjoint;
 
 /* Contact geometry of a rolling or wheel knife-edge constraint (contact.c): the joint's block
  * for a body on a plane-contact joint, the wheel block otherwise. */
 typedef struct kwheel {
-  double *u, *cb, *H, *rc;    /* u = -R^T e_z (body), contact point c_b = grad sigma(u) (body),
+  ap_sc *u, *cb, *H, *rc;     /* u = -R^T e_z (body), contact point c_b = grad sigma(u) (body),
                                  Hessian of sigma (body), contact vector R c_b (world) */
-  double *track;              /* disk, torus: as kjoint.track (wheel blocks only) */
+  ap_sc *track;               /* disk, torus: as kjoint.track (wheel blocks only) */
 } kwheel;
 
 static inline const ap_bmodel *ap_bm(const ap_model *m) { return (const ap_bmodel *)m->ev.impl; }
-static inline double *ap_bm_scratch(const ap_data *d) {
+static inline ap_sc *ap_bm_scratch(const ap_data *d) {
   return ((ap_scratch *)d->internal)->ev;
 }
 
-kbody ap_kin_body(const ap_bmodel *M, double *S, int body);
-kjoint ap_kin_joint(const ap_bmodel *M, double *S, int j);
+kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int body);
+kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j);
 
 /* ---- 3-vectors and 3 x 3 matrices (column-major) ---------------------------------------- */
 
-static inline double v3_dot(const double *a, const double *b) {
+static inline ap_sc v3_dot(const ap_sc *a, const ap_sc *b) {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
-static inline void v3_cross(const double *a, const double *b, double *c) {
-  double x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
-         z = a[0] * b[1] - a[1] * b[0];
+static inline void v3_cross(const ap_sc *a, const ap_sc *b, ap_sc *c) {
+  ap_sc x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
+        z = a[0] * b[1] - a[1] * b[0];
   c[0] = x, c[1] = y, c[2] = z;
 }
-static inline double v3_norm(const double *a) { return sqrt(v3_dot(a, a)); }
-static inline void v3_copy(const double *a, double *b) { b[0] = a[0], b[1] = a[1], b[2] = a[2]; }
+static inline ap_sc v3_norm(const ap_sc *a) { return SC_SQRT(v3_dot(a, a)); }
+static inline void v3_copy(const ap_sc *a, ap_sc *b) { b[0] = a[0], b[1] = a[1], b[2] = a[2]; }
 /* c += s a */
-static inline void v3_axpy(double s, const double *a, double *c) {
+static inline void v3_axpy(ap_sc s, const ap_sc *a, ap_sc *c) {
   c[0] += s * a[0], c[1] += s * a[1], c[2] += s * a[2];
 }
 /* c += a x b */
-static inline void v3_cross_add(const double *a, const double *b, double *c) {
-  double t[3];
+static inline void v3_cross_add(const ap_sc *a, const ap_sc *b, ap_sc *c) {
+  ap_sc t[3];
   v3_cross(a, b, t);
   c[0] += t[0], c[1] += t[1], c[2] += t[2];
 }
 /* y = M x */
-static inline void m3_mul_v(const double *M, const double *x, double *y) {
-  double a = M[0] * x[0] + M[3] * x[1] + M[6] * x[2], b = M[1] * x[0] + M[4] * x[1] + M[7] * x[2],
-         c = M[2] * x[0] + M[5] * x[1] + M[8] * x[2];
+static inline void m3_mul_v(const ap_sc *M, const ap_sc *x, ap_sc *y) {
+  ap_sc a = M[0] * x[0] + M[3] * x[1] + M[6] * x[2], b = M[1] * x[0] + M[4] * x[1] + M[7] * x[2],
+        c = M[2] * x[0] + M[5] * x[1] + M[8] * x[2];
   y[0] = a, y[1] = b, y[2] = c;
 }
 /* y = M^T x */
-static inline void m3t_mul_v(const double *M, const double *x, double *y) {
-  double a = M[0] * x[0] + M[1] * x[1] + M[2] * x[2], b = M[3] * x[0] + M[4] * x[1] + M[5] * x[2],
-         c = M[6] * x[0] + M[7] * x[1] + M[8] * x[2];
+static inline void m3t_mul_v(const ap_sc *M, const ap_sc *x, ap_sc *y) {
+  ap_sc a = M[0] * x[0] + M[1] * x[1] + M[2] * x[2], b = M[3] * x[0] + M[4] * x[1] + M[5] * x[2],
+        c = M[6] * x[0] + M[7] * x[1] + M[8] * x[2];
   y[0] = a, y[1] = b, y[2] = c;
 }
-void m3_mul(const double *A, const double *B, double *C);     /* C = A B (C may not alias) */
-void m3_mul_t(const double *A, const double *B, double *C);   /* C = A B^T */
-void ap_rot_axis_angle(const double *axis, double angle, double *R);
-void ap_quat_normalized_matrix(const double *q, double *R);  /* R of q / |q| */
+void m3_mul(const ap_sc *A, const ap_sc *B, ap_sc *C);    /* C = A B (C may not alias) */
+void m3_mul_t(const ap_sc *A, const ap_sc *B, ap_sc *C);  /* C = A B^T */
+void ap_rot_axis_angle(const double *axis, ap_sc angle, ap_sc *R);
+void ap_quat_normalized_matrix(const ap_sc *q, ap_sc *R);  /* R of q / |q| */
 /* The 4 x 3 block of N for a quaternion q with angular velocity w in parent axes:
  * q' = 1/2 [0; w] (x) q = Nq w, written into N (ld ldn) at (row, col). */
-void ap_quat_N(const double *q, double *N, int ldn, int row, int col);
-/* Symmetric 3 x 3 eigenvalues (Jacobi), ascending. */
+void ap_quat_N(const ap_sc *q, ap_sc *N, int ldn, int row, int col);
+/* Symmetric 3 x 3 eigenvalues (Jacobi), ascending (double build only). */
 void ap_sym3_eig(const double *A, double *lam);
+
+/* The same with a double operand (a model parameter: a frame, an axis, a point, a direction);
+ * in the double build they are the functions above. */
+#ifdef AP_SC_COMPLEX
+static inline ap_sc v3_dot_d(const ap_sc *a, const double *b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void v3_copy_d(const double *a, ap_sc *b) { b[0] = a[0], b[1] = a[1], b[2] = a[2]; }
+static inline void v3_axpy_d(ap_sc s, const double *a, ap_sc *c) {
+  c[0] += s * a[0], c[1] += s * a[1], c[2] += s * a[2];
+}
+static inline void v3_cross_d(const ap_sc *a, const double *b, ap_sc *c) {
+  ap_sc x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2],
+        z = a[0] * b[1] - a[1] * b[0];
+  c[0] = x, c[1] = y, c[2] = z;
+}
+static inline void m3_mul_v_d(const ap_sc *M, const double *x, ap_sc *y) {
+  ap_sc a = M[0] * x[0] + M[3] * x[1] + M[6] * x[2], b = M[1] * x[0] + M[4] * x[1] + M[7] * x[2],
+        c = M[2] * x[0] + M[5] * x[1] + M[8] * x[2];
+  y[0] = a, y[1] = b, y[2] = c;
+}
+void m3_mul_d(const ap_sc *A, const double *B, ap_sc *C);    /* C = A B */
+void m3_mul_t_d(const ap_sc *A, const double *B, ap_sc *C);  /* C = A B^T */
+#else
+#define v3_dot_d v3_dot
+#define v3_copy_d v3_copy
+#define v3_axpy_d v3_axpy
+#define v3_cross_d v3_cross
+#define m3_mul_v_d m3_mul_v
+#define m3_mul_d m3_mul
+#define m3_mul_t_d m3_mul_t
+#endif
 
 /* ---- shapes (shape.c) ------------------------------------------------------------------- */
 
 /* Support function sigma(u) of the shape at u (body axes), its gradient c (the support point)
  * and Hessian H (3 x 3). *flat = |u_perp| / |u| for disk and torus (1 otherwise). Returns 0,
  * or 1 when the shape is singular there (disk or torus lying flat: *flat < flat_tol). */
-int ap_shape_support(const ap_shape *s, const double *u, double *sigma, double *c, double *H,
+int ap_shape_support(const ap_shape *s, const ap_sc *u, ap_sc *sigma, ap_sc *c, ap_sc *H,
                      double *flat);
 
 /* ---- joints (joint.c) ------------------------------------------------------------------- */
@@ -210,12 +296,12 @@ void ap_joint_counts(ap_joint_kind kind, int *nq, int *nv, int *ndrivable, int *
                      int *wofs);
 /* Motion columns of local speed i in parent joint frame axes: angular sw, linear sv. For the
  * plane contact, rc is the contact vector (world = parent axes). */
-void ap_joint_column(const ap_mjoint *j, int i, const double *rc, double *sw, double *sv);
+void ap_joint_column(const ap_mjoint *j, int i, const ap_sc *rc, ap_sc *sw, ap_sc *sv);
 /* Rotation and translation of the joint from its local coordinates (plane contact: tj[2] is
  * filled by the kinematics from the shape). */
-void ap_joint_transform(const ap_mjoint *j, const double *qloc, double *Rj, double *tj);
+void ap_joint_transform(const ap_mjoint *j, const ap_sc *qloc, ap_sc *Rj, ap_sc *tj);
 /* The joint's entries of N (n x k, ld n) at q. */
-void ap_joint_fill_N(const ap_mjoint *j, const double *q, double *N, int n);
+void ap_joint_fill_N(const ap_mjoint *j, const ap_sc *q, ap_sc *N, int n);
 /* Coordinate and speed names (local i) for a kind, e.g. "x", "qw"; "wx". */
 const char *ap_joint_coord_name(ap_joint_kind kind, int i);
 const char *ap_joint_speed_name(ap_joint_kind kind, int i);
@@ -226,89 +312,98 @@ const char *ap_joint_kind_name(ap_joint_kind kind);
 /* Position stage of the bodies at (t, q): drives, transforms, Jacobians, world inertias, plane
  * contacts, then the wheel contacts' support points (contact.c). Writes d->msg on failure
  * (drive callback, disk lying flat). */
-int ap_kin_position(const ap_model *m, ap_data *d, double t, const double *q, double *S);
+int ap_kin_position(const ap_model *m, ap_data *d, double t, const ap_sc *q, ap_sc *S);
 /* Velocity stage: full body velocities and bias accelerations for speeds v. */
-void ap_kin_velocity(const ap_bmodel *M, const double *v, double *S);
+void ap_kin_velocity(const ap_bmodel *M, const ap_sc *v, ap_sc *S);
 /* g (k x k) += sum m Jc^T Jc + Jw^T Iw Jw. */
-void ap_kin_metric(const ap_bmodel *M, double *S, double *g);
+void ap_kin_metric(const ap_bmodel *M, ap_sc *S, ap_sc *g);
 /* h (k) += sum Jc^T m ac + Jw^T (Iw al + w x Iw w). */
-void ap_kin_bias(const ap_bmodel *M, double *S, double *h);
+void ap_kin_bias(const ap_bmodel *M, ap_sc *S, ap_sc *h);
 /* Point p (body axes) of a body or the ground: world position x, offset r = R p, Jacobian
- * JP (3 x K1) = Jo - [r]x Jw (zero for the ground). */
-void ap_kin_point(const ap_bmodel *M, double *S, int body, const double *p, double *x,
-                  double *r, double *JP);
+ * JP (3 x K1) = Jo - [r]x Jw (zero for the ground). ap_kin_point_d: p a model parameter. */
+void ap_kin_point(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *p, ap_sc *x, ap_sc *r,
+                  ap_sc *JP);
+#ifdef AP_SC_COMPLEX
+void ap_kin_point_d(const ap_bmodel *M, ap_sc *S, int body, const double *p, ap_sc *x,
+                    ap_sc *r, ap_sc *JP);
+#else
+#define ap_kin_point_d ap_kin_point
+#endif
 /* Velocity and bias acceleration of a body point with offset r (zero for the ground). */
-void ap_kin_point_motion(const ap_bmodel *M, double *S, int body, const double *r, double *vp,
-                         double *ap);
+void ap_kin_point_motion(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *r, ap_sc *vp,
+                         ap_sc *ap);
 /* Full velocity J [v; 1] of a 3 x K1 Jacobian. */
-void ap_kin_apply(int K1, const double *J, const double *v, double *out);
+void ap_kin_apply(int K1, const ap_sc *J, const ap_sc *v, ap_sc *out);
 /* Scratch size of the model's layout (sets the offsets in M). */
 void ap_kin_layout(ap_bmodel *M);
 
 /* ---- constraints (constraint.c) --------------------------------------------------------- */
 
 /* Time functions of the constraints at t (ground motion, prescribed speeds) into S. */
-int ap_con_time(const ap_model *m, ap_data *d, double t, double *S);
+int ap_con_time(const ap_model *m, ap_data *d, double t, ap_sc *S);
 /* Rows A (b x k, ld b) and a0 (b) after ap_kin_position. */
-int ap_con_rows(const ap_model *m, ap_data *d, double t, const double *q, double *S, double *A,
-                double *a0);
+int ap_con_rows(const ap_model *m, ap_data *d, double t, const ap_sc *q, ap_sc *S, ap_sc *A,
+                ap_sc *a0);
 /* gamma (b) after ap_kin_velocity. */
-int ap_con_gamma(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                 double *S, double *gamma);
+int ap_con_gamma(const ap_model *m, ap_data *d, double t, const ap_sc *q, const ap_sc *v,
+                 ap_sc *S, ap_sc *gamma);
 /* Rolling (or wheel knife-edge) gamma with or without the term of the contact point moving
  * over the body surface (surface = 0 is the classic mistake; tests use it to show the
  * finite-difference check catches it). Writes the constraint's rows of gamma. */
-void ap_con_rolling_gamma(const ap_bmodel *M, double *S, int con, int surface, double *gamma);
+void ap_con_rolling_gamma(const ap_bmodel *M, ap_sc *S, int con, int surface, ap_sc *gamma);
 /* Implicit holonomic rows (loop closures, wheel contact rows): residuals phi (nloop) and their
  * Jacobian transposed, JlT (k x nloop, ld k): JlT[c + k s] = d phi_s / d v_c. */
-void ap_con_loops(const ap_bmodel *M, double *S, double *phi, double *JlT);
+void ap_con_loops(const ap_bmodel *M, ap_sc *S, ap_sc *phi, ap_sc *JlT);
 /* Ground surface velocity Vg at the world point x and its rate Ag along x' = xd, from the
  * constraint's time scratch G (zero for a fixed ground). */
 enum { AP_G_OM = 0, AP_G_DOM = 1 };   /* Omega, Omega' in the constraint's time scratch */
-void ap_con_ground_velocity(const ap_mcon *c, const double *G, const double *x, double *Vg);
-void ap_con_ground_accel(const ap_mcon *c, const double *G, const double *x, const double *xd,
-                         double *Ag);
+void ap_con_ground_velocity(const ap_mcon *c, const ap_sc *G, const ap_sc *x, ap_sc *Vg);
+void ap_con_ground_accel(const ap_mcon *c, const ap_sc *G, const ap_sc *x, const ap_sc *xd,
+                         ap_sc *Ag);
 
 /* ---- contacts (contact.c) --------------------------------------------------------------- */
 
 /* The contact geometry of a rolling or wheel knife-edge constraint. */
-kwheel ap_contact_geom(const ap_bmodel *M, double *S, const ap_mcon *c);
+kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c);
 /* Support points of the wheel contacts (after the bodies' position stage); AP_RECOVERABLE with
  * a message naming the body when a disk or torus lies flat. */
-int ap_contact_position(const ap_model *m, ap_data *d, double t, double *S);
+int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S);
 /* The contact row .z: returns the height phi of the contact point, row = its K1 coefficients. */
-double ap_contact_hol_row(const ap_bmodel *M, double *S, const ap_mcon *c, double *row);
+ap_sc ap_contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row);
 /* Rows of A, a0 and gamma of a rolling or wheel knife-edge constraint (G: its time scratch);
  * surface = 0 drops the term of the contact point moving over the body surface (tests). */
-void ap_con_contact_rows(const ap_bmodel *M, double *S, int ci, const double *G, double *A,
-                         double *a0);
-void ap_con_contact_gamma(const ap_bmodel *M, double *S, int ci, const double *G, int surface,
-                          double *gamma);
-/* F += the force (world) of the constraint's rows with multipliers lam on its body. */
-void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
-                          double *F);
+void ap_con_contact_rows(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
+                         ap_sc *a0);
+void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
+                          ap_sc *gamma);
 
 /* ---- effects (effect.c) ----------------------------------------------------------------- */
 
 /* Q (k) += every effect's generalized force, after ap_kin_velocity. */
-int ap_eff_forces(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
-                  double *S, double *Q);
-/* Potential energy of the gravity and spring effects, after ap_kin_position. */
-double ap_eff_potential(const ap_bmodel *M, double *S);
+int ap_eff_forces(const ap_model *m, ap_data *d, double t, const ap_sc *q, const ap_sc *v,
+                  ap_sc *S, ap_sc *Q);
 
 /* ---- joint forces and motors (actuator.c) ----------------------------------------------- */
 
 /* Validate a joint force or motor effect and resolve its indices into ef (after the joints
  * and coordinates are laid out). Fails through the builder's message. */
 int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef);
-/* Q[ef->col] += tau at (t, q, v). */
-int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const double *q,
-                 const double *v, double *Q);
+/* Q[ef->col] += tau at (t, q, v). The complex-step build carries the state function's exact
+ * partials df into tau's imaginary part (AP_ERR_UNSUPPORTED, naming the effect, when the
+ * function does not give them). */
+int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const ap_sc *q,
+                 const ap_sc *v, ap_sc *Q);
 
 /* ---- evaluator (evaluate.c) ------------------------------------------------------------- */
 
-int ap_bm_position(const ap_model *m, ap_data *d, double *S);
-int ap_bm_velocity(const ap_model *m, ap_data *d, double *S);
+int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S);
+int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S);
+/* The DAE mode's implicit holonomic constraints (core.h ev.phi): loop closures, then one
+ * unit-norm row per quaternion joint; after ap_kin_position at (d->t, d->q). */
+int ap_bm_phi(const ap_model *m, ap_data *d, ap_sc *S, ap_sc *phi, ap_sc *Phi_q);
+
+/* ---- double build only: compile, projection, energies, contact forces -------------------- */
+#ifndef AP_SC_COMPLEX
 int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change);
 /* The same with track = 0: no check of the contact direction between accepted steps, and the
  * tracking is reset (for assembling states by hand). */
@@ -316,11 +411,21 @@ int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *c
                   int track);
 /* track_flat only (no correction of q): the DAE mode's check after each step. */
 int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S);
-/* The DAE mode's implicit holonomic constraints (core.h ev.phi): loop closures, then one
- * unit-norm row per quaternion joint; after ap_kin_position at (d->t, d->q). */
-int ap_bm_phi(const ap_model *m, ap_data *d, double *S, double *phi, double *Phi_q);
+/* 0, or -1 with a message naming the user constraint or user effect that keeps the model from
+ * the complex-step build (core.h ev.cs_blocker). */
+int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len);
+/* The complex-step hooks (hooks_cs.c), for compile.c to install. */
+int ap_bm_position_cs(const ap_model *m, ap_data_cs *d, double _Complex *S);
+int ap_bm_velocity_cs(const ap_model *m, ap_data_cs *d, double _Complex *S);
+int ap_bm_phi_cs(const ap_model *m, ap_data_cs *d, double _Complex *S, double _Complex *phi,
+                 double _Complex *Phi_q);
 /* 1 when body is root or one of its descendants. */
 int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
+/* Potential energy of the gravity and spring effects, after ap_kin_position. */
+double ap_eff_potential(const ap_bmodel *M, double *S);
+/* F += the force (world) of the constraint's rows with multipliers lam on its body. */
+void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
+                          double *F);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
  * effects (effect.c), and of the constraint rows other than skip with multipliers lambda
  * (constraint.c). AP_ERR_UNSUPPORTED when a user effect or user constraint is present (its
@@ -330,8 +435,9 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
 int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
                          int skip, double *F);
 void ap_bm_destroy(void *impl);
+#endif
 
 /* Message helper: printf into d->msg (core). */
-#define AP_BM_MSG(d, ...) ap_core_msg((d), __VA_ARGS__)
+#define AP_BM_MSG(d, ...) AP_SC(ap_core_msg)((d), __VA_ARGS__)
 
 #endif

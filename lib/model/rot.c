@@ -5,48 +5,66 @@
  * child components to parent components, v_parent = R(q) v_child, and with the angular
  * velocity w in parent axes R' = [w]x R, i.e. q' = 1/2 [0; w] (x) q (Hamilton product).
  * Invariant: R(q) is always computed from q / |q|, so a quaternion whose norm drifted still
- * gives an exact rotation (the projection after each step removes the drift). */
+ * gives an exact rotation (the projection after each step removes the drift).
+ * Generic in the scalar (model/model.h): rot_cs.c compiles the products, the axis-angle, the
+ * normalized quaternion matrix and N again for complex steps; the eigenvalues and the public
+ * quaternion helpers are double only. */
 #include <math.h>
 #include <string.h>
 
 #include "model/model.h"
 
-void m3_mul(const double *A, const double *B, double *C) {
+void m3_mul(const ap_sc *A, const ap_sc *B, ap_sc *C) {
   for (int j = 0; j < 3; j++)
     for (int i = 0; i < 3; i++)
       C[i + 3 * j] = A[i] * B[3 * j] + A[i + 3] * B[1 + 3 * j] + A[i + 6] * B[2 + 3 * j];
 }
 
-void m3_mul_t(const double *A, const double *B, double *C) {
+void m3_mul_t(const ap_sc *A, const ap_sc *B, ap_sc *C) {
   for (int j = 0; j < 3; j++)
     for (int i = 0; i < 3; i++)
       C[i + 3 * j] = A[i] * B[j] + A[i + 3] * B[j + 3] + A[i + 6] * B[j + 6];
 }
 
+#ifdef AP_SC_COMPLEX
+void m3_mul_d(const ap_sc *A, const double *B, ap_sc *C) {
+  for (int j = 0; j < 3; j++)
+    for (int i = 0; i < 3; i++)
+      C[i + 3 * j] = A[i] * B[3 * j] + A[i + 3] * B[1 + 3 * j] + A[i + 6] * B[2 + 3 * j];
+}
+
+void m3_mul_t_d(const ap_sc *A, const double *B, ap_sc *C) {
+  for (int j = 0; j < 3; j++)
+    for (int i = 0; i < 3; i++)
+      C[i + 3 * j] = A[i] * B[j] + A[i + 3] * B[j + 3] + A[i + 6] * B[j + 6];
+}
+#endif
+
 /* Rodrigues: R = cos I + (1 - cos) a a^T + sin [a]x, a unit. */
-void ap_rot_axis_angle(const double *a, double angle, double *R) {
-  double c = cos(angle), s = sin(angle), t = 1.0 - c;
+void ap_rot_axis_angle(const double *a, ap_sc angle, ap_sc *R) {
+  ap_sc c = SC_COS(angle), s = SC_SIN(angle), t = 1.0 - c;
   R[0] = c + t * a[0] * a[0], R[3] = t * a[0] * a[1] - s * a[2], R[6] = t * a[0] * a[2] + s * a[1];
   R[1] = t * a[1] * a[0] + s * a[2], R[4] = c + t * a[1] * a[1], R[7] = t * a[1] * a[2] - s * a[0];
   R[2] = t * a[2] * a[0] - s * a[1], R[5] = t * a[2] * a[1] + s * a[0], R[8] = c + t * a[2] * a[2];
 }
 
-void ap_quat_normalized_matrix(const double *q, double *R) {
-  double nn = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-  double s = nn > 0 ? 2.0 / nn : 0.0;
-  double w = q[0], x = q[1], y = q[2], z = q[3];
+void ap_quat_normalized_matrix(const ap_sc *q, ap_sc *R) {
+  ap_sc nn = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+  ap_sc s = SC_RE(nn) > 0 ? 2.0 / nn : 0.0;
+  ap_sc w = q[0], x = q[1], y = q[2], z = q[3];
   R[0] = 1.0 - s * (y * y + z * z), R[3] = s * (x * y - w * z), R[6] = s * (x * z + w * y);
   R[1] = s * (x * y + w * z), R[4] = 1.0 - s * (x * x + z * z), R[7] = s * (y * z - w * x);
   R[2] = s * (x * z - w * y), R[5] = s * (y * z + w * x), R[8] = 1.0 - s * (x * x + y * y);
 }
 
-void ap_quat_N(const double *q, double *N, int ldn, int row, int col) {
-  double w = 0.5 * q[0], x = 0.5 * q[1], y = 0.5 * q[2], z = 0.5 * q[3];
-  double blk[4][3] = {{-x, -y, -z}, {w, z, -y}, {-z, w, x}, {y, -x, w}};
+void ap_quat_N(const ap_sc *q, ap_sc *N, int ldn, int row, int col) {
+  ap_sc w = 0.5 * q[0], x = 0.5 * q[1], y = 0.5 * q[2], z = 0.5 * q[3];
+  ap_sc blk[4][3] = {{-x, -y, -z}, {w, z, -y}, {-z, w, x}, {y, -x, w}};
   for (int r = 0; r < 4; r++)
     for (int c = 0; c < 3; c++) N[(row + r) + (size_t)(col + c) * ldn] = blk[r][c];
 }
 
+#ifndef AP_SC_COMPLEX
 /* Cyclic Jacobi rotations until the off-diagonal part is negligible; eigenvalues ascending. */
 void ap_sym3_eig(const double *A, double *lam) {
   double a[3][3];
@@ -84,12 +102,14 @@ void ap_sym3_eig(const double *A, double *lam) {
 /* ---- public quaternion helpers ---------------------------------------------------------- */
 
 void ap_quat_from_axis_angle(const double axis[3], double angle, double q[4]) {
+  if (!axis || !q) return;
   double n = v3_norm(axis), s = n > 0 ? sin(0.5 * angle) / n : 0.0;
   q[0] = cos(0.5 * angle), q[1] = s * axis[0], q[2] = s * axis[1], q[3] = s * axis[2];
   if (!(n > 0)) q[0] = 1.0;
 }
 
 void ap_quat_mul(const double a[4], const double b[4], double out[4]) {
+  if (!a || !b || !out) return;
   double w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
   double x = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
   double y = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
@@ -97,10 +117,13 @@ void ap_quat_mul(const double a[4], const double b[4], double out[4]) {
   out[0] = w, out[1] = x, out[2] = y, out[3] = z;
 }
 
-void ap_quat_to_matrix(const double q[4], double R[9]) { ap_quat_normalized_matrix(q, R); }
+void ap_quat_to_matrix(const double q[4], double R[9]) {
+  if (q && R) ap_quat_normalized_matrix(q, R);
+}
 
 /* Shepperd: pick the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 to divide by. */
 void ap_quat_from_matrix(const double R[9], double q[4]) {
+  if (!R || !q) return;
   double tr = R[0] + R[4] + R[8], r;
   if (tr >= R[0] && tr >= R[4] && tr >= R[8]) {
     r = sqrt(1.0 + tr);
@@ -121,3 +144,4 @@ void ap_quat_from_matrix(const double R[9], double q[4]) {
   }
   if (q[0] < 0) q[0] = -q[0], q[1] = -q[1], q[2] = -q[2], q[3] = -q[3];
 }
+#endif

@@ -31,37 +31,46 @@ static const sc_node *blame(const sc_scene *s, const char *msg) {
   return node;
 }
 
+/* A builder call failed with rc: its message at node at (out of memory as such). */
+static int builder_err(sc_ctx *c, const sc_node *at, ap_builder *b, int rc) {
+  if (rc == AP_ERR_NOMEM) return sc_nomem(c);
+  return sc_err(c, at, "%s", ap_builder_message(b));
+}
+
 static int add_bodies(sc_ctx *c, sc_scene *s, ap_builder *b) {
   for (int i = 0; i < s->nb; i++) {
     ap_body_def def = s->bodies[i].def;
     if (s->bodies[i].uniform && ap_body_def_uniform(&def, def.mass) != AP_OK)
       return sc_err(c, s->bodies[i].node, "cannot compute a uniform inertia for this shape");
     int rc = ap_builder_add_body(b, &def, NULL);
-    if (rc != AP_OK) return sc_err(c, s->bodies[i].node, "%s", ap_builder_message(b));
+    if (rc != AP_OK) return builder_err(c, s->bodies[i].node, b, rc);
   }
   return AP_OK;
 }
 
 static int add_rest(sc_ctx *c, sc_scene *s, ap_builder *b) {
+  int rc = AP_OK;
   for (int i = 0; i < s->nj; i++)
-    if (ap_builder_add_joint(b, &s->joints[i].def, NULL) != AP_OK)
-      return sc_err(c, s->joints[i].node, "%s", ap_builder_message(b));
+    if ((rc = ap_builder_add_joint(b, &s->joints[i].def, NULL)) != AP_OK)
+      return builder_err(c, s->joints[i].node, b, rc);
   for (int i = 0; i < s->nc; i++)
-    if (ap_builder_add_constraint(b, &s->cons[i].def, NULL) != AP_OK)
-      return sc_err(c, s->cons[i].node, "%s", ap_builder_message(b));
+    if ((rc = ap_builder_add_constraint(b, &s->cons[i].def, NULL)) != AP_OK)
+      return builder_err(c, s->cons[i].node, b, rc);
   for (int i = 0; i < s->ne; i++)
-    if (ap_builder_add_effect(b, &s->effs[i].def, NULL) != AP_OK)
-      return sc_err(c, s->effs[i].node, "%s", ap_builder_message(b));
+    if ((rc = ap_builder_add_effect(b, &s->effs[i].def, NULL)) != AP_OK)
+      return builder_err(c, s->effs[i].node, b, rc);
   return AP_OK;
 }
 
 int sc_build(sc_ctx *c, sc_scene *s, ap_model **out) {
   ap_builder *b = NULL;
   *out = NULL;
-  if (ap_builder_create(s->name, &b) != AP_OK) return sc_err(c, s->root, "out of memory");
+  if (ap_builder_create(s->name, &b) != AP_OK) return sc_nomem(c);
   int rc = add_bodies(c, s, b);
   if (rc == AP_OK) rc = add_rest(c, s, b);
-  if (rc == AP_OK && ap_builder_compile(b, out) != AP_OK) {
+  int crc = rc == AP_OK ? ap_builder_compile(b, out) : AP_OK;
+  if (crc == AP_ERR_NOMEM) rc = sc_nomem(c);
+  else if (crc != AP_OK) {
     const char *msg = ap_builder_message(b);
     rc = sc_err(c, blame(s, msg ? msg : ""), "%s", msg && msg[0] ? msg : "the model does not "
                 "compile");

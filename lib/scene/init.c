@@ -185,7 +185,7 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
                              double *v, const int *given, char *rep, size_t rlen) {
   int k = ap_model_k(m);
   double *v_in = malloc(sizeof(double) * (size_t)k), change = 0.0;
-  if (!v_in) return sc_err(c, s->root, "out of memory");
+  if (!v_in) return sc_nomem(c);
   memcpy(v_in, v, sizeof(double) * (size_t)k);
   int rc = ap_body_complete_speeds(m, d, d->q, given, v);
   if (rc == AP_ERR_INCONSISTENT) {
@@ -203,6 +203,7 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
     }
   }
   free(v_in);
+  if (rc == AP_ERR_NOMEM) return sc_nomem(c);
   if (rc != AP_OK) return refuse(c, s, d, "no speeds satisfy the constraints");
   if ((rc = ap_fwd_position(m, d)) != AP_OK)
     return refuse(c, s, d, "the model cannot be evaluated there");
@@ -244,7 +245,7 @@ int sc_initial_state(sc_ctx *c, const sc_scene *s, const ap_model *m, double *q0
   ap_data *d = NULL;
   if (!given || ap_data_create(m, &d) != AP_OK) {
     free(given);
-    return sc_err(c, s->root, "out of memory");
+    return sc_nomem(c);
   }
   memset(q0, 0, sizeof(double) * (size_t)n);
   memset(v0, 0, sizeof(double) * (size_t)k);

@@ -125,7 +125,7 @@ int sc_get_body_ref(sc_ctx *c, const sc_scene *s, const sc_node *map, const char
   int b = sc_find_body(s, name);
   if (b >= 0) return *id = b, AP_OK;
   const char **names = calloc((size_t)s->nb + 2, sizeof *names);
-  if (!names) return sc_err(c, sc_map_get(map, key), "out of memory");
+  if (!names) return sc_nomem(c);
   for (int i = 0; i < s->nb; i++) names[i] = s->bodies[i].name;
   if (ground_ok) names[s->nb] = "ground";
   const char *sug = sc_suggest(name, names);
@@ -355,7 +355,7 @@ static int parse_bodies(sc_ctx *c, sc_scene *s) {
   if (sc_expect(c, n, SC_MAP)) return AP_ERR_ARG;
   if (n->n == 0) return sc_err(c, n, "the scene needs at least one body");
   s->bodies = calloc((size_t)n->n, sizeof *s->bodies);
-  if (!s->bodies) return sc_err(c, n, "out of memory");
+  if (!s->bodies) return sc_nomem(c);
   for (int i = 0; i < n->n; i++, s->nb++)
     if (parse_body(c, n->keys[i], n->kids[i], &s->bodies[i])) return AP_ERR_ARG;
   return AP_OK;
@@ -367,7 +367,7 @@ static int parse_joints(sc_ctx *c, sc_scene *s) {
                         "joint to its parent or the ground)");
   if (sc_expect(c, n, SC_MAP)) return AP_ERR_ARG;
   s->joints = calloc((size_t)n->n + 1, sizeof *s->joints);
-  if (!s->joints) return sc_err(c, n, "out of memory");
+  if (!s->joints) return sc_nomem(c);
   /* nj grows before each joint is read so that sc_scene_clear frees a half-read one; the child
    * lookups below only use bodies. */
   for (int i = 0; i < n->n; i++)

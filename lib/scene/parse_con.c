@@ -267,7 +267,7 @@ int sc_parse_con_eff(sc_ctx *c, sc_scene *s) {
   if ((cn && sc_expect(c, cn, SC_MAP)) || (en && sc_expect(c, en, SC_MAP))) return AP_ERR_ARG;
   s->cons = calloc(cn ? (size_t)cn->n + 1 : 1, sizeof *s->cons);
   s->effs = calloc(en ? (size_t)en->n + 1 : 1, sizeof *s->effs);
-  if (!s->cons || !s->effs) return sc_err(c, s->root, "out of memory");
+  if (!s->cons || !s->effs) return sc_nomem(c);
   /* Counts grow before each element is read so that sc_scene_clear frees a half-read one. */
   for (int i = 0; cn && i < cn->n; i++)
     if (s->nc++, parse_con(c, s, cn->keys[i], cn->kids[i], &s->cons[i])) return AP_ERR_ARG;

@@ -74,7 +74,7 @@ static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
-    return sc_err(c, sc->s.root, "out of memory");
+    return sc_nomem(c);
   return AP_OK;
 }
 
@@ -83,6 +83,14 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
                          size_t msg_len) {
   if (!out) return AP_ERR_ARG;
   *out = NULL;
+  int bad = nsets < 0 || (nsets > 0 && !sets) ? 0 : -1;   /* the first bad override */
+  for (int i = 0; bad < 0 && i < nsets; i++)
+    if (!sets[i]) bad = i + 1;
+  if (bad >= 0) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s: overrides: %d given, %s is NULL",
+                                 name ? name : "scene", nsets, bad ? "one" : "the array");
+    return AP_ERR_ARG;
+  }
   ap_scene *sc = calloc(1, sizeof *sc);
   sc_ctx c = {name ? name : "scene", "", AP_OK};
   if (!sc || !text) {
@@ -162,6 +170,7 @@ const char *ap_scene_name(const ap_scene *sc) { return sc ? sc->s.name : NULL; }
 
 void ap_scene_get_run(const ap_scene *sc, ap_scene_run *run) {
   if (sc && run) *run = sc->s.run;
+  else if (run) memset(run, 0, sizeof *run);
 }
 
 int ap_scene_initial_state(ap_scene *sc, double *q0, double *v0, char *report,
@@ -192,6 +201,9 @@ const char *ap_scene_output_name(const ap_scene *sc, int i) {
 
 int ap_scene_output_row(ap_scene *sc, ap_sim *sim, double *row) {
   if (!sc || !sim || !row) return AP_ERR_ARG;
+  const ap_data *sd = ap_sim_data(sim);   /* the simulation must be of the scene's model */
+  if (sd->n != ap_model_n(sc->m) || sd->k != ap_model_k(sc->m) || sd->b != ap_model_b(sc->m))
+    return AP_ERR_ARG;
   return sc_out_row(&sc->out, &sc->s, sc->m, sc->d, sim, row);
 }
 

@@ -44,6 +44,10 @@ void ap_scene_out_free(ap_scene_out *o) {
 
 int ap_scene_out_row(ap_scene_out *o, ap_sim *sim, double *row) {
   if (!o || !sim || !row) return AP_ERR_ARG;
+  const ap_data *sd = ap_sim_data(sim);   /* the simulation must be of the scene's model */
+  const ap_model *m = ap_scene_model(o->sc);
+  if (sd->n != ap_model_n(m) || sd->k != ap_model_k(m) || sd->b != ap_model_b(m))
+    return AP_ERR_ARG;
   return sc_out_row(&o->out, sc_scene_parsed(o->sc), ap_scene_model(o->sc), o->d, sim, row);
 }
 

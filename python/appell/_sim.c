@@ -61,6 +61,10 @@ static int apply_settings(apx_sim *s, PyObject *mode, PyObject *method, PyObject
       PyErr_Format(PyExc_ValueError, "%s must be a finite number > 0, got %R", names[i], num[i]);
       return -1;
     }
+    if (!field[i] && !(x >= 1 && x == floor(x) && x < 0x1p62)) {   /* (long)x must be exact */
+      PyErr_Format(PyExc_ValueError, "max_steps must be a whole number >= 1, got %R", num[i]);
+      return -1;
+    }
     if (field[i]) *field[i] = x;
     else d->max_steps = (long)x;
   }
@@ -238,14 +242,18 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
   double t_end = te == Py_None ? s->run.t_end : PyFloat_AsDouble(te);
   double dt = dto == Py_None ? s->run.interval : PyFloat_AsDouble(dto);
   if (PyErr_Occurred()) return NULL;
-  if (!(t_end >= t0) || !isfinite(t_end) || !(dt > 0) || !isfinite(dt))
-    return PyErr_Format(PyExc_ValueError, "need t_end >= the current time %.17g and dt > 0 "
-                        "(got t_end = %.17g, dt = %.17g)", t0, t_end, dt);
+  if (!(t_end >= t0) || !isfinite(t_end) || !(dt > 0) || !isfinite(dt)) {
+    char msg[160];   /* PyErr_Format has no %g */
+    snprintf(msg, sizeof msg, "need t_end >= the current time %.17g and dt > 0 (got t_end = "
+             "%.17g, dt = %.17g)", t0, t_end, dt);
+    PyErr_SetString(PyExc_ValueError, msg);
+    return NULL;
+  }
   const ap_model *m = ap_scene_model(s->model->sc);
   rec r = {NULL, NULL, NULL, ap_scene_output_count(s->model->sc), ap_model_n(m), ap_model_k(m),
            0, 0, AP_OK, 0};
   r.rows = (long)ceil((t_end - t0) / dt - 1e-9) + 1;
-  if (r.rows < 1) r.rows = 1;
+  if (r.rows < (t_end > t0 ? 2 : 1)) r.rows = t_end > t0 ? 2 : 1;   /* dt past t_end: t0, t_end */
   npy_intp d0[2] = {r.rows, r.nc}, d1[2] = {r.rows, r.n}, d2[2] = {r.rows, r.k};
   PyArrayObject *arr[3] = {(PyArrayObject *)PyArray_ZEROS(2, d0, NPY_DOUBLE, 0),
                            (PyArrayObject *)PyArray_ZEROS(2, d1, NPY_DOUBLE, 0),
@@ -266,9 +274,13 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
 static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
   double t = PyFloat_AsDouble(arg);
   if (t == -1.0 && PyErr_Occurred()) return NULL;
-  if (!(t >= ap_sim_time(s->sim)) || !isfinite(t))
-    return PyErr_Format(PyExc_ValueError, "advance(t): t must be >= the current time %.17g",
-                        ap_sim_time(s->sim));
+  if (!(t >= ap_sim_time(s->sim)) || !isfinite(t)) {
+    char msg[120];   /* PyErr_Format has no %g */
+    snprintf(msg, sizeof msg, "advance(t): t must be finite and >= the current time %.17g "
+             "(got %.17g)", ap_sim_time(s->sim), t);
+    PyErr_SetString(PyExc_ValueError, msg);
+    return NULL;
+  }
   if (claim(s)) return NULL;
   double due = now() + 0.2;
   int interrupted = 0;

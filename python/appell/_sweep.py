@@ -147,6 +147,8 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
     progress   callable(done, total), called about every 0.2 s
     A failed run is a row with its status (non-zero) and message.
     """
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
+        raise ValueError(f"jobs must be a whole number >= 0 (0: one per processor), got {jobs!r}")
     text, name, sets = _source(scene, set)
     grids = tuple(_grid_spec(p, v) for p, v in (grid or {}).items())
     randoms = tuple(_random_spec(p, v) for p, v in (random or {}).items())
@@ -169,6 +171,9 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
                                 progress=progress, **args)
         return _assemble([part], first)
     from ._dask import run_on_dask
+    # The plan checked here, as a local sweep checks it, before any chunk goes to a worker
+    # (the chunks skip the check): a misspelt path raises instead of failing every run.
+    _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
     return _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
 
 

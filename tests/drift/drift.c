@@ -161,7 +161,7 @@ static int sleigh_setup(sysrun *r) {
   ap_system_def def;
   r->p.sleigh = p;
   rs_sleigh_system(&r->p.sleigh, 1, &def);
-  rs_sleigh_initial(0.0, 0.0, RS_PI, 0.1, 0.2, r->q0, r->v0);   /* REFERENCES §2 sample */
+  rs_sleigh_initial(0.0, 0.0, RS_PI, 0.1, 0.2, r->q0, r->v0);   /* docs/references.md §2 sample */
   return from_system(r, &def);
 }
 

@@ -2,7 +2,7 @@
 
 References: the scene files and their fixtures (tests/scenes, the positions test_scene.c
 checks in C), the command-line tool's own output (appell check, the CSV header), the energy
-invariant of the rolling disk (REFERENCES.md's section on the rolling disk: rolling without
+invariant of the rolling disk (docs/references.md §4, the rolling disk: rolling without
 slip does no work), and serial runs for the threaded ones."""
 
 import signal
@@ -145,6 +145,39 @@ def test_bad_arguments(disk):
         appell.constant("70*")
     assert appell.constant("70*deg") == pytest.approx(70 * np.pi / 180, rel=1e-15)
     assert {"dopri5", "verner6", "bdf"} <= {x["name"] for x in appell.methods()}
+
+
+def test_argument_errors_name_the_numbers(disk):
+    # PyErr_Format has no %g: the messages once read "the current time %.17g".
+    sim = appell.Simulation(appell.load(disk))
+    sim.advance(0.25)
+    with pytest.raises(ValueError) as info:
+        sim.run(t_end=0.125, dt=0.5)
+    assert "%" not in str(info.value)
+    assert "time 0.25 " in str(info.value) and "t_end = 0.125," in str(info.value)
+    with pytest.raises(ValueError) as info:
+        sim.advance(float("nan"))
+    assert "%" not in str(info.value) and "time 0.25 " in str(info.value)
+
+
+def test_max_steps_must_be_a_whole_number(disk):
+    # 2.5 was truncated to 2, and 1e30 cast to long (undefined; LONG_MIN here), which the
+    # library then refused with a message about switch_growth.
+    m = appell.load(disk)
+    for bad in (2.5, 1e30, 0):
+        with pytest.raises(ValueError, match="max_steps must be a whole number"):
+            appell.Simulation(m, max_steps=bad)
+    assert appell.Simulation(m, max_steps=1e6).settings["max_steps"] == 1000000
+
+
+def test_an_interval_past_t_end_ends_at_t_end(disk):
+    # dt more than 1e9 times t_end - t0 once gave the row at t0 only, without integrating.
+    m = appell.load(disk)
+    sim = appell.Simulation(m)
+    res = sim.run(t_end=0.5, dt=1e9)
+    assert list(res.t) == [0.0, 0.5] and sim.t == 0.5
+    one = appell.Simulation(m).run(t_end=0.5, dt=0.5)   # the same single advance to 0.5
+    assert np.array_equal(res.table, one.table)
 
 
 def test_inconsistent_initial_speeds_are_refused(disk):

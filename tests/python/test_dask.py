@@ -47,6 +47,12 @@ def test_dask_equals_local(client, disk):
     assert "must be positive" in remote["message"][local.failed[0]]
 
 
+def test_a_bad_path_fails_before_any_chunk(client, disk):
+    # The chunks skip the plan's check: every run came back as a failed row instead.
+    with pytest.raises(appell.SceneError, match="did you mean 'mass'"):
+        appell.sweep(disk, grid={"bodies.disk.mas": [1, 2]}, client=client)
+
+
 def test_killed_worker_loses_no_run(client, disk):
     args = _args(20.0)                     # 36 runs of about 30 ms; chunks of 2 runs
     local = appell.sweep(disk, jobs=2, **args)

@@ -2,8 +2,8 @@
 the whole; random values are reproducible and have the asked-for distribution; failed runs are
 rows; and a sweep of the rolling disk reproduces the critical speed of upright rolling.
 
-The critical speed comes from the linearized equations of the rolling disk (REFERENCES.md,
-rolling disk): upright straight rolling of a uniform disk is stable iff v^2 > g r / 3. The
+The critical speed comes from the linearized equations of the rolling disk (docs/references.md
+§4): upright straight rolling of a uniform disk is stable iff v^2 > g r / 3. The
 same linearization gives, above it, the largest lean reached from a small initial lean delta
 with no lean rate and no turning: delta (2 / (1 - v_c^2 / v^2) - 1); below it the lean grows
 like exp(s t), s^2 = (4/5)(g/r)(1 - v^2/v_c^2)."""
@@ -137,6 +137,14 @@ def test_a_bad_path_fails_before_any_run(tmp_path, disk):
     assert not list(tmp_path.iterdir())
 
 
+def test_bad_jobs_are_refused_as_arguments(disk):
+    # jobs=-1 raised SceneError('invalid batch definition'); 2.5 ran on 2 threads.
+    for bad in (-1, 2.5, "2"):
+        with pytest.raises(ValueError, match="jobs must be a whole number") as info:
+            appell.sweep(disk, grid={"bodies.disk.mass": [1, 2]}, set=SHORT, jobs=bad)
+        assert not isinstance(info.value, appell.SceneError)
+
+
 def test_progress_is_reported(disk):
     calls = []
     appell.sweep(disk, grid={"initial.disk.tilt": "60*deg:89*deg:8"}, set=SHORT,
@@ -146,7 +154,7 @@ def test_progress_is_reported(disk):
 
 def test_critical_speed_of_upright_rolling(disk):
     g, r = 9.81, 0.5                       # the scene's gravity and radius
-    v_c = math.sqrt(g * r / 3)             # REFERENCES: stable iff v^2 > g r / 3
+    v_c = math.sqrt(g * r / 3)             # docs/references.md §4: stable iff v^2 > g r / 3
     ratios = [0.5, 0.8, 0.9, 0.95, 0.98, 1.02, 1.05, 1.1, 1.2, 1.5, 2.0]
     leans = [0.01, 0.05]                   # initial lean from upright, degrees
     t_end, dt = 10.0, 0.05

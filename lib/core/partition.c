@@ -1,0 +1,173 @@
+/* Choosing the partition of the speeds and judging redundant constraint rows (double build
+ * only: these decisions are taken at the real state, between steps, never inside a derivative).
+ *
+ * ap_partition: pivoted QR of A at (t, q) picks the dependent speeds (perm[0..rank-1]); rows
+ * beyond the rank are redundant: a row-pivoted QR of A^T names them, and their consistency
+ * (a0 in the range of the kept rows) decides between dropping them and AP_ERR_INCONSISTENT. A
+ * body model with implicit holonomic rows tells rows redundant for every q from rows redundant
+ * only where those rows hold, by the rank at a nearby state off them (nearby_rank).
+ * ap_core_judge_redundant: the latter kind, judged at an accepted state against manifold_rtol.
+ * Nothing here allocates. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "core/core.h"
+#include "linalg/linalg.h"
+
+#define SCRATCH(d) ((ap_scratch *)(d)->internal)  /* first member of the data block */
+
+static double max_abs(const double *x, size_t len) {
+  double mx = 0.0;
+  for (size_t i = 0; i < len; i++) mx = fmax(mx, fabs(x[i]));
+  return mx;
+}
+
+/* Names of the constraint rows a pivoted QR of A^T puts after the rank: the redundant ones. */
+static void name_redundant(const ap_model *m, ap_data *d, const int *jpvt, int r,
+                           const char *verdict, double resid) {
+  char rows[256] = "";
+  size_t used = 0;
+  for (int s = r; s < m->b && used + 40 < sizeof rows; s++) {
+    int len = snprintf(rows + used, sizeof rows - used, "%s'%s'", s > r ? ", " : "",
+                       m->constraint_names[jpvt[s]]);
+    if (len > 0) used += (size_t)len;
+  }
+  ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (%s) at t = %.17g: %s "
+              "is a combination of the others; residual %.3g", m->name, m->b - r, m->b,
+              verdict, d->t, rows, resid);
+}
+
+/* The dropped rows that contradict the kept ones, each with its own residual: from the pivoted
+ * QR A^T P = Q R of ap_la_orth_basis (R in the upper triangle of F, ld k), dropped row j is the
+ * combination c = R11^-1 R12[:, j] of the kept rows, and x_j - c . x_kept is its disagreement
+ * (x = a0 or gamma). Rows within tol are listed as consistent. work: b doubles. */
+static int name_inconsistent(const ap_model *m, ap_data *d, const double *F, const int *jpvt,
+                             int r, const double *x, double tol, const char *what,
+                             double *work) {
+  int k = m->k, nbad = 0;
+  char bad[320] = "";
+  size_t used = 0;
+  for (int j = r; j < m->b; j++) {
+    double *c = work, res = x[jpvt[j]];
+    for (int i = r - 1; i >= 0; i--) {   /* R11 c = R12[:, j] */
+      double t = F[i + (size_t)j * k];
+      for (int l = i + 1; l < r; l++) t -= F[i + (size_t)l * k] * c[l];
+      c[i] = t / F[i + (size_t)i * k];
+    }
+    for (int i = 0; i < r; i++) res -= c[i] * x[jpvt[i]];
+    if (!(fabs(res) > tol)) continue;
+    nbad++;
+    if (used + 60 >= sizeof bad) continue;
+    int len = snprintf(bad + used, sizeof bad - used, "%s'%s' (by %.3g)", used ? ", " : "",
+                       m->constraint_names[jpvt[j]], res);
+    if (len > 0) used += (size_t)len;
+  }
+  if (nbad)
+    ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and %d of them "
+                "inconsistent at t = %.17g: %s disagree%s with the combination of the others "
+                "(%s)", m->name, m->b - r, m->b, nbad, d->t, bad, nbad == 1 ? "s" : "", what);
+  return nbad;
+}
+
+/* ---- partition ---------------------------------------------------------------------------- */
+
+/* Rank of A at a nearby state q + eps N xi off the holonomic manifold (xi a fixed spread of
+ * directions, eps 1e-6 of the size of q): redundancy that holds for every q survives there,
+ * redundancy of the manifold does not. The position stage at q is restored (d->perm is
+ * overwritten). Returns the rank, -1 when the nearby state cannot be evaluated, -2 when q
+ * cannot. */
+static int nearby_rank(const ap_model *m, ap_data *d) {
+  ap_scratch *s = SCRATCH(d);
+  int n = m->n, k = m->k, r = -1;
+  double qmax = fmax(1.0, max_abs(d->q, (size_t)n)), step = 0.0;
+  for (int c = 0; c < k; c++) s->tk1[c] = sin(1.3 + 2.1 * c);
+  ap_la_gemv(n, k, d->N, s->tk1, s->tn);   /* tn = N xi */
+  step = max_abs(s->tn, (size_t)n);
+  if (!(step > 0)) return -1;
+  for (int i = 0; i < n; i++) {
+    double qi = d->q[i];
+    d->q[i] += 1e-6 * qmax / step * s->tn[i];
+    s->tn[i] = qi;
+  }
+  if (ap_core_position_objects(m, d) == AP_OK &&
+      ap_la_pivot_select(m->b, k, d->A, d->rank_rtol, d->perm, &r, s->work, s->iwork) != AP_OK)
+    r = -1;
+  memcpy(d->q, s->tn, sizeof(double) * (size_t)n);
+  if (ap_core_position_objects(m, d) != AP_OK) return -2;
+  return r;
+}
+
+int ap_partition(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  ap_scratch *s = SCRATCH(d);
+  d->cnt.partitions++;
+  if (m->b == 0) {
+    d->rank = 0, d->l = m->k;
+    for (int i = 0; i < m->k; i++) d->perm[i] = i;
+    return AP_OK;
+  }
+  int rc = ap_core_position_objects(m, d);
+  if (rc != AP_OK) return rc;
+  int r = 0;
+  rc = ap_la_pivot_select(m->b, m->k, d->A, d->rank_rtol, d->perm, &r, s->work, s->iwork);
+  if (rc != AP_OK) {
+    ap_core_msg(d, "system '%s': pivoted QR of A failed at t = %.17g", m->name, d->t);
+    return rc;
+  }
+  d->rank = r, d->l = m->k - r, d->redundant = m->b - r, d->redundant_manifold = 0;
+  if (r == m->b) return AP_OK;
+  if (m->nhol > 0) {   /* structural or of the manifold? */
+    int rn = nearby_rank(m, d);
+    if (rn == -2) return AP_ERR_INTERNAL;   /* the state itself evaluated a moment ago */
+    d->redundant_manifold = rn > r ? rn - r : 0;
+    rc = ap_la_pivot_select(m->b, m->k, d->A, d->rank_rtol, d->perm, &r, s->work, s->iwork);
+    if (rc != AP_OK) return rc;
+  }
+  /* Which rows are redundant, and are they consistent? The row-pivoted QR of A^T says. */
+  double resid = 0.0;
+  int rr = 0;
+  rc = ap_la_orth_basis(m->b, m->k, d->A, d->a0, d->rank_rtol, &rr, s->F, s->tau, s->jpvt,
+                        s->Qf, s->gB, s->tk1, &resid, s->work, s->iwork);
+  if (rc != AP_OK) return rc;
+  double scale = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A,
+                                                                       (size_t)m->b * m->k)));
+  double tol = d->redundant_manifold ? d->manifold_rtol : AP_CONSISTENCY_RTOL;
+  if (resid > tol * scale) {
+    name_inconsistent(m, d, s->F, s->jpvt, rr, d->a0, tol * scale, "the free terms a0",
+                      s->work);
+    return AP_ERR_INCONSISTENT;
+  }
+  name_redundant(m, d, s->jpvt, rr, !d->redundant_manifold ? "consistent, dropped"
+                 : d->redundant_manifold == d->redundant ? "consistent, dropped; only where "
+                 "the loops and contacts close" : "consistent, dropped; some only where the "
+                 "loops and contacts close", resid);
+  return AP_OK;
+}
+
+/* Rows redundant only on the holonomic manifold, at an accepted state (core.h). The residuals
+ * scale like the distance from the manifold: relative to the largest entry of A, a0 (resp.
+ * gamma). Which rows: the row-pivoted QR of A^T names them (as ap_partition). */
+int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
+  if (!d->redundant_manifold) return AP_OK;
+  ap_scratch *s = SCRATCH(d);
+  double sa = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A, (size_t)m->b * m->k)));
+  double sg = fmax(1.0, max_abs(d->gamma, (size_t)m->b)), tol = d->manifold_rtol;
+  int bad_a = d->resid_a0 > tol * sa, bad_g = !bad_a && d->resid_gamma > tol * sg;
+  if (!bad_a && !bad_g) return AP_OK;
+  double resid = 0.0;
+  int rr = d->rank;
+  if (ap_la_orth_basis(m->b, m->k, d->A, d->a0, -1.0, &rr, s->F, s->tau, s->jpvt, s->Qf, s->gB,
+                       s->tk1, &resid, s->work, s->iwork) != AP_OK)
+    return AP_ERR_INCONSISTENT;
+  if (!name_inconsistent(m, d, s->F, s->jpvt, rr, bad_a ? d->a0 : d->gamma,
+                         tol * (bad_a ? sa : sg), bad_a ? "the free terms a0" : "gamma",
+                         s->work)) {
+    char verdict[160];
+    snprintf(verdict, sizeof verdict, "inconsistent along the motion: %s by %.3g relative, "
+             "more than manifold_rtol %.3g", bad_a ? "the rows drifted apart" : "gamma",
+             bad_a ? d->resid_a0 / sa : d->resid_gamma / sg, tol);
+    name_redundant(m, d, s->jpvt, rr, verdict, bad_a ? d->resid_a0 : d->resid_gamma);
+  }
+  return AP_ERR_INCONSISTENT;
+}
