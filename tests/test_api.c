@@ -72,6 +72,7 @@ static ap_lin_eig eg;
 static ap_lin_sweep sw;
 static ap_scene_out *oo;
 static ap_scene_lin sl;
+static ap_scene_lin_guess lg;
 static int stat_[4];
 static char *msgs[4];
 static const double sweep_p[3] = {0.0, 1.0, 2.0};
@@ -641,6 +642,31 @@ static void cases_scene_runs(void) {
   CASE(ap_scene_get_linearize, "out NULL",
        ap_scene_get_linearize(SC, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_lin_free, "NULL", (ap_scene_lin_free(NULL), 1));
+  CASE(ap_scene_lin_guess_load, "path NULL",
+       ap_scene_lin_guess_load(NULL, NULL, 0, NULL, 0, &lg, msg, sizeof msg) == AP_ERR_ARG &&
+           msg[0] && !lg.scene);
+  CASE(ap_scene_lin_guess_load, "out NULL",
+       ap_scene_lin_guess_load(SCENE_PATH, NULL, 0, NULL, 0, NULL, msg, sizeof msg) ==
+           AP_ERR_ARG);
+  CASE(ap_scene_lin_guess_load, "nsets -1",
+       ap_scene_lin_guess_load(SCENE_PATH, NULL, 0, NULL, -1, &lg, msg, sizeof msg) ==
+           AP_ERR_ARG && !lg.scene);
+  CASE(ap_scene_lin_guess_load, "sets NULL, nsets 1",
+       ap_scene_lin_guess_load(SCENE_PATH, NULL, 0, NULL, 1, &lg, msg, sizeof msg) ==
+           AP_ERR_ARG && !lg.scene);
+  CASE(ap_scene_lin_guess_load, "a missing file",
+       ap_scene_lin_guess_load("/nonexistent/x.yaml", NULL, 0, NULL, 0, &lg, msg, sizeof msg) !=
+           AP_OK && msg[0] && !lg.scene && !lg.q);
+  CASE(ap_scene_lin_guess_load, "msg NULL (optional)",
+       ap_scene_lin_guess_load(NULL, NULL, 0, NULL, 0, &lg, NULL, 0) == AP_ERR_ARG);
+  CASE(ap_scene_lin_guess_free, "NULL", (ap_scene_lin_guess_free(NULL), 1));
+  CASE(ap_scene_lin_guess_free, "zeroed", (ap_scene_lin_guess_free(&lg), isnan(lg.speed)));
+  CASE(ap_scene_lin_def, "NULL: the defaults",
+       ap_scene_lin_def(NULL).about == AP_LIN_STEADY && !ap_scene_lin_def(NULL).speed_dir);
+  CASE(ap_scene_lin_create, "g NULL", ap_scene_lin_create(NULL, NULL, &oln) == AP_ERR_ARG && !oln);
+  CASE(ap_scene_lin_create, "g without a scene",
+       ap_scene_lin_create(&lg, NULL, &oln) == AP_ERR_ARG && !oln);
+  CASE(ap_scene_lin_create, "out NULL", ap_scene_lin_create(&lg, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_body_actuator_partials, "m NULL",
        ap_body_actuator_partials(NULL, BD, 0, &id, &T, NULL, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_body_actuator_partials, "d NULL",
@@ -753,11 +779,18 @@ static void cases_lin(void) {
   CASE(ap_lin_create, "q NULL", ap_lin_create(TM, NULL, 0.0, NULL, tw, &oln) == AP_ERR_ARG && !oln);
   CASE(ap_lin_create, "t NaN", ap_lin_create(TM, NULL, NAN, tq, tw, &oln) == AP_ERR_ARG && !oln);
   CASE(ap_lin_create, "out NULL", ap_lin_create(TM, NULL, 0.0, tq, tw, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_create, "q NaN (a message in the linearizer)",
+       (tq[1] = NAN, ap_lin_create(TM, NULL, 0.0, tq, tw, &oln) == AP_ERR_ARG && oln &&
+                         strstr(ap_lin_message(oln), "nan")));
+  CASE(ap_lin_create, "v Inf (a message in the linearizer)",
+       (tw[0] = INFINITY, ap_lin_create(TM, NULL, 0.0, tq, tw, &oln) == AP_ERR_ARG && oln &&
+                              strstr(ap_lin_message(oln), "inf")));
   CASE(ap_lin_create, "def, v NULL (defaults, zero speeds)",
        (ap_lin_create(TM, NULL, 0.0, tq, NULL, &oln), oln != NULL));
   CASE(ap_lin_free, "NULL", (ap_lin_free(NULL), 1));
   CASE(ap_lin_message, "NULL: a fixed text", ap_lin_message(NULL) && ap_lin_message(NULL)[0]);
   CASE(ap_lin_operating_point, "L NULL", ap_lin_operating_point(NULL, 0.0) == AP_ERR_ARG);
+  CASE(ap_lin_operating_point, "s Inf", ap_lin_operating_point(LN, INFINITY) == AP_ERR_ARG);
   CASE(ap_lin_q, "NULL", ap_lin_q(NULL) == NULL);
   CASE(ap_lin_v, "NULL", ap_lin_v(NULL) == NULL);
   CASE(ap_lin_linearize, "NULL", ap_lin_linearize(NULL) == AP_ERR_ARG);

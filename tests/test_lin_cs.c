@@ -152,7 +152,6 @@ static void compare(ap_lin *L, const char *label) {
 
 /* The example scenes that have no operating point (appell linearize refuses them too). */
 static const char *const refused[] = {
-    "bicycle.yaml",             /* TEMPORARY: its linearize: section is being written */
     "diff_drive_motors.yaml",   /* motors driving the wheels: no steady state in the scene's
                                    state, no section */
     NULL};

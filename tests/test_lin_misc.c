@@ -5,7 +5,9 @@
  *    sorting would swap them), zero crossings of a real eigenvalue and of a pair, and a meeting,
  *    at known parameters, found to 1e-12; bad parameter grids refused.
  *  - Scene section: read back (overrides, speed keys with sequences, lists, sweep); bad
- *    sections named with file:line:column and the reason.
+ *    sections named with file:line:column and the reason, the overrides of initial: included;
+ *    names in free: / independent: that are not state variables refused at the entry's
+ *    location with the closest name; a guess with NaN or Inf refused.
  *  - Errors: a point that is not steady (the state and its rate named), a subsystem that is not
  *    closed (the coupling state named), a repeated state, a turntable whose rate changes with
  *    time (refused as time-dependent), NULL arguments. */
@@ -207,7 +209,14 @@ static void test_scene_section(void) {
       {"linearize: {speed: {disk: {spin_rate: fast}}}", "fast"},
       {"linearize: {free: disk.tilt}", "sequence"},
       {"linearize: {sweep: {from: 1, to: 0, count: 5}}", "greater than"},
-      {"linearize: {sweep: {from: 0, to: 1, count: 1}}", "count"}};
+      {"linearize: {sweep: {from: 0, to: 1, count: 1}}", "count"},
+      /* overrides of initial: checked where the section writes them (they were reported at
+       * the scene's initial: as "set by --set") */
+      {"linearize: {initial: {disk: {tilt: 90*dg}}}", "linearize.initial.disk.tilt: unknown "
+                                                      "name 'dg'"},
+      {"linearize: {initial: {disk: {heading_rat: 0}}}", "did you mean 'heading_rate'"},
+      {"linearize: {speed: {disk: {spin_rat: -2}}}", "did you mean 'spin_rate'"},
+      {"linearize: {initial: {dsk: {tilt: 1}}}", "no joint named 'dsk' (did you mean 'disk'"}};
   for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
     char text[2048];
     size_t cut = strstr(scene_text, "linearize:") - scene_text;
@@ -221,11 +230,119 @@ static void test_scene_section(void) {
   }
 }
 
+/* ap_scene_lin_guess_load: the rolling disk's section sets spin_rate = -2 s (v = s m/s at
+ * r = 0.5), so the speeds are v0 + s dir with v0 = 0 (upright, no other rate), dir = the
+ * speeds at s = 1 (forward speed 1 m/s along x: vx = 1, spin 2 rad/s about the axis), and
+ * the scene's own spin_rate -6 gives s = 3; an override -4 gives 2, from text as from the
+ * file. Hoffmann's section has no speed: no direction, speed NaN. A missing file fails with
+ * its name and leaves nothing to free but the (empty) struct. */
+static void test_guess(void) {
+  char file[1200], msg[1024];
+  snprintf(file, sizeof file, "%s/examples/scenes/rolling_disk.yaml", srcdir);
+  ap_scene_lin_guess g;
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(file, NULL, 0, NULL, 0, &g, msg, sizeof msg), AP_OK);
+  AP_CHECK(g.dir != NULL && g.v0 != NULL && g.n == 6 && g.k == 5);
+  AP_CHECK_NEAR(g.speed, 3.0, 1e-14);
+  double nv0 = 0.0, ndir = 0.0, nres = 0.0;
+  for (int i = 0; g.dir && i < g.k; i++) {
+    nv0 = fmax(nv0, fabs(g.v0[i])), ndir += g.dir[i] * g.dir[i];
+    nres = fmax(nres, fabs(g.v[i] - g.v0[i] - g.speed * g.dir[i]));
+  }
+  AP_CHECK_NEAR(nv0, 0.0, 1e-15);
+  AP_CHECK_NEAR(ndir, 5.0, 1e-14);   /* vx = 1 and |w| = 2 */
+  AP_CHECK_NEAR(nres, 0.0, 1e-14);
+  AP_CHECK(g.sec.present && g.sec.nspeed == 1);
+  ap_lin *L = NULL;   /* the linearizer starts at v0 + s dir */
+  AP_CHECK_EQ_INT(ap_scene_lin_create(&g, NULL, &L), AP_OK);
+  AP_CHECK_EQ_INT(ap_lin_operating_point(L, g.speed), AP_OK);
+  for (int i = 0; L && i < g.k; i++) AP_CHECK_NEAR(ap_lin_v(L)[i], g.v[i], 1e-13);
+  ap_lin_free(L);
+  ap_scene_lin_guess_free(&g);
+  FILE *f = fopen(file, "rb");
+  static char text[8192];
+  size_t len = f ? fread(text, 1, sizeof text, f) : 0;
+  if (f) fclose(f);
+  const char *set[] = {"initial.disk.spin_rate=-4"};
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load("disk.yaml", text, len, set, 1, &g, msg, sizeof msg),
+                  AP_OK);
+  AP_CHECK_NEAR(g.speed, 2.0, 1e-14);
+  ap_scene_lin_guess_free(&g);
+  snprintf(file, sizeof file, "%s/examples/scenes/hoffmann.yaml", srcdir);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(file, NULL, 0, NULL, 0, &g, msg, sizeof msg), AP_OK);
+  AP_CHECK(g.dir == NULL && g.v0 == NULL && isnan(g.speed) && g.sec.about == AP_LIN_EQUILIBRIUM);
+  ap_scene_lin_guess_free(&g);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load("/nonexistent/bike.yaml", NULL, 0, NULL, 0, &g, msg,
+                                          sizeof msg), AP_ERR_ARG);
+  AP_CHECK(strstr(msg, "/nonexistent/bike.yaml") != NULL && g.scene == NULL && g.q == NULL);
+  ap_scene_lin_guess_free(&g);
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load(NULL, NULL, 0, NULL, 0, &g, msg, sizeof msg),
+                  AP_ERR_ARG);
+}
+
+/* Names in free: / independent: that are not state variables are refused with the closest
+ * name, located in the scene (they were ignored); a guess with NaN or Inf, or an infinite speed
+ * parameter, is refused with a message naming the entry (it failed later, or not at all). */
+static void test_bad_names_and_values(void) {
+  char text[2048], msg[1024];
+  size_t cut = strstr(scene_text, "linearize:") - scene_text;
+  snprintf(text, sizeof text, "%.*slinearize:\n  free:\n    - disk.tilt\n    - disk.tlt\n",
+           (int)cut, scene_text);
+  ap_scene_lin_guess g;
+  AP_CHECK_EQ_INT(ap_scene_lin_guess_load("names.yaml", text, strlen(text), NULL, 0, &g, msg,
+                                          sizeof msg), AP_OK);
+  ap_lin *L = NULL;
+  AP_CHECK_EQ_INT(ap_scene_lin_create(&g, NULL, &L), AP_ERR_ARG);
+  const char *m = ap_lin_message(L);
+  printf("  free: [disk.tilt, disk.tlt]: %s\n", m);
+  AP_CHECK(strstr(m, "names.yaml:14:7: linearize.free[1]: 'disk.tlt' is not a state variable") ==
+           m);
+  AP_CHECK(strstr(m, "did you mean 'disk.tilt'?") != NULL);
+  ap_lin_free(L);
+  /* the same list given by the caller (not the section's): the library's own message */
+  static const char *const indep[] = {"disk.wx", "disk.spin_rate", NULL};
+  ap_lin_def def = ap_scene_lin_def(&g);
+  def.independent = indep, def.free = NULL;
+  AP_CHECK_EQ_INT(ap_scene_lin_create(&g, &def, &L), AP_ERR_ARG);
+  m = ap_lin_message(L);
+  printf("  independent: [disk.wx, disk.spin_rate]: %s\n", m);
+  AP_CHECK(strstr(m, "independent: 'disk.spin_rate' is not a state variable of model") == m);
+  AP_CHECK(strstr(m, "disk.wz") != NULL);   /* no close name: the variables are listed */
+  ap_lin_free(L);
+  def.independent = NULL;
+  /* NaN and Inf in the guess, an infinite speed parameter */
+  double q[16], v[16];
+  memcpy(q, g.q, sizeof *q * (size_t)g.n), memcpy(v, g.v, sizeof *v * (size_t)g.k);
+  q[2] = NAN;
+  AP_CHECK_EQ_INT(ap_lin_create(ap_scene_model(g.scene), &def, 0.0, q, v, &L), AP_ERR_ARG);
+  printf("  q[2] NaN: %s\n", ap_lin_message(L));
+  AP_CHECK(strstr(ap_lin_message(L), "coordinate 2 (disk.qw) of the guess is nan") != NULL);
+  ap_lin_free(L);
+  q[2] = g.q[2], v[4] = -INFINITY;
+  AP_CHECK_EQ_INT(ap_lin_create(ap_scene_model(g.scene), &def, 0.0, q, v, &L), AP_ERR_ARG);
+  AP_CHECK(strstr(ap_lin_message(L), "speed 4 (disk.wz) of the guess is -inf") != NULL);
+  ap_lin_free(L);
+  v[4] = g.v[4];
+  double dir[16] = {0};
+  dir[0] = INFINITY;
+  def.speed_dir = dir;
+  AP_CHECK_EQ_INT(ap_lin_create(ap_scene_model(g.scene), &def, 0.0, q, v, &L), AP_ERR_ARG);
+  AP_CHECK(strstr(ap_lin_message(L), "speed_dir[0] (disk.vx) is inf") != NULL);
+  ap_lin_free(L);
+  dir[0] = 1.0;
+  def.about = AP_LIN_STEADY;
+  AP_CHECK_EQ_INT(ap_lin_create(ap_scene_model(g.scene), &def, 0.0, q, v, &L), AP_OK);
+  AP_CHECK_EQ_INT(ap_lin_operating_point(L, INFINITY), AP_ERR_ARG);
+  AP_CHECK(strstr(ap_lin_message(L), "the speed parameter is inf") != NULL);
+  ap_lin_free(L);
+  ap_scene_lin_guess_free(&g);
+}
 
 int main(void) {
   find_srcdir();
+  test_bad_names_and_values();
   test_sweep();
   test_scene_section();
+  test_guess();
   test_errors();
   return ap_check_finish("lin_misc");
 }

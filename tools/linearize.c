@@ -42,6 +42,7 @@ static const char help[] =
     "                      exact to round-off, where the model allows it; else Ridders')\n"
     "  --csv FILE          write the eigenvalues as CSV (a sweep: one row per value)\n"
     "  --plot FIG.png|svg  draw real and imaginary parts against the swept parameter\n"
+    "  --yrange A:B        the plot's vertical range (default: all eigenvalues)\n"
     "  --set PATH=VALUE    override a scalar of the scene (repeatable)\n"
     "  -h, --help          this help\n"
     "\n"
@@ -81,6 +82,18 @@ static int parse_sweep(const char *v, lin_opts *o) {
   return 0;
 }
 
+static int parse_yrange(const char *v, lin_opts *o) {
+  char *end = NULL;
+  o->ymin = strtod(v, &end);
+  if (end == v || *end != ':') return -1;
+  const char *b = end + 1;
+  o->ymax = strtod(b, &end);
+  if (end == b || *end || !isfinite(o->ymin) || !isfinite(o->ymax) || !(o->ymax > o->ymin))
+    return -1;
+  o->has_yrange = 1;
+  return 0;
+}
+
 static int list_opt(char ***dst, const char *v) {
   free(*dst);
   *dst = split(v);
@@ -90,7 +103,7 @@ static int list_opt(char ***dst, const char *v) {
 static int parse(int argc, char **argv, lin_opts *o) {
   static const char *const known[] = {"--about", "--speed", "--sweep", "--states", "--free",
                                       "--inputs", "--keep-cyclic", "--derivatives", "--csv",
-                                      "--plot", "--set", "--help", NULL};
+                                      "--plot", "--yrange", "--set", "--help", NULL};
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;
     int r = 0;
@@ -121,6 +134,11 @@ static int parse(int argc, char **argv, lin_opts *o) {
       o->method = strcmp(v, "ridders") == 0 ? AP_LIN_RIDDERS : AP_LIN_COMPLEX_STEP;
     } else if (r == 0 && (r = cli_opt(argc, argv, &i, "--csv", &v)) > 0) o->csv = v;
     else if (r == 0 && (r = cli_opt(argc, argv, &i, "--plot", &v)) > 0) o->plot = v;
+    else if (r == 0 && (r = cli_opt(argc, argv, &i, "--yrange", &v)) > 0) {
+      if (parse_yrange(v, o))
+        return fprintf(stderr, "appell linearize: --yrange %s: expected A:B with A < B, e.g. "
+                       "-10:10\n", v), -1;
+    }
     else if (r == 0 && (r = cli_opt(argc, argv, &i, "--set", &v)) > 0) {
       if (o->nsets >= LIN_MAX_SETS)
         return fprintf(stderr, "appell linearize: at most %d --set\n", LIN_MAX_SETS), -1;
@@ -137,6 +155,8 @@ static int parse(int argc, char **argv, lin_opts *o) {
   if (!o->scene) return fprintf(stderr, "appell linearize: no scene file (see --help)\n"), -1;
   if (o->plot && !o->count)
     return fprintf(stderr, "appell linearize: --plot draws a sweep: give --sweep\n"), -1;
+  if (o->has_yrange && !o->plot)
+    return fprintf(stderr, "appell linearize: --yrange sets the range of --plot's figure\n"), -1;
   return 0;
 }
 

@@ -20,6 +20,8 @@ typedef struct lin_opts {
   int count;
   char **states, **free, **inputs;   /* NULL-terminated, or NULL */
   int keep_cyclic;
+  int has_yrange;          /* --yrange A:B: the plot's vertical range */
+  double ymin, ymax;
   int method;              /* --derivatives: ap_lin_method; 0 = AP_LIN_AUTO (the default) */
 } lin_opts;
 
@@ -34,6 +36,6 @@ int lin_write_point_csv(const char *file, const ap_lin_eig *e);
 int lin_check_target(const char *opt, const char *file, const char *scene);
 /* Real and imaginary parts against the parameter, from the CSV file written before. */
 int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
-             const char *title);
+             const char *title, const lin_opts *o);
 
 #endif

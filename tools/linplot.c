@@ -101,7 +101,7 @@ int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
 static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
 
 static void script(FILE *g, const char *fig, const char *csv, const char *param,
-                   const ap_lin_sweep *sw, const char *title) {
+                   const ap_lin_sweep *sw, const char *title, const lin_opts *o) {
   const char *ext = strrchr(fig, '.');
   fprintf(g, "set terminal %s size 900,600 noenhanced\n",
           ext && strcmp(ext, ".svg") == 0 ? "svg" : "pngcairo");
@@ -109,6 +109,7 @@ static void script(FILE *g, const char *fig, const char *csv, const char *param,
   fprintf(g, "set xlabel '%s'\nset ylabel 'eigenvalues (1/s)'\n", param);
   fprintf(g, "set title '%s: real parts (solid), imaginary parts (dashed)'\n", title);
   fprintf(g, "set key off\nset xzeroaxis lt -1\n");
+  if (o->has_yrange) fprintf(g, "set yrange [%.17g:%.17g]\n", o->ymin, o->ymax);
   for (int i = 0; i < sw->npoints; i++)
     fprintf(g, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 3 lc rgb 'gray40'\n",
             sw->points[i].p, sw->points[i].p);
@@ -126,7 +127,7 @@ static void script(FILE *g, const char *fig, const char *csv, const char *param,
 }
 
 int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
-             const char *title) {
+             const char *title, const lin_opts *o) {
   const char *ext = strrchr(fig, '.');
   if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
     return fprintf(stderr, "appell linearize: --plot %s: the figure must end in .png or .svg\n",
@@ -149,7 +150,7 @@ int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_s
   close(fd[0]);
   FILE *g = fdopen(fd[1], "w");
   if (g) {
-    script(g, fig, csv, param, sw, title);
+    script(g, fig, csv, param, sw, title, o);
     fclose(g);
   } else {
     close(fd[1]);

@@ -8,16 +8,10 @@
 #include "cli.h"
 #include "linearize.h"
 
-#define MAX_LOAD_SETS (LIN_MAX_SETS + 512)
-
 typedef struct run {
   lin_opts *o;
-  ap_scene_lin sec;        /* the linearize: section */
-  ap_scene *sc;            /* the scene of the operating point guess */
-  const char *sets[MAX_LOAD_SETS];
-  int nsets;               /* user sets + linearize.initial */
-  char (*buf)[128];        /* speed-key sets written here */
-  double *q, *v, *v0, *dir, s_point;
+  ap_scene_lin_guess g;    /* the scene, its linearize: section, the guess */
+  double s_point;          /* the speed parameter of one point (NaN: none) */
   ap_lin_def def;
   ap_lin *L;
   int *sel, ns;
@@ -26,88 +20,39 @@ typedef struct run {
 
 /* ---- loading ------------------------------------------------------------------------------ */
 
-/* Load the scene with r->sets plus the speed keys at coef * s (NaN: leave them) and one more
- * set (or NULL); its initial state into q, v. The scene goes to *out (may be NULL: freed). */
-static int load(run *r, double s, const char *extra, ap_scene **out, double *q, double *v) {
-  const char *sets[MAX_LOAD_SETS + 2];
-  int n = r->nsets;
-  memcpy(sets, r->sets, sizeof *sets * (size_t)n);
-  for (int i = 0; isfinite(s) && i < r->sec.nspeed && i < 256; i++) {
-    snprintf(r->buf[i], sizeof r->buf[i], "%.100s=%.17g", r->sec.speed_keys[i],
-             r->sec.speed_coef[i] * s);
-    sets[n++] = r->buf[i];
-  }
-  if (extra) sets[n++] = extra;
-  ap_scene *sc = NULL;
-  int rc = ap_scene_load(r->o->scene, sets, n, &sc, r->msg, sizeof r->msg);
-  if (rc == AP_OK && q)
-    rc = ap_scene_initial_state(sc, q, v, NULL, 0, r->msg, sizeof r->msg);
-  if (rc != AP_OK || !out) ap_scene_free(sc);
-  else *out = sc;
-  return rc;
-}
-
 static int prepare(run *r) {
   lin_opts *o = r->o;
-  ap_scene *sc0 = NULL;
-  int rc = ap_scene_load(o->scene, o->sets, o->nsets, &sc0, r->msg, sizeof r->msg);
-  if (rc == AP_OK) rc = ap_scene_get_linearize(sc0, &r->sec, r->msg, sizeof r->msg);
-  ap_scene_free(sc0);
+  int rc = ap_scene_lin_guess_load(o->scene, NULL, 0, o->sets, o->nsets, &r->g, r->msg,
+                                   sizeof r->msg);
   if (rc != AP_OK) return rc;
-  for (int i = 0; i < o->nsets; i++) r->sets[r->nsets++] = o->sets[i];
-  for (int i = 0; i < r->sec.nsets && r->nsets < MAX_LOAD_SETS; i++)
-    r->sets[r->nsets++] = r->sec.sets[i];
-  if ((o->has_speed || !strcmp(o->sweep_path, "speed")) && r->sec.nspeed == 0) {
+  if ((o->has_speed || !strcmp(o->sweep_path, "speed")) && r->g.sec.nspeed == 0) {
     snprintf(r->msg, sizeof r->msg, "%s: the speed parameter needs linearize.speed (the "
              "initial rates proportional to it) in the scene", o->scene);
     return AP_ERR_ARG;
   }
-  r->buf = calloc(256, sizeof *r->buf);
-  if (!r->buf) return AP_ERR_NOMEM;
-  return load(r, NAN, NULL, &r->sc, NULL, NULL);
-}
-
-/* q and v of the guess; with speed keys, v0 (speed 0), dir and the scene's own speed. */
-static int guess(run *r) {
-  const ap_model *m = ap_scene_model(r->sc);
-  int n = ap_model_n(m), k = ap_model_k(m);
-  r->q = calloc((size_t)(n + 4 * k) + 1, sizeof *r->q);
-  if (!r->q) return AP_ERR_NOMEM;
-  r->v = r->q + n, r->v0 = r->v + k, r->dir = r->v0 + k;
-  int rc = ap_scene_initial_state(r->sc, r->q, r->v, NULL, 0, r->msg, sizeof r->msg);
-  r->s_point = NAN;
-  if (rc != AP_OK || r->sec.nspeed == 0) return rc;
-  double *qt = r->dir + k, num = 0.0, den = 0.0;
-  rc = load(r, 0.0, NULL, NULL, qt, r->v0);
-  if (rc == AP_OK) rc = load(r, 1.0, NULL, NULL, qt, r->dir);
-  for (int i = 0; rc == AP_OK && i < k; i++) {
-    r->dir[i] -= r->v0[i];
-    num += (r->v[i] - r->v0[i]) * r->dir[i], den += r->dir[i] * r->dir[i];
-  }
-  r->s_point = r->o->has_speed ? r->o->speed : den > 0 ? num / den : 0.0;
-  return rc;
+  r->s_point = r->g.sec.nspeed == 0 ? NAN : o->has_speed ? o->speed : r->g.speed;
+  return AP_OK;
 }
 
 static int create(run *r) {
   lin_opts *o = r->o;
-  ap_scene_run sr;
-  ap_scene_get_run(r->sc, &sr);
-  r->def = ap_lin_def_default();
-  r->def.about = o->about >= 0 ? (ap_lin_about)o->about : r->sec.about;
-  r->def.free = (const char *const *)(o->free ? o->free : r->sec.free);
-  r->def.independent = (const char *const *)r->sec.independent;
-  r->def.inputs = (const char *const *)(o->inputs ? o->inputs : r->sec.inputs);
-  r->def.speed_dir = r->sec.nspeed ? r->dir : NULL;
+  r->def = ap_scene_lin_def(&r->g);
+  if (o->about >= 0) r->def.about = (ap_lin_about)o->about;
+  if (o->free) r->def.free = (const char *const *)o->free;
+  if (o->inputs) r->def.inputs = (const char *const *)o->inputs;
   r->def.method = (ap_lin_method)o->method;
-  int rc = ap_lin_create(ap_scene_model(r->sc), &r->def, sr.t0, r->q,
-                         r->sec.nspeed ? r->v0 : r->v, &r->L);
-  if (rc != AP_OK) snprintf(r->msg, sizeof r->msg, "%s", ap_lin_message(r->L));
+  int rc = ap_scene_lin_create(&r->g, &r->def, &r->L);
+  const char *m = ap_lin_message(r->L);
+  if (rc != AP_OK && o->free && strncmp(m, "free: ", 6) == 0)   /* a name given by --free */
+    snprintf(r->msg, sizeof r->msg, "%s: --free: %s", o->scene, m + 6);
+  else if (rc != AP_OK)
+    snprintf(r->msg, sizeof r->msg, "%s", m);
   return rc;
 }
 
 /* The subsystem's states from --states or linearize.states (after the partition). */
 static int select_states(run *r) {
-  char **names = r->o->states ? r->o->states : r->sec.states;
+  char **names = r->o->states ? r->o->states : r->g.sec.states;
   r->ns = 0;
   if (!names) return AP_OK;
   int count = 0;
@@ -139,12 +84,12 @@ static double max_abs(const double *x, size_t n) {
 }
 
 static void print_point(const run *r) {
-  const ap_model *m = ap_scene_model(r->sc);
+  const ap_model *m = ap_scene_model(r->g.scene);
   const ap_lin *L = r->L;
   int nx = ap_lin_nx(L), nu = ap_lin_nu(L);
   const double *q = ap_lin_q(L), *v = ap_lin_v(L), *A = ap_lin_A(L), *E = ap_lin_A_error(L);
   const double *B = ap_lin_B(L), *F = ap_lin_rates(L);
-  printf("scene        %s (%s)\n", ap_scene_name(r->sc), r->o->scene);
+  printf("scene        %s (%s)\n", ap_scene_name(r->g.scene), r->o->scene);
   printf("about        %s", r->def.about == AP_LIN_EQUILIBRIUM ? "equilibrium" : "steady motion");
   if (isfinite(r->s_point)) printf(" at speed %.10g", r->s_point);
   printf("\ncoordinates ");
@@ -206,7 +151,7 @@ static int one_point(run *r) {
   if (rc == AP_OK) rc = select_states(r);
   else snprintf(r->msg, sizeof r->msg, "%s: %s", r->o->scene, ap_lin_message(r->L));
   if (rc == AP_OK) rc = ap_lin_eigen(r->L, r->ns ? r->sel : NULL, r->ns, !r->o->keep_cyclic &&
-                                     r->sec.drop_cyclic);
+                                     r->g.sec.drop_cyclic);
   if (rc != AP_OK) {
     if (!r->msg[0]) snprintf(r->msg, sizeof r->msg, "%s: %s", r->o->scene, ap_lin_message(r->L));
     return rc;
@@ -233,31 +178,25 @@ static int param_eig(double p, int n, double *re, double *im, void *user) {
   run *r = ((param_ctx *)user)->r;
   char set[512];
   snprintf(set, sizeof set, "%s=%.17g", r->o->sweep_path, p);
-  ap_scene *sc = NULL;
+  const char *sets[LIN_MAX_SETS + 1];
+  memcpy(sets, r->o->sets, sizeof *sets * (size_t)r->o->nsets);
+  sets[r->o->nsets] = set;
+  ap_scene_lin_guess g;
   ap_lin *L = NULL;
-  const ap_model *m = NULL;
-  ap_scene_run sr;
-  double *q = NULL;
-  int rc = load(r, r->s_point, set, &sc, NULL, NULL);
+  int rc = ap_scene_lin_guess_load(r->o->scene, NULL, 0, sets, r->o->nsets + 1, &g, r->msg,
+                                   sizeof r->msg);
   if (rc == AP_OK) {
-    m = ap_scene_model(sc);
-    q = calloc((size_t)(ap_model_n(m) + ap_model_k(m)) + 1, sizeof *q);
-    rc = q ? ap_scene_initial_state(sc, q, q + ap_model_n(m), NULL, 0, r->msg, sizeof r->msg)
-           : AP_ERR_NOMEM;
-  }
-  if (rc == AP_OK) {
-    ap_scene_get_run(sc, &sr);
     ap_lin_def def = r->def;
-    def.speed_dir = NULL;
-    rc = ap_lin_create(m, &def, sr.t0, q, q + ap_model_n(m), &L);
+    def.speed_dir = g.dir;
+    rc = ap_scene_lin_create(&g, &def, &L);
   }
   ap_lin *keep = r->L;
   r->L = L;
-  if (rc == AP_OK) rc = ap_lin_operating_point(L, NAN);
+  if (rc == AP_OK) rc = ap_lin_operating_point(L, r->s_point);
   if (rc == AP_OK) rc = ap_lin_linearize(L);
   if (rc == AP_OK) rc = select_states(r);
   if (rc == AP_OK) rc = ap_lin_eigen(L, r->ns ? r->sel : NULL, r->ns, !r->o->keep_cyclic &&
-                                     r->sec.drop_cyclic);
+                                     r->g.sec.drop_cyclic);
   ap_lin_eig e;
   if (rc == AP_OK) ap_lin_get_eigen(L, &e);
   if (rc == AP_OK && e.n != n && n > 0) rc = AP_ERR_INCONSISTENT;
@@ -268,8 +207,7 @@ static int param_eig(double p, int n, double *re, double *im, void *user) {
                                      ap_lin_message(L));
   r->L = keep;
   ap_lin_free(L);
-  ap_scene_free(sc);
-  free(q);
+  ap_scene_lin_guess_free(&g);
   return rc;
 }
 
@@ -305,7 +243,7 @@ static int sweep(run *r) {
     if (rc == AP_OK) rc = select_states(r);
     if (rc == AP_OK)
       rc = ap_lin_sweep_speed(r->L, p, o->count, r->ns ? r->sel : NULL, r->ns,
-                              !o->keep_cyclic && r->sec.drop_cyclic, ptol, &sw);
+                              !o->keep_cyclic && r->g.sec.drop_cyclic, ptol, &sw);
     if (rc != AP_OK && !r->msg[0])
       snprintf(r->msg, sizeof r->msg, "%s: %s", o->scene, ap_lin_message(r->L));
   } else {
@@ -325,7 +263,7 @@ static int sweep(run *r) {
   if (!csv && o->plot) snprintf(tmp, sizeof tmp, "%s.csv", o->plot), csv = tmp;
   if (csv && lin_write_sweep_csv(csv, o->sweep_path, &sw)) rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot &&
-      lin_plot(o->plot, csv, o->sweep_path, &sw, ap_scene_name(r->sc)) != 0)
+      lin_plot(o->plot, csv, o->sweep_path, &sw, ap_scene_name(r->g.scene), o) != 0)
     rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot) printf("%s\n", o->plot);
   ap_lin_sweep_free(&sw);
@@ -340,15 +278,13 @@ int lin_run(lin_opts *o) {
   memset(&r, 0, sizeof r);
   r.o = o;
   int rc = prepare(&r);
-  if (rc == AP_OK) rc = guess(&r);
   if (rc == AP_OK) rc = create(&r);
   if (rc == AP_OK) rc = o->count ? sweep(&r) : one_point(&r);
   if (rc != AP_OK && rc != AP_ERR_INTERNAL)
     fprintf(stderr, "appell linearize: %s\n", r.msg[0] ? r.msg : ap_strerror(rc));
   int code = rc == AP_ERR_INTERNAL ? EXIT_INTERNAL : cli_exit_code(rc);
   ap_lin_free(r.L);
-  ap_scene_free(r.sc);
-  ap_scene_lin_free(&r.sec);
-  free(r.q), free(r.sel), free(r.buf);
+  ap_scene_lin_guess_free(&r.g);
+  free(r.sel);
   return code;
 }

@@ -95,7 +95,9 @@ typedef struct ap_lin ap_lin;
 /* Create a linearizer for model m with the guess (t, q, v) (n and k entries; v may be NULL:
  * zero). The definition is copied (names too). AP_ERR_UNSUPPORTED for a math-level system with
  * a kinematic matrix N and n != k, or a joint kind the chart does not know; AP_ERR_ARG for an
- * input that is not a speed. On such a failure *out still holds the linearizer, so that
+ * input that is not a speed, a name in def.free or def.independent that is not a state
+ * variable (the message has the closest name), or a NaN or infinity in q, v or def.speed_dir
+ * (the message names the entry). On such a failure *out still holds the linearizer, so that
  * ap_lin_message can say why: free it. (NULL arguments: AP_ERR_ARG and *out = NULL.) */
 AP_API int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, const double *q,
                          const double *v, ap_lin **out);
@@ -103,7 +105,7 @@ AP_API void ap_lin_free(ap_lin *L);
 AP_API const char *ap_lin_message(const ap_lin *L);
 
 /* Find the operating point at speed parameter s (ignored without def.speed_dir; NaN: leave the
- * speeds as they are). Starts from the last operating point (or the guess), so a sweep is a
+ * speeds as they are; an infinity: AP_ERR_ARG). Starts from the last operating point (or the guess), so a sweep is a
  * continuation. The first call chooses the partitions. On success the chart is re-centred on
  * the point. AP_ERR_SINGULAR / AP_ERR_SOLVER when Newton fails (message with the residual). */
 AP_API int ap_lin_operating_point(ap_lin *L, double s);

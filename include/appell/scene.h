@@ -154,6 +154,38 @@ AP_API int ap_scene_get_linearize(const ap_scene *s, ap_scene_lin *out, char *ms
                                   size_t msg_len);
 AP_API void ap_scene_lin_free(ap_scene_lin *l);
 
+/* The guess of a scene's operating point, as appell linearize makes it: the scene loaded with
+ * the overrides and linearize.initial, and its initial state; with a speed parameter
+ * (linearize.speed) also the speeds at speed 0 and per unit of speed (the initial state is
+ * linear in the given rates). */
+typedef struct ap_scene_lin_guess {
+  ap_scene_lin sec;        /* the section */
+  ap_scene *scene;         /* loaded with the overrides and then linearize.initial */
+  int n, k;                /* its model's coordinates and speeds */
+  double t0;               /* its start time */
+  double *q, *v;           /* (n), (k): its initial state, the guess */
+  double *v0, *dir;        /* (k) each with a speed parameter (else NULL): the speeds at
+                              speed 0 and per unit of speed */
+  double speed;            /* the speed of the scene's own rates (least squares of
+                              v = v0 + speed dir); NaN without a speed parameter */
+} ap_scene_lin_guess;
+
+/* Load the guess from the scene file path, or (text non-NULL) from text of len bytes named
+ * path in messages, with nsets overrides "path=value". The result owns its scene and arrays:
+ * ap_scene_lin_guess_free (also after a failure). Errors as ap_scene_load's. */
+AP_API int ap_scene_lin_guess_load(const char *path, const char *text, size_t len,
+                                   const char *const *sets, int nsets, ap_scene_lin_guess *out,
+                                   char *msg, size_t msg_len);
+AP_API void ap_scene_lin_guess_free(ap_scene_lin_guess *g);
+/* The linearizer's definition the section gives (about, free, independent, inputs, the speed
+ * direction; the lists point into g); change fields before ap_scene_lin_create. */
+AP_API ap_lin_def ap_scene_lin_def(const ap_scene_lin_guess *g);
+/* A linearizer of the guess's model at its state with def (NULL: ap_scene_lin_def(g)); the
+ * speeds are v0 when def has the speed direction, so that ap_lin_operating_point(L, s) starts
+ * at v0 + s dir. As ap_lin_create: on failure *out may hold the linearizer with the message. */
+AP_API int ap_scene_lin_create(const ap_scene_lin_guess *g, const ap_lin_def *def,
+                               ap_lin **out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -48,7 +48,6 @@
 typedef struct an_quat {
   int q;                    /* index in q of the quaternion's w */
   int c[3];                 /* chart indices of heading, tilt, spin (those of wz, wx, wy) */
-  int zsym;                 /* the body is symmetric about its z axis */
   double nb[3];             /* spin axis in body axes */
   double n0[3], d[3];       /* spin axis and tilt axis (unit, horizontal) in parent axes at
                                the reference */
@@ -72,8 +71,8 @@ typedef struct an_chart {
 } an_chart;
 
 int ap_an_chart_build(const ap_model *m, an_chart *ch, char *msg, size_t len);
-/* Centre the quaternion charts on q_ref: spin axis (body z for a body symmetric about it,
- * unless nearly vertical; else the most horizontal body axis), its image n0 and the tilt axis
+/* Centre the quaternion charts on q_ref: spin axis (the child frame's z axis unless it is
+ * within 26 degrees of the vertical; else its most horizontal axis), its image n0 and the tilt axis
  * d = unit(e_z x n0). keep_axis: keep the spin axis chosen before while it stays regular. */
 void ap_an_chart_centre(an_chart *ch, const double *q_ref, int keep_axis);
 void ap_an_chart_free(an_chart *ch);
@@ -157,6 +156,8 @@ struct ap_lin {
   ap_lin_method used;       /* the method of the last linearization */
   char fallback[512];       /* why Ridders' method was used under AP_LIN_AUTO ("" otherwise) */
   char msg[512];
+  const char *bad_list;     /* "free" or "independent" when a name there is not a variable */
+  int bad_index;            /* its entry */
 };
 
 void ap_an_msg(ap_lin *L, const char *fmt, ...)

@@ -7,8 +7,11 @@
  *
  *     R = Rz(a) Rd(b) R_ref Rn(c),    d = unit(e_z x n0), n0 = R_ref n,
  *
- * with n a body axis (the spin axis: body z for a body symmetric about it, else the most
- * horizontal body axis at the reference) and Rd a turn about the horizontal axis d. Turning
+ * with n an axis of the joint's child frame (the spin axis: its z axis, unless that is within
+ * 26 degrees of the vertical at the reference, then its most horizontal axis) and Rd a turn
+ * about the horizontal axis d. With n = z and the reference's Z-X-Z angles (h0, t0, s0),
+ * 0 < t0 < pi, d is the line of nodes Rz(h0) e_x and R = Rz(h0 + a) Rx(t0 + b) Rz(s0 + c):
+ * the chart's angles are the offsets of the scene's heading, tilt and spin. Turning
  * the whole body about the parent z axis changes a alone and spinning it about n changes c
  * alone, exactly: a heading or a spin that moves at a steady motion is a true cyclic coordinate
  * (a rotation vector mixes tilt and spin at second order, which falsifies the eigenvalues of a
@@ -64,7 +67,6 @@ static int chart_joint(const ap_model *m, const ap_jlayout *J, an_chart *ch) {
   if (J->quat >= 0) {
     an_quat *Q = &ch->quat[ch->nquat++];
     Q->q = J->qidx[J->quat];
-    Q->zsym = J->zsym;
     for (int i = 0; i < 3; i++) {
       Q->c[i] = v[J->wofs + (i + 2) % 3];   /* heading, tilt, spin: indices of wz, wx, wy */
       ch->qof[Q->c[i]] = -1;
@@ -142,6 +144,10 @@ static void rotate(const double *p, const double *y, double *x) {
   for (int i = 0; i < 3; i++) x[i] = R[i] * y[0] + R[i + 3] * y[1] + R[i + 6] * y[2];
 }
 
+/* The frame's z axis is the spin axis unless it is within acos(SPIN_Z_MAX) = 26 degrees of
+ * the vertical. */
+#define SPIN_Z_MAX 0.9
+
 void ap_an_chart_centre(an_chart *ch, const double *q_ref, int keep_axis) {
   for (int i = 0; i < ch->nquat; i++) {
     an_quat *Q = &ch->quat[i];
@@ -150,7 +156,7 @@ void ap_an_chart_centre(an_chart *ch, const double *q_ref, int keep_axis) {
     if (!keep_axis || !(fabs(Q->n0[2]) < 0.95)) {
       double ez[3] = {0, 0, 1}, best = 2.0;
       rotate(p, ez, Q->n0);
-      if (Q->zsym && fabs(Q->n0[2]) < 0.9) best = -1.0, Q->nb[0] = Q->nb[1] = 0, Q->nb[2] = 1;
+      if (fabs(Q->n0[2]) < SPIN_Z_MAX) best = -1.0, Q->nb[0] = Q->nb[1] = 0, Q->nb[2] = 1;
       for (int a = 0; a < 3 && best >= 0.0; a++) {   /* the most horizontal body axis */
         double e[3] = {a == 0, a == 1, a == 2}, n[3];
         rotate(p, e, n);

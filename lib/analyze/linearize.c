@@ -5,8 +5,8 @@
  * round-off, where the model allows it; else with Ridders' method (ridders.c), first step
  * h0 max(1, |x0_j|), the round-off floor of its estimates from the noise of F measured at x0
  * (ap_an_noise: near a steady motion F is small while the terms it is made of are not, so a
- * noise relative to |F| would be far too small). Aerr holds the estimates. B = dF/dtau for a generalized force tau on
- * model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
+ * noise relative to |F| would be far too small). Aerr holds the estimates. B = dF/dtau for a
+ * generalized force tau on model speed s is exact: the Appell solve is affine in Q, so dv'/dtau = B_c G^-1 B_c^T e_s with
  * the core's basis B_c and the factor of G = B_c^T g B_c left by the evaluation at x0, and at x0
  * the heading frames are the identity (du'/dtau = dv'/dtau); coordinate rows are zero.
  * Cyclic states: start from every coordinate state and drop a state while its column has a
@@ -123,6 +123,54 @@ static int bind_inputs(ap_lin *L) {
   return AP_OK;
 }
 
+/* Every name of list (def.free or def.independent) is a state variable: a chart coordinate or
+ * a model speed. Else AP_ERR_ARG, the message with the closest name ("did you mean") or the
+ * variables, and the entry in L->bad_list, L->bad_index (the scene layer locates it). */
+static int check_var_names(ap_lin *L, const char *const *list, const char *what) {
+  for (int i = 0; list && list[i]; i++) {
+    if (ap_an_find_var(L, list[i]) >= 0) continue;
+    int nv = L->ch.nc + L->k;
+    const char **names = calloc((size_t)nv + 1, sizeof *names);
+    for (int j = 0; names && j < nv; j++) names[j] = ap_an_var_name(L, j);
+    const char *sug = names ? ap_core_suggest(list[i], names, nv) : NULL;
+    char hint[300] = "";
+    size_t used = 0;
+    if (sug) snprintf(hint, sizeof hint, "did you mean '%s'?", sug);
+    for (int j = 0; !sug && names && j < nv && used + 8 < sizeof hint; j++)
+      used += (size_t)snprintf(hint + used, sizeof hint - used, "%s%s", j ? ", " : "the state "
+                               "variables are ", names[j]);
+    free(names);
+    ap_an_msg(L, "%s: '%s' is not a state variable of model '%s' (%s)", what, list[i],
+              ap_model_name(L->m), hint);
+    L->bad_list = what, L->bad_index = i;
+    return AP_ERR_ARG;
+  }
+  return AP_OK;
+}
+
+/* The guess must be finite: a NaN or an infinity would only show up later as a failed Newton. */
+static int check_guess(ap_lin *L, const double *q, const double *v) {
+  for (int i = 0; i < L->n; i++)
+    if (!isfinite(q[i])) {
+      ap_an_msg(L, "linearizer for model '%s': coordinate %d (%s) of the guess is %g",
+                ap_model_name(L->m), i, ap_model_coord_name(L->m, i), q[i]);
+      return AP_ERR_ARG;
+    }
+  for (int i = 0; v && i < L->k; i++)
+    if (!isfinite(v[i])) {
+      ap_an_msg(L, "linearizer for model '%s': speed %d (%s) of the guess is %g",
+                ap_model_name(L->m), i, ap_model_speed_name(L->m, i), v[i]);
+      return AP_ERR_ARG;
+    }
+  for (int i = 0; L->def.speed_dir && i < L->k; i++)
+    if (!isfinite(L->def.speed_dir[i])) {
+      ap_an_msg(L, "linearizer for model '%s': speed_dir[%d] (%s) is %g", ap_model_name(L->m), i,
+                ap_model_speed_name(L->m, i), L->def.speed_dir[i]);
+      return AP_ERR_ARG;
+    }
+  return AP_OK;
+}
+
 static void normalize_quats(ap_lin *L) {
   for (int i = 0; i < L->ch.nquat; i++) {
     double *p = L->q_ref + L->ch.quat[i].q;
@@ -146,9 +194,12 @@ static int setup(ap_lin *L, const ap_lin_def *def, double t, const double *q, co
               "needs coordinates whose rates are the speeds", ap_model_name(L->m), L->n, L->k);
     return AP_ERR_UNSUPPORTED;
   }
-  int rc = ap_data_create(L->m, &L->d);
+  int rc = check_guess(L, q, v);
+  if (rc == AP_OK) rc = ap_data_create(L->m, &L->d);
   if (rc == AP_OK) rc = ap_an_chart_build(L->m, &L->ch, L->msg, sizeof L->msg);
   if (rc == AP_OK) rc = alloc_all(L);
+  if (rc == AP_OK) rc = check_var_names(L, L->def.free, "free");
+  if (rc == AP_OK) rc = check_var_names(L, L->def.independent, "independent");
   if (rc != AP_OK) return rc;
   memcpy(L->q_ref, q, sizeof *q * (size_t)L->n);
   if (v) memcpy(L->v_ref, v, sizeof *v * (size_t)L->k);
@@ -201,6 +252,11 @@ void ap_lin_free(ap_lin *L) {
 int ap_lin_operating_point(ap_lin *L, double s) {
   if (!L || !L->d) return AP_ERR_ARG;
   L->msg[0] = '\0';
+  if (isinf(s)) {
+    ap_an_msg(L, "operating point: the speed parameter is %g (a finite value, or NaN to keep "
+              "the speeds)", s);
+    return AP_ERR_ARG;
+  }
   L->linearized = 0;
   int rc = AP_OK;
   if (!L->parted) {

@@ -11,8 +11,9 @@
  *     drop_cyclic: true                  # report without the cyclic coordinates (default)
  *     sweep: {from: 0, to: 10, count: 101}
  *
- * At load only the structure is checked (keys, kinds, joint names, numbers): state names need
- * the linearizer's chart and are checked by it. ap_scene_get_linearize turns the section into
+ * At load the structure is checked with the section's locations (keys, kinds, joint names, the
+ * joints' initial: keys, numbers): state names need the linearizer's chart and are checked by
+ * it. ap_scene_get_linearize turns the section into
  * override strings and name lists. */
 #include <math.h>
 #include <stdio.h>
@@ -26,21 +27,34 @@ static const char *const lin_keys[] = {"about", "initial", "speed", "free", "ind
 static const char *const sweep_keys[] = {"from", "to", "count", NULL};
 static const char *const abouts[] = {"steady", "equilibrium", NULL};   /* ap_lin_about */
 
-/* JOINT: {KEY: value} maps: joints exist, values are scalars (or sequences of scalars). */
-static int check_joint_map(sc_ctx *c, const sc_scene *s, const sc_node *n, int numbers) {
+/* "no joint named 'x' (did you mean 'y'?)" at the key node. */
+static int no_joint(sc_ctx *c, const sc_scene *s, const sc_node *key) {
+  const char **names = calloc((size_t)s->nj + 1, sizeof *names);
+  for (int k = 0; names && k < s->nj; k++) names[k] = s->joints[k].name;
+  const char *sug = names ? sc_suggest(key->text, names) : NULL;
+  sc_err(c, key, "no joint named '%s'%s%s%s", key->text, sug ? " (did you mean '" : "",
+         sug ? sug : "", sug ? "'?)" : "");
+  free(names);
+  return AP_ERR_ARG;
+}
+
+/* JOINT: {KEY: value} maps: joints exist, keys are the joint's initial: keys, values are
+ * numbers (or sequences of numbers), all checked here with the section's own locations (the
+ * guess applies them later as overrides of initial:, whose messages would point there). */
+static int check_joint_map(sc_ctx *c, const sc_scene *s, const sc_node *n) {
   if (sc_expect(c, n, SC_MAP)) return AP_ERR_ARG;
   for (int i = 0; i < n->n; i++) {
-    if (sc_find_joint(s, n->keys[i]->text) < 0)
-      return sc_err(c, n->keys[i], "no joint named '%s'", n->keys[i]->text);
+    int jt = sc_find_joint(s, n->keys[i]->text);
+    if (jt < 0) return no_joint(c, s, n->keys[i]);
     const sc_node *m = n->kids[i];
-    if (sc_expect(c, m, SC_MAP)) return AP_ERR_ARG;
+    if (sc_check_keys(c, m, sc_init_keys(s->joints[jt].def.kind))) return AP_ERR_ARG;
     for (int j = 0; j < m->n; j++) {
       const sc_node *v = m->kids[j];
       double x;
       if (v->kind == SC_MAP) return sc_err(c, v, "expected a value, got a mapping");
-      if (numbers && v->kind == SC_SCALAR && sc_number(c, v, &x)) return AP_ERR_ARG;
+      if (v->kind == SC_SCALAR && sc_number(c, v, &x)) return AP_ERR_ARG;
       for (int e = 0; v->kind == SC_SEQ && e < v->n; e++)
-        if (sc_expect(c, v->kids[e], SC_SCALAR) || (numbers && sc_number(c, v->kids[e], &x)))
+        if (sc_expect(c, v->kids[e], SC_SCALAR) || sc_number(c, v->kids[e], &x))
           return AP_ERR_ARG;
     }
   }
@@ -72,8 +86,8 @@ int sc_parse_linearize(sc_ctx *c, const sc_scene *s) {
       sc_get_bool(c, n, "drop_cyclic", &drop))
     return AP_ERR_ARG;
   const sc_node *v;
-  if ((v = sc_map_get(n, "initial")) && check_joint_map(c, s, v, 0)) return AP_ERR_ARG;
-  if ((v = sc_map_get(n, "speed")) && check_joint_map(c, s, v, 1)) return AP_ERR_ARG;
+  if ((v = sc_map_get(n, "initial")) && check_joint_map(c, s, v)) return AP_ERR_ARG;
+  if ((v = sc_map_get(n, "speed")) && check_joint_map(c, s, v)) return AP_ERR_ARG;
   static const char *const lists[] = {"free", "independent", "inputs", "states"};
   for (int i = 0; i < 4; i++)
     if ((v = sc_map_get(n, lists[i])) && check_names(c, v)) return AP_ERR_ARG;
@@ -200,4 +214,16 @@ void ap_scene_lin_free(ap_scene_lin *l) {
   free(l->speed_coef);
   free_list(l->free), free_list(l->independent), free_list(l->inputs), free_list(l->states);
   memset(l, 0, sizeof *l);
+}
+
+int sc_lin_entry_at(const ap_scene *sc, const char *list, int i, char *buf, size_t len) {
+  const sc_scene *s = sc_scene_parsed(sc);
+  const sc_node *l = s ? sc_map_get(sc_map_get(s->root, "linearize"), list) : NULL;
+  if (!l || l->kind != SC_SEQ || i < 0 || i >= l->n) return 0;
+  const sc_node *e = l->kids[i];
+  if (e->line > 0)
+    snprintf(buf, len, "%s:%d:%d: %s", s->file, e->line, e->col, e->path);
+  else
+    snprintf(buf, len, "%s: --set %s: %s", s->file, e->origin ? e->origin : "?", e->path);
+  return 1;
 }

@@ -31,7 +31,7 @@ static const char *const init_fre[] = {"x", "y", "z", "vx", "vy", "vz", ORIENT_K
 static const char *const init_con[] = {"x", "y", "vx", "vy", ORIENT_KEYS, NULL};
 static const char *const init_fix[] = {NULL};
 
-static const char *const *init_keys(ap_joint_kind kind) {
+const char *const *sc_init_keys(ap_joint_kind kind) {
   switch (kind) {
     case AP_JOINT_REVOLUTE: return init_rev;
     case AP_JOINT_PRISMATIC: return init_pri;
@@ -151,7 +151,7 @@ static int parse_initial(sc_ctx *c, sc_scene *s) {
     }
     sc_joint *jt = &s->joints[j];
     jt->init.node = n->kids[i];
-    if (sc_check_keys(c, n->kids[i], init_keys(jt->def.kind)) || check_driven(c, n->kids[i], jt) ||
+    if (sc_check_keys(c, n->kids[i], sc_init_keys(jt->def.kind)) || check_driven(c, n->kids[i], jt) ||
         read_init_kind(c, n->kids[i], jt))
       return AP_ERR_ARG;
   }

@@ -13,6 +13,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "core/core.h"
 #include "scene/scene_int.h"
 
 static const char *kind_word(sc_kind k) {
@@ -42,36 +43,8 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   return AP_ERR_ARG;
 }
 
-/* Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
- * neighbouring letters each cost 1. */
-static int edit_distance(const char *a, const char *b) {
-  size_t la = strlen(a), lb = strlen(b);
-  if (la > 63 || lb > 63) return 99;
-  int d[64][64];
-  for (size_t i = 0; i <= la; i++) d[i][0] = (int)i;
-  for (size_t j = 0; j <= lb; j++) d[0][j] = (int)j;
-  for (size_t i = 1; i <= la; i++)
-    for (size_t j = 1; j <= lb; j++) {
-      int cost = tolower((unsigned char)a[i - 1]) != tolower((unsigned char)b[j - 1]);
-      int best = d[i - 1][j - 1] + cost;
-      if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
-      if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
-      int swap = i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1];
-      if (swap && d[i - 2][j - 2] + 1 < best) best = d[i - 2][j - 2] + 1;
-      d[i][j] = best;
-    }
-  return d[la][lb];
-}
-
 const char *sc_suggest(const char *word, const char *const *keys) {
-  const char *best = NULL;
-  int bd = 99;
-  for (int i = 0; keys[i]; i++) {
-    int d = edit_distance(word, keys[i]);
-    if (d < bd) bd = d, best = keys[i];
-  }
-  int allow = (int)strlen(word) <= 4 ? 1 : (int)strlen(word) <= 8 ? 2 : 3;
-  return bd <= allow ? best : NULL;
+  return ap_core_suggest(word, keys, -1);
 }
 
 int sc_expect(sc_ctx *c, const sc_node *n, sc_kind kind) {

@@ -262,8 +262,13 @@ int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
+/* The keys of initial: for a joint of this kind (NULL-terminated). */
+const char *const *sc_init_keys(ap_joint_kind kind);
 /* The linearize: section (linearize.c): keys, types and joint names checked at load. */
 int sc_parse_linearize(sc_ctx *c, const sc_scene *s);
+/* "FILE:LINE:COL: linearize.LIST.I" (or the --set that gave it), the location of entry i of
+ * the section's name list; 0 when there is no such entry. */
+int sc_lin_entry_at(const ap_scene *sc, const char *list, int i, char *buf, size_t len);
 void sc_scene_clear(sc_scene *s);
 int sc_find_body(const sc_scene *s, const char *name);   /* -1 if none */
 int sc_find_joint(const sc_scene *s, const char *name);  /* -1 if none */

@@ -9,8 +9,14 @@
     table = appell.sweep("examples/scenes/rolling_disk.yaml",
                          grid={"initial.disk.tilt": "70*deg:89*deg:20"}, jobs=2)
 
+    lin = appell.linearize(model, speed=3)      # operating point, A, B, eigenvalues
+    lin.A, lin.B, lin.eigenvalues, lin.state_names
+    sw = appell.linearize(model, sweep=np.linspace(0, 5, 101))
+    sw.eigenvalues, sw.points                    # tracked eigenvalues, characteristic speeds
+
 The integration runs in C (the appell library) with the GIL released. docs/python.md
-describes the package; docs/sweeps.md the sweeps (threads, shards, Dask).
+describes the package; docs/sweeps.md the sweeps (threads, shards, Dask); docs/linearize.md
+the linearization.
 """
 
 import math as _math
@@ -21,7 +27,8 @@ from ._appell import Error, Model, SceneError
 from ._sweep import Table, sweep
 
 __all__ = ["Error", "SceneError", "Model", "Simulation", "Result", "Table", "load", "loads",
-           "sweep", "methods", "constant", "version"]
+           "sweep", "methods", "constant", "version", "linearize", "Linearization",
+           "LinearSweep"]
 
 version = _appell.version
 
@@ -138,3 +145,97 @@ class Simulation(_appell.Simulation):
                 e.result = Result(*partial, m.coordinate_names, m.speed_names)
             raise
         return Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+
+
+class Linearization:
+    """The linearization of a Model at one operating point (appell.linearize), as NumPy arrays:
+
+    speed          the speed parameter (None without one); t, q, v: the operating point
+    state_names    the states x = (independent chart coordinates, independent speeds)
+    cyclic         (nx) bool: cyclic coordinates (dropped from the eigenvalues by default)
+    A, A_error     (nx x nx) the state matrix dF/dx and the error estimate of each entry
+    B, input_names (nx x nu) the input matrix for generalized forces on the named speeds
+    rates          (nx) F at the point (non-zero only in cyclic rows for a steady motion)
+    subsystem      the states of the eigenvalue problem; A_sub its matrix
+    eigenvalues    (complex), largest real part first, with rcond (reciprocal condition
+                   numbers), rcondv (of the eigenvectors), error (bound) and eigenvectors
+                   (column j for eigenvalue j)."""
+
+    def __init__(self, d):
+        self.__dict__.update(d)
+
+    def index(self, name):
+        """The index of a state by name (ValueError if none)."""
+        try:
+            return self.state_names.index(name)
+        except ValueError:
+            raise ValueError(f"no state {name!r}; the states are "
+                             f"{', '.join(self.state_names)}") from None
+
+    def block(self, rows, cols=None, matrix="A"):
+        """The sub-matrix of A (or "B", "A_error") on the named states (cols: rows when
+        None; for B, cols are input names)."""
+        M = getattr(self, matrix)
+        r = [self.index(n) for n in rows]
+        if matrix == "B":
+            names = self.input_names
+            c = [names.index(n) for n in (cols if cols is not None else names)]
+        else:
+            c = [self.index(n) for n in (cols if cols is not None else rows)]
+        return M[_np_ix(r, c)]
+
+    def __repr__(self):
+        return (f"<appell.Linearization: {len(self.state_names)} states, "
+                f"{len(self.eigenvalues)} eigenvalues of {', '.join(self.subsystem)}>")
+
+
+class LinearSweep:
+    """Eigenvalues over the speed (appell.linearize(..., sweep=speeds)):
+
+    p            (count) the speeds
+    subsystem    the states of the eigenvalue problem
+    eigenvalues  (count x n) complex; column j follows one eigenvalue by continuity
+    points       characteristic speeds, dicts: kind ('crossing': a real part crosses zero;
+                 'meeting': two real eigenvalues meet), p, p_err (the root finder's
+                 bracket), value (the eigenvalue there), index (its column), rising (a
+                 crossing: the real part goes from - to +; a meeting: the pair becomes
+                 complex as the speed grows)."""
+
+    def __init__(self, d):
+        self.__dict__.update(d)
+
+    def __repr__(self):
+        return (f"<appell.LinearSweep: {len(self.p)} speeds x {self.eigenvalues.shape[1]} "
+                f"eigenvalues, {len(self.points)} characteristic points>")
+
+
+def _np_ix(r, c):
+    import numpy as np
+    return np.ix_(r, c)
+
+
+def linearize(model, speed=None, about=None, free=None, inputs=None, states=None,
+              keep_cyclic=False, sweep=None, ptol=None, set=None):
+    """Linearize a model (a Model, or a scene path loaded with the overrides set) about its
+    operating point, as `appell linearize` does, with the scene's linearize: section
+    (docs/linearize.md) unless overridden here:
+
+    speed        the speed parameter (needs linearize.speed; default: the scene's own rates)
+    about        "steady" or "equilibrium"
+    free         state variables Newton may move; inputs: speeds receiving a generalized
+                 force (columns of B); states: the subsystem of the eigenvalues
+    keep_cyclic  keep the cyclic coordinates in the eigenvalue problem
+    sweep        speeds (ascending): returns a LinearSweep with the eigenvalues tracked and
+                 the characteristic speeds located to ptol (default 1e-14 of the largest)
+
+    Returns a Linearization (or a LinearSweep). Failures raise Error (no operating point,
+    a subsystem that is not closed, an unknown state name ...)."""
+    if not isinstance(model, Model):
+        model = load(model, set=set)
+    elif set is not None:
+        text, name, sets = model.source
+        model = loads(text, name=name, set=sets + _sets(set))
+    tup = (lambda x: None if x is None else ((x,) if isinstance(x, str) else tuple(x)))
+    d = _appell.linearize(model, speed, about, tup(free), tup(inputs), tup(states),
+                          bool(keep_cyclic), sweep, 0.0 if ptol is None else float(ptol))
+    return LinearSweep(d) if sweep is not None else Linearization(d)

@@ -4,6 +4,7 @@
  *   _model.c    Model: a loaded scene (ap_scene) and what it tells about itself
  *   _sim.c      Simulation: one ap_sim with its own output evaluator (ap_scene_out)
  *   _batch.c    run_plan: a slice of a sweep plan on the batch API's thread pool
+ *   _lin.c      linearize: operating points, A and B, eigenvalues, speed sweeps
  *
  * Only the public C API (<appell/appell.h>) is used. Integration and batches run with the
  * GIL released; a Model is only read by Simulations and may be shared by Python threads. */
@@ -55,5 +56,6 @@ PyObject *apx_loads(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_run_plan(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_plan_info(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_constant(PyObject *self, PyObject *args);
+PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw);
 
 #endif

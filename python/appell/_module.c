@@ -146,6 +146,9 @@ static PyMethodDef module_methods[] = {
     {"constant", apx_constant, METH_VARARGS,
      "constant(text) -> float: a constant expression of the scene grammar (70*deg)"},
     {"methods", methods_list, METH_NOARGS, "the steppers on offer (name, summary, order)"},
+    {"linearize", (PyCFunction)(void (*)(void))apx_linearize, METH_VARARGS | METH_KEYWORDS,
+     "linearize(model, speed, about, free, inputs, states, keep_cyclic, sweep, ptol) -> dict "
+     "(appell.linearize wraps it)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {
