@@ -446,7 +446,7 @@ static int ball_measure(sysrun *r, double t, const double *q, const double *v, d
 /* ---- the table of runs ------------------------------------------------------------------- */
 
 static const drift_sys systems[] = {
-    {"skate", "math", M_ALL, "dopri5", 1e-8, 4000.0, 450.0, 0.0, 100000, 0, 1, {"energy"},
+    {"skate", "math", M_ALL, "dopri5", 1e-8, 4000.0, 560.0, 0.0, 100000, 0, 1, {"energy"},
      {1.0}, skate_setup, skate_measure},
     {"sleigh", "math", M_ALL, "dopri5", 1e-8, 100.0, 100.0, 1e-3, 100000, 0, 1, {"energy"},
      {1e-3}, sleigh_setup, sleigh_measure},
@@ -456,7 +456,7 @@ static const drift_sys systems[] = {
      {"jacobi"}, {1.0}, line_setup, line_measure},
     {"hoffmann_primitive", "math", M_ALL, "dopri5", 1e-8, 1200.0, 180.0, 0.0, 100000, 1, 1,
      {"energy"}, {1.0}, hoffprim_setup, hoffprim_measure},
-    {"rolling_disk", "disk", M_ALL, "dopri5", 1e-8, 1700.0, 300.0, 0.0, 100000, 0, 1,
+    {"rolling_disk", "disk", M_ALL, "dopri5", 1e-8, 1700.0, 340.0, 0.0, 100000, 0, 1,
      {"energy"}, {1.0}, disk_setup, energy_measure},
     {"heavy_top", "top", M_MIN | M_DAE, "dopri5", 1e-8, 250.0, 80.0, 0.0, 100000, 0, 3,
      {"energy", "L_z", "spin"}, {1.0, 1e-3, 1.0}, top_setup, top_measure},
@@ -466,9 +466,9 @@ static const drift_sys systems[] = {
      {"energy"}, {1.0}, hoffloop_setup, hoffloop_measure},
     {"sleigh_long", "slow_sleigh", M_ALL, "dopri5", 1e-8, 1000.0, 1000.0, 1e-3, 1000000, 0, 1,
      {"energy"}, {1e-3}, sleigh_setup, sleigh_measure},
-    {"rolling_disk_long", "slow_disk", M_ALL, "dopri5", 1e-8, 17000.0, 2600.0, 0.0, 1000000,
+    {"rolling_disk_long", "slow_disk", M_ALL, "dopri5", 1e-8, 17000.0, 3300.0, 0.0, 1000000,
      0, 1, {"energy"}, {1.0}, disk_setup, energy_measure},
-    {"spinning_ball", "ball", M_ALL, "dopri5", 1e-11, 4.0, 1.0, 0.0, 100000, 0, 3,
+    {"spinning_ball", "ball", M_ALL, "dopri5", 1e-11, 4.0, 1.5, 0.0, 100000, 0, 3,
      {"energy", "speed", "track"}, {1.0, 0.0, 0.0}, ball_setup, ball_measure},
 };
 #define NSYS ((int)(sizeof systems / sizeof systems[0]))
