@@ -90,12 +90,36 @@ static void test_max_steps(void) {
   ap_scene_free(sc);
 }
 
+/* kd = 1e5 N m s/rad on the wheel motors: dopri5 runs into max_steps and dop853 blows up in
+ * its first steps; both messages point to BDF. */
+static void test_stiff_hint(void) {
+  const char *sets[] = {"effects.motor_l.kd=1e5", "effects.motor_r.kd=1e5",
+                        "simulation.max_steps=2000", "simulation.method=dopri5"};
+  const int want[] = {AP_ERR_SOLVER, AP_ERR_NAN};
+  for (int i = 0; i < 2; i++) {
+    if (i == 1) sets[3] = "simulation.method=dop853";
+    char msg[1024] = "";
+    ap_scene *sc = NULL;
+    ap_sim *sim = start(motors_scene, sets, 4, 0.0, &sc, msg, sizeof msg);
+    AP_CHECK(sim != NULL);
+    if (sim) {
+      AP_CHECK_EQ_INT(ap_sim_advance(sim, 0.05), want[i]);
+      printf("%s: %s\n", sets[3], ap_sim_message(sim));
+      AP_CHECK(strstr(ap_sim_message(sim), "the motor 'motor_l'") &&
+               strstr(ap_sim_message(sim), "try --method bdf"));
+    }
+    ap_sim_free(sim);
+    ap_scene_free(sc);
+  }
+}
+
 int main(void) {
   if (ct_init("test_user_errors") != 0) return 1;
   ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
   ct_source(motors_scene, sizeof motors_scene, "examples/scenes", "diff_drive_motors.yaml");
   test_times();
   test_max_steps();
+  test_stiff_hint();
   ct_finish();
   return ap_check_finish("test_user_errors");
 }

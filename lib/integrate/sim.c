@@ -26,6 +26,7 @@
 #include "appell/body.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
+#include "model/model.h"
 
 int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...) {
        va_list ap;
@@ -272,6 +273,34 @@ void ap_sim_free(ap_sim *s) {
 
 /* ---- advancing ----------------------------------------------------------------------------- */
 
+/* A motor, spring or damper of a body model, or NULL: the usual source of stiffness. */
+static const ap_meff *stiff_effect(const ap_model *m) {
+  if (!ap_model_is_body_model(m)) return NULL;
+  const ap_bmodel *M = ap_bm(m);
+  for (int i = 0; i < M->ne; i++) {
+    const ap_effect_def *e = &M->effs[i].def;
+    if (e->kind == AP_EFFECT_MOTOR || e->kind == AP_EFFECT_JOINT_DAMPING ||
+        (e->kind == AP_EFFECT_SPRING && (e->stiffness > 0 || e->damping > 0)))
+      return &M->effs[i];
+  }
+  return NULL;
+}
+
+/* A failed step (status rc, message in s->msg): when the integrator gave up (max_steps, the step
+ * size collapsed) or the solution blew up with an explicit or Adams method on a model with a
+ * motor, spring or damper, append the hint to try BDF. The status is unchanged. */
+static int stiff_hint(ap_sim *s, int rc) {
+  const ap_meff *e = rc == AP_ERR_SOLVER || rc == AP_ERR_NAN ? stiff_effect(s->m) : NULL;
+  if (!e || s->dae || strcmp(s->meth->name, "bdf") == 0) return rc;
+  const char *kind = e->def.kind == AP_EFFECT_MOTOR ? "motor"
+                     : e->def.kind == AP_EFFECT_SPRING ? "spring" : "damper";
+  size_t len = strlen(s->msg);
+  snprintf(s->msg + len, sizeof s->msg - len, "; the model has the %s '%s': large gains make "
+           "it stiff, which explicit methods such as %s can only follow in tiny steps: try "
+           "--method bdf (simulation.method: bdf)", kind, e->name, s->meth->name);
+  return rc;
+}
+
 /* tout must be a finite time at or after the current one. */
 static int check_tout(ap_sim *s, double tout) {
   if (!isfinite(tout))
@@ -298,10 +327,10 @@ static int advance_one(ap_sim *s, double tout) {
   }
   int rc = ap_step_one(s->st, tout, &t, s->ytry);
   if (rc != AP_OK) {
-    if (s->rhs_status < 0) return ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg);
-    return ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
-                       s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
-                       s->rhs_status > 0 ? s->rhs_msg : "");
+    if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
+    return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
+                                     s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
+                                     s->rhs_status > 0 ? s->rhs_msg : ""));
   }
   s->t = t;
   memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
@@ -322,10 +351,11 @@ int ap_sim_advance(ap_sim *s, double tout) {
                                             "(the poll function returned %d)", s->t, stop);
     }
     if (steps >= s->def.max_steps)
-      return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps from t = %.17g "
-                         "reached only t = %.17g, short of the output time %.17g (raise "
-                         "max_steps, in a scene simulation.max_steps)", s->m->name,
-                         s->def.max_steps, t_start, s->t, tout);
+      return stiff_hint(s, ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps "
+                                       "from t = %.17g reached only t = %.17g, short of the "
+                                       "output time %.17g (raise max_steps, in a scene "
+                                       "simulation.max_steps)", s->m->name, s->def.max_steps,
+                                       t_start, s->t, tout));
     rc = advance_one(s, tout);
     if (rc != AP_OK) return rc;
   }
