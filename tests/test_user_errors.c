@@ -113,6 +113,49 @@ static void test_stiff_hint(void) {
   }
 }
 
+static void test_rank_rtol(void) {
+  /* ap_sim_def: rank_rtol >= 1 called every row after the first redundant (was accepted) */
+  const char *sets[] = {"simulation.rank_rtol=0.5"};
+  char msg[1024] = "";
+  ap_scene *sc = NULL;
+  ap_sim *sim = start(disk_scene, sets, 1, 0.0, &sc, msg, sizeof msg);
+  AP_CHECK(sim != NULL);   /* 0.5 is a legal tolerance */
+  ap_sim_free(sim);
+  const ap_model *m = sc ? ap_scene_model(sc) : NULL;
+  double x[64] = {0};
+  const double bad[] = {1.0, 2.0, NAN, -1e-10, 0.0};
+  for (int i = 0; m && i < 5; i++) {
+    ap_sim_def def = ap_sim_def_default();
+    def.rank_rtol = bad[i];
+    AP_CHECK_EQ_INT(ap_sim_create(m, &def, 0.0, x, x + 32, &sim, msg, sizeof msg), AP_ERR_ARG);
+    AP_CHECK(strstr(msg, "rank_rtol = ") && strstr(msg, "must lie in (0, 1)"));
+  }
+  printf("rank_rtol: %s\n", msg);
+  ap_scene_free(sc);
+  /* a scene: refused at the key, and through --set */
+  char path[200];
+  snprintf(path, sizeof path, "%s/rank.yaml", ct_tmp);
+  FILE *in = fopen(disk_scene, "r"), *out = fopen(path, "w");
+  char line[1024];
+  int lines = 0, at = 0;
+  while (in && out && fgets(line, sizeof line, in)) {
+    fputs(line, out), lines++;
+    if (strncmp(line, "simulation:", 11) == 0) fputs("  rank_rtol: 1.5\n", out), at = lines + 1;
+  }
+  if (in) fclose(in);
+  if (out) fclose(out);
+  char where[300];
+  snprintf(where, sizeof where, "%s:%d:14: simulation.rank_rtol: must be below 1 (got 1.5",
+           path, at);
+  AP_CHECK_EQ_INT(ap_scene_load(path, NULL, 0, &sc, msg, sizeof msg), AP_ERR_ARG);
+  printf("scene: %s\n", msg);
+  AP_CHECK(strstr(msg, where) != NULL);
+  unlink(path);
+  const char *argv[] = {ct_bin, "check", disk_scene, "--set", "simulation.rank_rtol=1", NULL};
+  AP_CHECK_EQ_INT(ct_run(argv), 2);
+  AP_CHECK(ct_log_has("--set simulation.rank_rtol=1: simulation.rank_rtol: must be below 1"));
+}
+
 int main(void) {
   if (ct_init("test_user_errors") != 0) return 1;
   ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
@@ -120,6 +163,7 @@ int main(void) {
   test_times();
   test_max_steps();
   test_stiff_hint();
+  test_rank_rtol();
   ct_finish();
   return ap_check_finish("test_user_errors");
 }

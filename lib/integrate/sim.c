@@ -77,11 +77,13 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
       !(def->h_max >= 0 && def->h_max <= HUGE_VAL))
     return ap_drv_fail(s, AP_ERR_ARG, "h_init and h_max must be >= 0 (0: none; got %g, %g)",
                        def->h_init, def->h_max);
-  if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||
-      !(def->init_tol > 0))
-    return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
-                         "init_tol positive (%g, %g), max_steps >= 1 (%ld)", def->switch_growth,
-                         def->rank_rtol, def->init_tol, def->max_steps);
+  if (!(def->rank_rtol > 0 && def->rank_rtol < 1))
+    return ap_drv_fail(s, AP_ERR_ARG, "rank_rtol = %g: the relative rank tolerance must lie in "
+                       "(0, 1) (default 1e-10)", def->rank_rtol);
+  if (!(def->switch_growth >= 1.0) || def->max_steps < 1 || !(def->init_tol > 0))
+    return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), init_tol positive "
+                         "(%g), max_steps >= 1 (%ld)", def->switch_growth, def->init_tol,
+                         def->max_steps);
   return AP_OK;
 }
 
