@@ -156,6 +156,43 @@ static void test_rank_rtol(void) {
   AP_CHECK(ct_log_has("--set simulation.rank_rtol=1: simulation.rank_rtol: must be below 1"));
 }
 
+/* "appell run scene.yaml --mode -o out.csv" took "-o" as the mode. */
+static void test_option_as_value(void) {
+  char csv[200];
+  snprintf(csv, sizeof csv, "%s/out.csv", ct_tmp);
+  const char *run[] = {ct_bin, "run", disk_scene, "--mode", "-o", csv, NULL};
+  AP_CHECK_EQ_INT(ct_run(run), 2);
+  AP_CHECK(ct_log_has("appell run: --mode needs a value; got the option -o"));
+  AP_CHECK(access(csv, F_OK) != 0);
+  const char *const cases[][7] = {
+      {"run", "--out", "--quiet", "appell run: --out needs a file name; got the option --quiet"},
+      {"run", "--set", "--quiet", "appell run: --set needs PATH=VALUE; got the option --quiet"},
+      {"sweep", "--at", "-o", "appell sweep: --at needs a value; got the option -o"},
+      {"sweep", "--jobs", "--quiet", "appell sweep: --jobs needs a value; got the option --quiet"},
+      {"check", "--set", "--help", "appell check: --set needs PATH=VALUE; got the option --help"},
+      {"linearize", "--csv", "--plot", "appell linearize: --csv needs a value; got the option "
+                                       "--plot"},
+      {"bench", "--csv", "-q", "appell bench: --csv needs a value; got the option -q"},
+      {"plot", "--y", "-o", "appell plot: --y needs a value; got the option -o"}};
+  for (int i = 0; i < 8; i++) {
+    const char *argv[] = {ct_bin, cases[i][0], disk_scene, cases[i][1], cases[i][2], "x", NULL};
+    AP_CHECK_EQ_INT(ct_run(argv), 2);
+    if (!ct_log_has(cases[i][3])) fprintf(stderr, "missing: %s\n", cases[i][3]);
+    AP_CHECK(ct_log_has(cases[i][3]));
+  }
+  /* a negative number and "-" (standard output) are values */
+  const char *neg[] = {ct_bin, "run", disk_scene, "--t-end", "-1", NULL};
+  AP_CHECK_EQ_INT(ct_run(neg), 2);
+  AP_CHECK(ct_log_has("simulation.t_end (set by --set simulation.t_end=-1): must be after t0"));
+  const char *dash[] = {ct_bin, "run", disk_scene, "--t-end", "0.02", "--out", "-", "--quiet",
+                        NULL};
+  AP_CHECK_EQ_INT(ct_run(dash), 0);
+  AP_CHECK(ct_log_has("t,disk.x,"));
+  const char *eq[] = {ct_bin, "run", disk_scene, "--mode=-o", NULL};   /* the = form passes */
+  AP_CHECK_EQ_INT(ct_run(eq), 2);
+  AP_CHECK(ct_log_has("unknown mode '-o'"));
+}
+
 int main(void) {
   if (ct_init("test_user_errors") != 0) return 1;
   ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
@@ -164,6 +201,7 @@ int main(void) {
   test_max_steps();
   test_stiff_hint();
   test_rank_rtol();
+  test_option_as_value();
   ct_finish();
   return ap_check_finish("test_user_errors");
 }

@@ -62,7 +62,7 @@ static int parse(int argc, char **argv, plot_opts *o) {
     else if (argv[i][0] == '-' && argv[i][1]) return cli_unknown("plot", argv[i], known), -1;
     else if (!o->csv) o->csv = argv[i];
     else return fprintf(stderr, "appell plot: one CSV file at a time\n"), -1;
-    if (r < 0) return fprintf(stderr, "appell plot: %s needs a value\n", argv[i]), -1;
+    if (r < 0) return cli_need("plot", argv[i], NULL);
   }
   if (!o->csv || !o->ny || !o->out)
     return fprintf(stderr, "appell plot: need FILE.csv, at least one --y and -o FIG.png|svg "

@@ -74,7 +74,7 @@ typedef struct sweep_opts {
 } sweep_opts;
 
 static int need(const char *opt) {
-  return fprintf(stderr, "appell sweep: %s needs a value (see appell sweep --help)\n", opt), -1;
+  return cli_need("sweep", opt, NULL);
 }
 
 static int push(const char **list, int *n, const char *v, const char *opt) {
