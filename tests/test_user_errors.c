@@ -193,6 +193,58 @@ static void test_option_as_value(void) {
   AP_CHECK(ct_log_has("unknown mode '-o'"));
 }
 
+/* appell sweep --at beyond t_end wrote a table of NaN samples and exited 0. */
+static void test_sweep_at(void) {
+  char csv[200];
+  snprintf(csv, sizeof csv, "%s/sweep.csv", ct_tmp);
+  const char *late[] = {ct_bin, "sweep", disk_scene, "--t-end", "0.1", "--channel", "disk.x",
+                        "--at", "0.05,0.5", "--out", csv, "--quiet", NULL};
+  AP_CHECK_EQ_INT(ct_run(late), 2);
+  AP_CHECK(ct_log_has("appell sweep: --at 0.5 is outside the runs' time range t0 = 0 .. "
+                      "t_end = 0.1"));
+  AP_CHECK(access(csv, F_OK) != 0);
+  const char *early[] = {ct_bin, "sweep", disk_scene, "--t-end", "0.1", "--at", "-1",
+                         "--channel", "disk.x", "--out", csv, "--quiet", NULL};
+  AP_CHECK_EQ_INT(ct_run(early), 2);
+  AP_CHECK(ct_log_has("--at -1 is outside the runs' time range"));
+  /* a grid over t_end: the shortest run sets the end of the range */
+  const char *grid[] = {ct_bin, "sweep", disk_scene, "--grid", "simulation.t_end=0.1,0.02",
+                        "--at", "0.05", "--channel", "disk.x", "--out", csv, "--quiet", NULL};
+  AP_CHECK_EQ_INT(ct_run(grid), 2);
+  AP_CHECK(ct_log_has("--at 0.05 is outside the runs' time range t0 = 0 .. t_end = 0.02"));
+  /* --at without --channel spun for ever on the first time it reached (lib/batch) */
+  const char *nochan[] = {ct_bin, "sweep", disk_scene, "--t-end", "0.1", "--at", "0.05",
+                          "--out", csv, "--quiet", NULL};
+  AP_CHECK_EQ_INT(ct_run(nochan), 2);
+  AP_CHECK(ct_log_has("--at gives the times to sample the --channel columns at"));
+  const char *good[] = {ct_bin, "sweep", disk_scene, "--t-end", "0.1", "--channel", "disk.x",
+                        "--at", "0,0.05,0.1", "--out", csv, "--quiet", NULL};
+  AP_CHECK_EQ_INT(ct_run(good), 0);
+  AP_CHECK(access(csv, F_OK) == 0);
+  unlink(csv);
+}
+
+/* The batch API with sample times and no channels: ap_batch_run returned only when killed.
+ * The alarm turns a hang into a failure. */
+static void test_batch_times_without_channels(void) {
+  const char *sets[] = {"simulation.t_end=0.1"};
+  const double times[] = {0.05, 0.033, 0.5};
+  ap_batch_def def = ap_batch_def_default();
+  def.times = times, def.ntimes = 3;
+  ap_batch *b = NULL;
+  char msg[1024] = "";
+  AP_CHECK_EQ_INT(ap_batch_load(disk_scene, sets, 1, &def, &b, msg, sizeof msg), AP_OK);
+  int nc = b ? ap_batch_ncols(b) : 0, status = -1;
+  double *row = calloc((size_t)nc + 1, sizeof *row);
+  alarm(20);
+  if (b && row) AP_CHECK_EQ_INT(ap_batch_run(b, 1, 0, NULL, row, &status, NULL), AP_OK);
+  alarm(0);
+  AP_CHECK_EQ_INT(status, AP_OK);
+  AP_CHECK(b && strcmp(ap_batch_col_name(b, 0), "t") == 0 && row[0] == 0.1);
+  free(row);
+  ap_batch_free(b);
+}
+
 int main(void) {
   if (ct_init("test_user_errors") != 0) return 1;
   ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
@@ -202,6 +254,8 @@ int main(void) {
   test_stiff_hint();
   test_rank_rtol();
   test_option_as_value();
+  test_sweep_at();
+  test_batch_times_without_channels();
   ct_finish();
   return ap_check_finish("test_user_errors");
 }
