@@ -245,6 +245,24 @@ static void test_batch_times_without_channels(void) {
   ap_batch_free(b);
 }
 
+/* appell plot of a header-only CSV ran gnuplot, which failed (exit 1) and left an empty PNG. */
+static void test_plot_empty(void) {
+  char csv[200], png[200];
+  snprintf(csv, sizeof csv, "%s/empty.csv", ct_tmp);
+  snprintf(png, sizeof png, "%s/fig.png", ct_tmp);
+  const char *argv[] = {ct_bin, "plot", csv, "--y", "x", "-o", png, NULL};
+  const char *text[] = {"t,x\n", ""}, *says[] = {"has a header but no data rows", "is empty"};
+  for (int i = 0; i < 2; i++) {
+    FILE *f = fopen(csv, "w");
+    if (f) fputs(text[i], f), fclose(f);
+    AP_CHECK_EQ_INT(ct_run(argv), 2);
+    AP_CHECK(ct_log_has(says[i]));
+    AP_CHECK(access(png, F_OK) != 0);
+    unlink(png);
+  }
+  unlink(csv);
+}
+
 int main(void) {
   if (ct_init("test_user_errors") != 0) return 1;
   ct_source(disk_scene, sizeof disk_scene, "examples/scenes", "rolling_disk.yaml");
@@ -256,6 +274,7 @@ int main(void) {
   test_option_as_value();
   test_sweep_at();
   test_batch_times_without_channels();
+  test_plot_empty();
   ct_finish();
   return ap_check_finish("test_user_errors");
 }
