@@ -32,28 +32,11 @@
 #include <time.h>
 
 #include "appell/appell.h"
+#include "benchutil.h"
 
 #ifndef AP_SRCDIR
 #define AP_SRCDIR "."
 #endif
-
-static volatile double sink;   /* keeps the compiler from dropping the timed work */
-
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static void die(const char *what, const char *msg) {
-  fprintf(stderr, "bench_bicycle: %s: %s\n", what, msg);
-  exit(1);
-}
 
 static void scene_path(const char *name, char *file, size_t len) {
   snprintf(file, len, "%s/examples/scenes/%s.yaml", AP_SRCDIR, name);
@@ -66,13 +49,13 @@ __attribute__((noinline)) ap_scene *load_one(const char *file, double *x, size_t
                                              double *t_load) {
   char msg[1024];
   ap_scene *sc = NULL;
-  double t0 = now_ns();
-  if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) die(file, msg);
-  *t_load = now_ns() - t0;
+  double t0 = bench_thread_ns();
+  if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) bench_die(file, msg);
+  *t_load = bench_thread_ns() - t0;
   const ap_model *m = ap_scene_model(sc);
-  if ((size_t)(ap_model_n(m) + ap_model_k(m)) > xlen) die(file, "state too large");
+  if ((size_t)(ap_model_n(m) + ap_model_k(m)) > xlen) bench_die(file, "state too large");
   if (ap_scene_initial_state(sc, x, x + ap_model_n(m), NULL, 0, msg, sizeof msg) != AP_OK)
-    die(file, msg);
+    bench_die(file, msg);
   return sc;
 }
 
@@ -83,13 +66,13 @@ static void bench_load(const char *name, int loads) {
   double x[64], t_load;
   ap_scene_free(load_one(file, x, 64, &t_load));   /* warm-up: the file in the page cache */
   for (int i = 0; i < loads; i++) {
-    double t0 = now_ns();
+    double t0 = bench_thread_ns();
     ap_scene *sc = load_one(file, x, 64, &t_load);
-    ti[i] = now_ns() - t0, tl[i] = t_load;
+    ti[i] = bench_thread_ns() - t0, tl[i] = t_load;
     ap_scene_free(sc);
   }
-  qsort(tl, (size_t)loads, sizeof *tl, cmp_double);
-  qsort(ti, (size_t)loads, sizeof *ti, cmp_double);
+  qsort(tl, (size_t)loads, sizeof *tl, bench_cmp_double);
+  qsort(ti, (size_t)loads, sizeof *ti, bench_cmp_double);
   printf("%-13s load  %8.3f ms (%.3f..%.3f); with the initial state %.3f ms (%.3f..%.3f)  "
          "callgrind divisor %d\n", name, tl[loads / 2] * 1e-6, tl[0] * 1e-6,
          tl[loads - 1] * 1e-6, ti[loads / 2] * 1e-6, ti[0] * 1e-6, ti[loads - 1] * 1e-6,
@@ -98,43 +81,6 @@ static void bench_load(const char *name, int loads) {
 }
 
 /* ---- one evaluation ------------------------------------------------------------------------ */
-
-/* The timed block: callgrind collects inside this function only (--toggle-collect). */
-__attribute__((noinline)) double eval_block(const ap_model *m, ap_data *d, int reps) {
-  double s = 0.0;
-  for (int r = 0; r < reps; r++) {
-    if (ap_forward(m, d) != AP_OK) die("ap_forward", d->msg);
-    s += d->edd[0] + d->qdot[0];
-  }
-  return s;
-}
-
-static void bench_eval(const char *name, const ap_model *m, const double *x, int reps,
-                       int blocks) {
-  int n = ap_model_n(m);
-  ap_data *d = NULL;
-  if (ap_data_create(m, &d) != AP_OK) die(name, "ap_data_create");
-  memcpy(d->q, x, sizeof(double) * (size_t)n);
-  memcpy(d->v, x + n, sizeof(double) * (size_t)ap_model_k(m));
-  d->basis = AP_BASIS_PARTITIONED;
-  if (ap_partition(m, d) != AP_OK) die(name, d->msg);
-  for (int j = 0; j < d->l; j++) d->e[j] = d->v[d->perm[d->rank + j]];
-  d->speeds_from_e = 1;
-  double *t = malloc(sizeof(double) * (size_t)blocks);
-  sink = eval_block(m, d, reps);   /* warm-up */
-  for (int b = 0; b < blocks; b++) {
-    double t0 = now_ns();
-    sink = eval_block(m, d, reps);
-    t[b] = (now_ns() - t0) / reps;
-  }
-  qsort(t, (size_t)blocks, sizeof *t, cmp_double);
-  double med = t[blocks / 2];
-  printf("%-13s eval  %8.0f ns (%.0f..%.0f)  %9.0f evals/s  n %2d k %2d b %2d l %d  "
-         "callgrind divisor %d\n", name, med, t[0], t[blocks - 1], 1e9 / med, n, ap_model_k(m),
-         ap_model_b(m), d->l, reps * (blocks + 1));
-  free(t);
-  ap_data_free(d);
-}
 
 /* ---- runs at rtol 1e-8 against rtol 1e-13 ---------------------------------------------------- */
 
@@ -153,14 +99,15 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
   run.sim.atol = 1e-2 * rtol;
   int n = ap_model_n(m), iq = ap_model_find_coord(m, "rear_frame.qw");
   int ix = ap_model_find_coord(m, "rear_frame.x"), is = ap_model_find_coord(m, "front_frame.angle");
-  if (iq < 0 || ix < 0 || is < 0) die("bicycle", "coordinates not found");
+  if (iq < 0 || ix < 0 || is < 0) bench_die("bicycle", "coordinates not found");
   int wheel[2] = {ap_model_find_body(m, "rear_wheel"), ap_model_find_body(m, "front_wheel")};
   char msg[1024];
   ap_sim *sim = NULL;
   ap_data *d = NULL;
-  double t0 = now_ns(), ang = 0, pos = 0, phi = 0, cpu = 0;
-  if (ap_data_create(m, &d) != AP_OK) die("run", "ap_data_create");
-  if (ap_sim_create(m, &run.sim, 0, x, x + n, &sim, msg, sizeof msg) != AP_OK) die("run", msg);
+  double t0 = bench_thread_ns(), ang = 0, pos = 0, phi = 0, cpu = 0;
+  if (ap_data_create(m, &d) != AP_OK) bench_die("run", "ap_data_create");
+  if (ap_sim_create(m, &run.sim, 0, x, x + n, &sim, msg, sizeof msg) != AP_OK)
+    bench_die("run", msg);
   for (int i = 0; i <= NOUT; i++) {
     if (i > 0 && ap_sim_advance(sim, 0.01 * i) != AP_OK) {
       printf("%-13s run   mode %d rtol %.0e failed: %s\n", "bicycle", (int)mode, rtol,
@@ -169,7 +116,7 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
       return;
     }
     const double *q = ap_sim_q(sim), *p = q + iq;
-    double t1 = now_ns();           /* the contact rows, outside the timed part */
+    double t1 = bench_thread_ns();           /* the contact rows, outside the timed part */
     ap_body_state st;
     memcpy(d->q, q, sizeof(double) * (size_t)n);
     memcpy(d->v, ap_sim_v(sim), sizeof(double) * (size_t)ap_model_k(m));
@@ -177,7 +124,7 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
     for (int w = 0; w < 2; w++)
       if (ap_body_eval(m, d) == AP_OK && ap_body_get_state(m, d, wheel[w], &st) == AP_OK)
         phi = fmax(phi, fabs(st.contact[2]));
-    cpu -= now_ns() - t1;
+    cpu -= bench_thread_ns() - t1;
     double nn = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3];
     double *o = tr->v[i];
     o[0] = acos(1 - 2 * (p[1] * p[1] + p[2] * p[2]) / nn) - acos(-1.0) / 2;   /* tilt - pi/2 */
@@ -186,7 +133,7 @@ static void bench_run(ap_scene *sc, const double *x, ap_mode mode, double rtol, 
       ang = fmax(ang, fmax(fabs(o[0] - ref->v[i][0]), fabs(o[1] - ref->v[i][1]))),
       pos = fmax(pos, fmax(fabs(o[2] - ref->v[i][2]), fabs(o[3] - ref->v[i][3])));
   }
-  cpu = (cpu + now_ns() - t0) * 1e-9;
+  cpu = (cpu + bench_thread_ns() - t0) * 1e-9;
   ap_sim_stats st;
   ap_sim_get_stats(sim, &st);
   ap_data_free(d);
@@ -211,12 +158,12 @@ int main(int argc, char **argv) {
     else if (strcmp(argv[i], "--loads") == 0 && i + 1 < argc) loads = atoi(argv[++i]);
     else if (strcmp(argv[i], "--rtol") == 0 && i + 1 < argc) rtol = atof(argv[++i]);
     else if (strcmp(argv[i], "--no-run") == 0) runs = 0;
-    else die("usage", "bench_bicycle [--only bicycle|rolling_disk|hoffmann] [--reps N] "
+    else bench_die("usage", "bench_bicycle [--only bicycle|rolling_disk|hoffmann] [--reps N] "
              "[--blocks N] "
              "[--loads N] [--rtol X] [--no-run]");
   }
   if (reps < 1 || blocks < 1 || loads < 1 || !(rtol > 0))
-    die("usage", "--reps, --blocks, --loads and --rtol must be > 0");
+    bench_die("usage", "--reps, --blocks, --loads and --rtol must be > 0");
   const char *names[3] = {"rolling_disk", "bicycle", "hoffmann"};
   for (int c = 0; c < 3; c++) {
     if (only && strcmp(only, names[c]) != 0) continue;
@@ -225,7 +172,7 @@ int main(int argc, char **argv) {
     scene_path(names[c], file, sizeof file);
     bench_load(names[c], loads);
     ap_scene *sc = load_one(file, x, 64, &t_load);
-    bench_eval(names[c], ap_scene_model(sc), x, reps, blocks);
+    bench_forward(names[c], 13, ap_scene_model(sc), x, reps, blocks);
     if (runs && c == 1) {
       static track ref, tr;
       bench_run(sc, x, AP_MODE_MINIMAL, 1e-13, &ref, NULL);

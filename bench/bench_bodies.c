@@ -30,30 +30,11 @@
 #include <time.h>
 
 #include "appell/appell.h"
+#include "benchutil.h"
 #include "bodysys.h"
 
-static volatile double sink;   /* keeps the compiler from dropping the timed work */
-
-/* CPU time of this thread: the machine is shared, and wall time would count the time other
- * processes hold the cores (cache contention still shows). */
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static void die(const char *what, const char *msg) {
-  fprintf(stderr, "bench_bodies: %s: %s\n", what, msg);
-  exit(1);
-}
-
 static void check(int rc, const char *what) {
-  if (rc != AP_OK) die(what, ap_strerror(rc));
+  if (rc != AP_OK) bench_die(what, ap_strerror(rc));
 }
 
 /* ---- timing ------------------------------------------------------------------------------ */
@@ -77,7 +58,7 @@ static void prepare(side *s, const ap_model *m, int objects, double t, const dou
     return;
   }
   d->basis = AP_BASIS_PARTITIONED;
-  if (ap_partition(m, d) != AP_OK) die("partition", d->msg);
+  if (ap_partition(m, d) != AP_OK) bench_die("partition", d->msg);
   for (int j = 0; j < d->l; j++) d->e[j] = d->v[d->perm[d->rank + j]];
   d->speeds_from_e = 1;   /* as minimal mode's right-hand side runs */
 }
@@ -86,8 +67,8 @@ static void eval(side *s) {
   ap_data *d = s->d;
   int rc = s->objects ? ap_fwd_position(s->m, d) : ap_forward(s->m, d);
   if (rc == AP_OK && s->objects) rc = ap_fwd_velocity(s->m, d);
-  if (rc != AP_OK) die(ap_model_name(s->m), d->msg);
-  sink += s->objects ? d->h[0] + d->Q[0] : d->vdot[0];
+  if (rc != AP_OK) bench_die(ap_model_name(s->m), d->msg);
+  bench_sink += s->objects ? d->h[0] + d->Q[0] : d->vdot[0];
 }
 
 typedef struct timing {
@@ -95,7 +76,7 @@ typedef struct timing {
 } timing;
 
 static timing summarize(double *ns, int blocks) {
-  qsort(ns, (size_t)blocks, sizeof *ns, cmp_double);
+  qsort(ns, (size_t)blocks, sizeof *ns, bench_cmp_double);
   timing t = {ns[blocks / 2], ns[0], ns[blocks - 1]};
   return t;
 }
@@ -107,14 +88,14 @@ static void time_pair(side *body, side *hand, int blocks, int reps, timing *tb, 
   double *nb = malloc(sizeof(double) * (size_t)blocks);
   double *nh = malloc(sizeof(double) * (size_t)blocks);
   double *pr = malloc(sizeof(double) * (size_t)blocks);
-  if (!nb || !nh || !pr) die("timing", "out of memory");
+  if (!nb || !nh || !pr) bench_die("timing", "out of memory");
   for (int i = 0; i < reps; i++) eval(body), eval(hand);
   for (int b = 0; b < blocks; b++) {
-    double t0 = now_ns();
+    double t0 = bench_thread_ns();
     for (int i = 0; i < reps; i++) eval(body);
-    double t1 = now_ns();
+    double t1 = bench_thread_ns();
     for (int i = 0; i < reps; i++) eval(hand);
-    double t2 = now_ns();
+    double t2 = bench_thread_ns();
     nb[b] = (t1 - t0) / reps, nh[b] = (t2 - t1) / reps, pr[b] = nb[b] / nh[b];
   }
   *tb = summarize(nb, blocks), *th = summarize(nh, blocks), *paired = summarize(pr, blocks).median;
@@ -157,10 +138,10 @@ int main(int argc, char **argv) {
   ap_model *hand[6], *body[6] = {bs_skate_model(&kp), bs_sleigh_model(&sp),
                                  bs_turntable_model(&tp), bs_turntable_model(&tv),
                                  bs_hoffmann_tree(&hp, 0, 0.0), bs_hoffmann_primitive(&hp)};
-  if (bs_failures() > 0) die("body models", "cannot build (see above)");
+  if (bs_failures() > 0) bench_die("body models", "cannot build (see above)");
   for (int i = 0; i < 6; i++) {
     char msg[256];
-    if (ap_model_from_system(&def[i], &hand[i], msg, sizeof msg) != AP_OK) die("refsys", msg);
+    if (ap_model_from_system(&def[i], &hand[i], msg, sizeof msg) != AP_OK) bench_die("refsys", msg);
   }
 
   bench_pair P[6];
@@ -192,7 +173,7 @@ int main(int argc, char **argv) {
   for (int i = 0; i < 4; i++) P[5].qb[i] = q4[perm[i]], P[5].vb[i] = v4[perm[i]];
 
   FILE *out = csv ? fopen(csv, "w") : NULL;
-  if (csv && !out) die(csv, "cannot write");
+  if (csv && !out) bench_die(csv, "cannot write");
   if (out)
     fprintf(out, "system,what,k_body,k_hand,b,body_ns,body_lo,body_hi,hand_ns,hand_lo,hand_hi,"
                  "ratio,paired\n");

@@ -28,6 +28,7 @@
 #include <time.h>
 
 #include "appell/appell.h"
+#include "benchutil.h"
 #include "scene/scene_int.h"
 
 #define NCONF 5
@@ -71,24 +72,6 @@ typedef struct conf {
   double q_end[16];
 } conf;
 
-/* CPU time of this thread: the machine is shared, and wall time would count the time other
- * processes hold the cores (cache contention still shows). */
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static void die(const char *what, const char *msg) {
-  fprintf(stderr, "bench_effects: %s: %s\n", what, msg);
-  exit(1);
-}
-
 static void load(conf *c, double t_end, double interval) {
   char text[4096], effs[1024] = "", msg[1024] = "";
   int len = snprintf(text, sizeof text, scene_head, t_end, interval,
@@ -96,11 +79,11 @@ static void load(conf *c, double t_end, double interval) {
   if (c->effects) snprintf(effs, sizeof effs, extra_effects, c->force);
   snprintf(text + len, sizeof text - (size_t)len, "%s", effs);
   if (ap_scene_load_string(text, strlen(text), c->name, NULL, 0, &c->sc, msg, sizeof msg) != AP_OK)
-    die(c->name, msg);
+    bench_die(c->name, msg);
   if (ap_model_n(ap_scene_model(c->sc)) > 16 || ap_scene_output_count(c->sc) > 64)
-    die(c->name, "model or row too large");
+    bench_die(c->name, "model or row too large");
   if (ap_scene_initial_state(c->sc, c->q0, c->v0, NULL, 0, msg, sizeof msg) != AP_OK)
-    die(c->name, msg);
+    bench_die(c->name, msg);
 }
 
 /* One run: create, advance through every output time writing rows, free. With `record` the
@@ -115,11 +98,11 @@ static void run_once(conf *c, int record) {
   long rows = 0, nrows = lround((sr.t_end - sr.t0) / sr.interval);
   long e0 = sc_scene_output_data(c->sc)->cnt.energy;
   if (ap_sim_create(m, &sr.sim, sr.t0, c->q0, c->v0, &s, msg, sizeof msg) != AP_OK)
-    die(c->name, msg);
+    bench_die(c->name, msg);
   for (long i = 0; i <= nrows; i++) {
     if (i > 0 && ap_sim_advance(s, sr.t0 + (double)i * sr.interval) != AP_OK)
-      die(c->name, ap_sim_message(s));
-    if (ap_scene_output_row(c->sc, s, row) != AP_OK) die(c->name, "output row failed");
+      bench_die(c->name, ap_sim_message(s));
+    if (ap_scene_output_row(c->sc, s, row) != AP_OK) bench_die(c->name, "output row failed");
     rows++;
   }
   if (record) {
@@ -163,18 +146,18 @@ int main(int argc, char **argv) {
   for (int c = 0; c < NCONF; c++) {
     load(&C[c], t_end, interval);
     C[c].ns = malloc(sizeof(double) * (size_t)repeats);
-    if (!C[c].ns) die("timing", "out of memory");
+    if (!C[c].ns) bench_die("timing", "out of memory");
     run_once(&C[c], 1);   /* warm-up, and the counters of one run */
   }
   for (int r = 0; r < repeats; r++)
     for (int c = 0; c < NCONF; c++) {
-      double t0 = now_ns();
+      double t0 = bench_thread_ns();
       run_once(&C[c], 0);
-      C[c].ns[r] = now_ns() - t0;
+      C[c].ns[r] = bench_thread_ns() - t0;
     }
 
   FILE *out = csv ? fopen(csv, "w") : NULL;
-  if (csv && !out) die(csv, "cannot write");
+  if (csv && !out) bench_die(csv, "cannot write");
   if (out)
     fprintf(out, "config,columns,effects,median_ms,min_ms,max_ms,ratio,steps,rhs_evals,"
                  "velocity_stages,effect_evals,energy_evals,reaction_solves,rows\n");
@@ -185,7 +168,7 @@ int main(int argc, char **argv) {
          "max|dq|");
   double base = 0.0;
   for (int c = 0; c < NCONF; c++) {
-    qsort(C[c].ns, (size_t)repeats, sizeof(double), cmp_double);
+    qsort(C[c].ns, (size_t)repeats, sizeof(double), bench_cmp_double);
     double med = C[c].ns[repeats / 2] * 1e-6, lo = C[c].ns[0] * 1e-6,
            hi = C[c].ns[repeats - 1] * 1e-6;
     if (c == 0) base = med;

@@ -18,24 +18,12 @@
 #include <time.h>
 
 #include "appell/appell.h"
+#include "benchutil.h"
 #include "refsys.h"
-
-static volatile double sink;   /* keeps the compiler from dropping the timed work */
 
 typedef struct timing {
   double median, lo, hi;       /* ns per evaluation */
 } timing;
-
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
 
 /* ---- hand-reduced right-hand sides ------------------------------------------------------- */
 
@@ -107,11 +95,11 @@ static timing time_blocks(int blocks, int reps, void (*body)(void *), void *arg)
   double *ns = malloc(sizeof(double) * (size_t)blocks);
   for (int i = 0; i < reps; i++) body(arg);                      /* warm-up */
   for (int b = 0; b < blocks; b++) {
-    double t0 = now_ns();
+    double t0 = bench_mono_ns();
     for (int i = 0; i < reps; i++) body(arg);
-    ns[b] = (now_ns() - t0) / reps;
+    ns[b] = (bench_mono_ns() - t0) / reps;
   }
-  qsort(ns, (size_t)blocks, sizeof *ns, cmp_double);
+  qsort(ns, (size_t)blocks, sizeof *ns, bench_cmp_double);
   timing t = {ns[blocks / 2], ns[0], ns[blocks - 1]};
   free(ns);
   return t;
@@ -127,7 +115,7 @@ static void fwd_body(void *arg) {
   fwd_arg *a = arg;
   a->d->t = a->t;
   if (ap_forward(a->m, a->d) != AP_OK) abort();
-  sink += a->d->vdot[0];
+  bench_sink += a->d->vdot[0];
 }
 
 typedef struct hand_arg {
@@ -138,7 +126,7 @@ typedef struct hand_arg {
 static void hand_body(void *arg) {
   hand_arg *a = arg;
   a->c->hand(a->c->p, 0.3, a->c->hand_y, a->yd);
-  sink += a->yd[a->c->hand_n - 1];
+  bench_sink += a->yd[a->c->hand_n - 1];
 }
 
 int main(int argc, char **argv) {

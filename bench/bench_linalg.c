@@ -20,24 +20,12 @@
 #include <time.h>
 
 #include "appell/status.h"
+#include "benchutil.h"
 #include "linalg/linalg.h"
-
-static volatile double sink;   /* keeps the compiler from dropping the timed work */
 
 typedef struct timing {
   double median, lo, hi;       /* ns per call */
 } timing;
-
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec * 1e9 + ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
 
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
 
@@ -115,55 +103,55 @@ static void prob_free(prob *p) {
 static void r_partition(prob *p) {
   check(ap_la_partition_basis(p->b, p->k, p->r, p->perm, p->A, p->a0, p->F, p->tau, p->B, p->b0,
                               &p->growth, NULL, &p->resid, p->work, p->iwork), "partition_basis");
-  sink += p->B[0];
+  bench_sink += p->B[0];
 }
 static void r_partition_rc(prob *p) {
   check(ap_la_partition_basis(p->b, p->k, p->r, p->perm, p->A, p->a0, p->F, p->tau, p->B, p->b0,
                               &p->growth, &p->rcond, &p->resid, p->work, p->iwork),
         "partition_basis");
-  sink += p->B[0];
+  bench_sink += p->B[0];
 }
 static void r_particular(prob *p) {
   check(ap_la_partition_particular(p->b, p->k, p->r, p->perm, p->F, p->tau, p->gamma, p->w,
                                    &p->resid, p->work), "partition_particular");
-  sink += p->w[0];
+  bench_sink += p->w[0];
 }
 static void r_orth(prob *p) {
   check(ap_la_orth_basis(p->b, p->k, p->A, p->a0, 1e-9, &p->rank, p->Fo, p->tauo, p->jpvt, p->Qf,
                          p->Z, p->b0, &p->resid, p->work, p->iwork), "orth_basis");
-  sink += p->Z[0];
+  bench_sink += p->Z[0];
 }
 static void r_orth_particular(prob *p) {
   check(ap_la_orth_particular(p->b, p->k, p->rank, p->Fo, p->jpvt, p->Qf, p->gamma, p->w,
                               &p->resid, p->work), "orth_particular");
-  sink += p->w[0];
+  bench_sink += p->w[0];
 }
 static void r_chol(prob *p) {
   memcpy(p->G, p->G0, sizeof(double) * (size_t)p->l * p->l);
   check(ap_la_chol(p->l, p->G, NULL, p->work, p->iwork), "chol");
-  sink += p->G[0];
+  bench_sink += p->G[0];
 }
 static void r_chol_rc(prob *p) {
   memcpy(p->G, p->G0, sizeof(double) * (size_t)p->l * p->l);
   check(ap_la_chol(p->l, p->G, &p->rcond, p->work, p->iwork), "chol");
-  sink += p->G[0];
+  bench_sink += p->G[0];
 }
 static void r_chol_solve(prob *p) {
   memcpy(p->y, p->x, sizeof(double) * (size_t)p->l); /* solving in place: a fresh rhs */
   ap_la_chol_solve(p->l, p->L, p->y);
-  sink += p->y[0];
+  bench_sink += p->y[0];
 }
 static void r_congruence(prob *p) {
   ap_la_congruence(p->k, p->l, p->g, p->B, p->G, p->gB);
-  sink += p->G[0];
+  bench_sink += p->G[0];
 }
 static void r_gemv(prob *p) {
   ap_la_gemv(p->k, p->k, p->g, p->x, p->y);
-  sink += p->y[0];
+  bench_sink += p->y[0];
 }
 static void r_gemv_t(prob *p) {
   ap_la_gemv_t(p->k, p->l, p->B, p->x, p->y);
-  sink += p->y[0];
+  bench_sink += p->y[0];
 }
 
 typedef struct routine {
@@ -197,13 +185,13 @@ static void time_both(int blocks, int reps, const routine *rt, prob *p, timing *
   for (int b = 0; b < blocks; b++)
     for (int path = 0; path < 2; path++) {
       ap_la_set_small_limit(path ? 0 : INT_MAX);
-      double t0 = now_ns();
+      double t0 = bench_mono_ns();
       for (int i = 0; i < reps; i++) rt->call(p);
-      ns[path * blocks + b] = (now_ns() - t0) / reps;
+      ns[path * blocks + b] = (bench_mono_ns() - t0) / reps;
     }
   for (int path = 0; path < 2; path++) {
     double *v = ns + path * blocks;
-    qsort(v, (size_t)blocks, sizeof *v, cmp_double);
+    qsort(v, (size_t)blocks, sizeof *v, bench_cmp_double);
     timing t = {v[blocks / 2], v[0], v[blocks - 1]};
     *(path ? lap : nat) = t;
   }

@@ -23,28 +23,11 @@
 #include <time.h>
 
 #include "appell/appell.h"
+#include "benchutil.h"
 
 #ifndef AP_SRCDIR
 #define AP_SRCDIR "."
 #endif
-
-static volatile double sink;   /* keeps the compiler from dropping the timed work */
-
-static double now_ns(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec * 1e9 + (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
-static void die(const char *what, const char *msg) {
-  fprintf(stderr, "bench_vehicles: %s: %s\n", what, msg);
-  exit(1);
-}
 
 typedef struct vcase {
   const char *name, *file;
@@ -62,43 +45,6 @@ static const vcase cases[] = {
 
 /* ---- one evaluation ------------------------------------------------------------------------ */
 
-/* The timed block: callgrind collects inside this function only (--toggle-collect). */
-__attribute__((noinline)) double eval_block(const ap_model *m, ap_data *d, int reps) {
-  double s = 0.0;
-  for (int r = 0; r < reps; r++) {
-    if (ap_forward(m, d) != AP_OK) die("ap_forward", d->msg);
-    s += d->edd[0] + d->qdot[0];
-  }
-  return s;
-}
-
-static void bench_eval(const char *name, ap_scene *sc, const double *x, int reps, int blocks) {
-  const ap_model *m = ap_scene_model(sc);
-  int n = ap_model_n(m);
-  ap_data *d = NULL;
-  if (ap_data_create(m, &d) != AP_OK) die(name, "ap_data_create");
-  memcpy(d->q, x, sizeof(double) * (size_t)n);
-  memcpy(d->v, x + n, sizeof(double) * (size_t)ap_model_k(m));
-  d->basis = AP_BASIS_PARTITIONED;
-  if (ap_partition(m, d) != AP_OK) die(name, d->msg);
-  for (int j = 0; j < d->l; j++) d->e[j] = d->v[d->perm[d->rank + j]];
-  d->speeds_from_e = 1;
-  double *t = malloc(sizeof(double) * (size_t)blocks);
-  sink = eval_block(m, d, reps);   /* warm-up */
-  for (int b = 0; b < blocks; b++) {
-    double t0 = now_ns();
-    sink = eval_block(m, d, reps);
-    t[b] = (now_ns() - t0) / reps;
-  }
-  qsort(t, (size_t)blocks, sizeof *t, cmp_double);
-  double med = t[blocks / 2];
-  printf("%-18s eval  %8.0f ns (%.0f..%.0f)  %9.0f evals/s  n %2d k %2d b %2d l %d  "
-         "callgrind divisor %d\n", name, med, t[0], t[blocks - 1], 1e9 / med, n, ap_model_k(m),
-         ap_model_b(m), d->l, reps * (blocks + 1));
-  free(t);
-  ap_data_free(d);
-}
-
 /* ---- a run at rtol 1e-8 ---------------------------------------------------------------------- */
 
 static void bench_run(const vcase *c, ap_scene *sc, const double *x, ap_mode mode) {
@@ -112,20 +58,20 @@ static void bench_run(const vcase *c, ap_scene *sc, const double *x, ap_mode mod
   int iy = ap_model_find_coord(m, "chassis.y"), ih = ap_model_find_coord(m, "chassis.heading");
   double R = c->R, W = c->Omega, err = 0.0;
   if (strcmp(c->name, "car_ackermann") == 0) R = 1.2 / tan(0.3), W = 2.0 / R;
-  double t0 = now_ns();
+  double t0 = bench_thread_ns();
   if (ap_sim_create(m, &run.sim, run.t0, x, x + n, &sim, msg, sizeof msg) != AP_OK)
-    die(c->name, msg);
+    bench_die(c->name, msg);
   int nout = (int)lround(c->t_end / 0.05);
   for (int i = 1; i <= nout; i++) {
     double t = 0.05 * i;
-    if (ap_sim_advance(sim, t) != AP_OK) die(c->name, ap_sim_message(sim));
+    if (ap_sim_advance(sim, t) != AP_OK) bench_die(c->name, ap_sim_message(sim));
     if (R == 0 || ix < 0) continue;
     const double *q = ap_sim_q(sim);
     double th = W * t;
     err = fmax(err, fmax(fmax(fabs(q[ix] - R * sin(th)), fabs(q[iy] - R * (1 - cos(th)))),
                          fabs(q[ih] - th)));
   }
-  double cpu = (now_ns() - t0) * 1e-9;
+  double cpu = (bench_thread_ns() - t0) * 1e-9;
   ap_sim_stats st;
   ap_sim_get_stats(sim, &st);
   printf("%-18s run   %-9s t_end %4.0f s  steps %6ld  evals %7ld  cpu %6.3f s", c->name,
@@ -144,21 +90,21 @@ int main(int argc, char **argv) {
     else if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = atoi(argv[++i]);
     else if (strcmp(argv[i], "--blocks") == 0 && i + 1 < argc) blocks = atoi(argv[++i]);
     else if (strcmp(argv[i], "--no-run") == 0) runs = 0;
-    else die("usage", "bench_vehicles [--only NAME] [--reps N] [--blocks N] [--no-run]");
+    else bench_die("usage", "bench_vehicles [--only NAME] [--reps N] [--blocks N] [--no-run]");
   }
-  if (reps < 1 || blocks < 1) die("usage", "--reps and --blocks must be positive");
+  if (reps < 1 || blocks < 1) bench_die("usage", "--reps and --blocks must be positive");
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     const vcase *c = &cases[i];
     if (only && strcmp(only, c->name) != 0) continue;
     char file[1200], msg[1024];
     ap_scene *sc = NULL;
     snprintf(file, sizeof file, "%s/examples/scenes/%s", AP_SRCDIR, c->file);
-    if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) die(c->name, msg);
+    if (ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg) != AP_OK) bench_die(c->name, msg);
     const ap_model *m = ap_scene_model(sc);
     double *x = calloc((size_t)(ap_model_n(m) + ap_model_k(m)), sizeof *x);
     if (ap_scene_initial_state(sc, x, x + ap_model_n(m), NULL, 0, msg, sizeof msg) != AP_OK)
-      die(c->name, msg);
-    bench_eval(c->name, sc, x, reps, blocks);
+      bench_die(c->name, msg);
+    bench_forward(c->name, 18, ap_scene_model(sc), x, reps, blocks);
     if (runs) bench_run(c, sc, x, AP_MODE_MINIMAL), bench_run(c, sc, x, AP_MODE_PROJECTED);
     free(x);
     ap_scene_free(sc);

@@ -2,8 +2,9 @@
  * Taylor jets, and the explanation of a value that is not finite.
  *
  * A stack machine over the postfix code: pushes (t, x[slot], constant) and operations on the
- * top entries. The stack is a local array of SC_PROG_STACK entries (the compiler refused any
- * program deeper than that), so evaluation allocates nothing and writes nothing but the
+ * top entries. The stack is a local array of SC_PROG_STACK + 1 entries whose first is never used
+ * (the top starts there, so the pointer stays inside the array; the compiler refused any
+ * program deeper than SC_PROG_STACK), so evaluation allocates nothing and writes nothing but the
  * caller's outputs. Jet rules, for b OP a with jets (b0, b1, b2) and (a0, a1, a2) of Taylor
  * coefficients (the third is f''/2):
  *   b * a:  r0 = b0 a0,  r1 = b0 a1 + b1 a0,  r2 = b0 a2 + b1 a1 + b2 a0
@@ -152,18 +153,18 @@ static SC_INLINE sc_jet *step_jet(const sc_ins *in, const double *kk, const sc_j
 /* ---- the interpreters --------------------------------------------------------------------- */
 
 int sc_prog_value(const sc_prog *p, double t, const double *x, double *f) {
-  double st[SC_PROG_STACK], *top = st - 1;
+  double st[SC_PROG_STACK + 1], *top = st;
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++)
     top = step_value(in, p->k, t, x, top);
-  *f = st[0];
-  return isfinite(st[0]) ? 0 : -1;
+  *f = st[1];
+  return isfinite(st[1]) ? 0 : -1;
 }
 
 int sc_prog_jet(const sc_prog *p, const sc_jet *t, const sc_jet *x, sc_jet *f) {
-  sc_jet st[SC_PROG_STACK], *top = st - 1;
+  sc_jet st[SC_PROG_STACK + 1], *top = st;
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++)
     top = step_jet(in, p->k, t, x, top);
-  *f = st[0];
+  *f = st[1];
   return isfinite(f->c[0]) && isfinite(f->c[1]) && isfinite(f->c[2]) ? 0 : -1;
 }
 
@@ -230,7 +231,7 @@ static void describe(const sc_prog *p, const sc_ins *in, const sc_jet *b, const 
 
 int sc_prog_explain(const sc_prog *p, const sc_jet *t, const sc_jet *x, int order, char *buf,
                     size_t len) {
-  sc_jet st[SC_PROG_STACK], *top = st - 1;
+  sc_jet st[SC_PROG_STACK + 1], *top = st;
   if (len) buf[0] = '\0';
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
     sc_jet zero = {{0.0, 0.0, 0.0}};
