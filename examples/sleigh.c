@@ -1,7 +1,7 @@
 /* Chaplygin sleigh (docs/references.md §2): the main demo.
  *
  * A rigid body on a horizontal plane rests on a blade at P that cannot slide sideways; its centre
- * of mass sits a distance a ahead of P. The math-level system (tests/refsys.c) hands Appell the
+ * of mass sits a distance a ahead of P. The math-level system (tests/refsys_blade.c) hands Appell the
  * non-diagonal metric g(theta), its derivative dg/dtheta (h by Christoffel symbols) and the
  * blade row A = [-sin theta, cos theta, 0]. The run is compared with the closed form
  * u = V tanh(k t + c), w = w0 cosh c / cosh(k t + c), theta by the Gudermannian and x, y by

@@ -6,8 +6,12 @@
 #include <math.h>
 #include <stdio.h>
 
-static int ap_check_failed = 0;
-static int ap_check_passed = 0;
+/* One pair of counters per program: every file that includes this (the test and its shared
+ * helpers, fdcheck.c, linalg_problems.c) counts into them, so a helper's failed check fails
+ * the program. Weak definitions: the linker keeps one of the identical copies. */
+extern int ap_check_failed, ap_check_passed;
+__attribute__((weak)) int ap_check_failed = 0;
+__attribute__((weak)) int ap_check_passed = 0;
 
 #define AP_CHECK(cond)                                                                   \
   do {                                                                                   \

@@ -3,15 +3,13 @@
 #include <string.h>
 
 #include "fdcheck.h"
+#include "testrand.h"
 
-/* ---- random numbers (xorshift64*, fixed seed) -------------------------------------------- */
+/* ---- random numbers (tests/testrand.h, fixed seed) ---------------------------------------- */
 
-static unsigned long long rng_state = 0x9E3779B97F4A7C15ull;
-double urand(void) {
-  rng_state ^= rng_state >> 12, rng_state ^= rng_state << 25, rng_state ^= rng_state >> 27;
-  return (double)((rng_state * 2685821657736338717ull) >> 11) / 9007199254740992.0;
-}
-double srand1(void) { return 2.0 * urand() - 1.0; }
+static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
+double urand(void) { return ap_test_urand(&rng_state); }
+double srand1(void) { return ap_test_srand(&rng_state); }
 void rand_vec(double *x, int n, double s) {
   for (int i = 0; i < n; i++) x[i] = s * srand1();
 }

@@ -1,4 +1,4 @@
-/* The hand-derived reference systems (tests/refsys.c) rebuilt from bodies.
+/* The hand-derived reference systems (tests/refsys.h) rebuilt from bodies.
  *
  * Each problem is described with bodies, joints, constraints and effects only (the models of
  * tests/bodysys.c), compiled, and compared with its math-level twin at matching coordinates
@@ -23,6 +23,7 @@
 
 #include "check.h"
 #include "bodysys.h"
+#include "testrand.h"
 
 #define ROUND 1e-13
 #define RTOL 1e-11
@@ -30,12 +31,9 @@
 #define POS_TOL 1e-8
 #define MAXK 8
 
-static unsigned long long rng = 88172645463325252ull;
-static double urand(void) {
-  rng ^= rng << 13, rng ^= rng >> 7, rng ^= rng << 17;
-  return (double)(rng >> 11) / 9007199254740992.0;
-}
-static double srand1(void) { return 2.0 * urand() - 1.0; }
+static uint64_t rng = 88172645463325252ull;
+static double urand(void) { return ap_test_urand(&rng); }
+static double srand1(void) { return ap_test_srand(&rng); }
 
 static ap_model *from_system(ap_system_def *def) {
   ap_model *m = NULL;

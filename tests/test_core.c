@@ -10,6 +10,7 @@
 #include "appell/appell.h"
 #include "check.h"
 #include "refsys.h"
+#include "testrand.h"
 
 /* ---- counting allocations: this program's malloc wraps glibc's (alloc.h) ----------------- */
 #include "alloc.h"
@@ -22,11 +23,8 @@ typedef struct rand_sys {
   int fail_metric, fail_force;   /* 1: NaN, 2: return > 0, 3: return < 0 */
 } rand_sys;
 
-static unsigned long long rng_state = 88172645463325252ULL;
-static double urand(void) {
-  rng_state ^= rng_state << 13, rng_state ^= rng_state >> 7, rng_state ^= rng_state << 17;
-  return (double)(rng_state >> 11) / 9007199254740992.0 * 2.0 - 1.0;
-}
+static uint64_t rng_state = 88172645463325252ULL;
+static double urand(void) { return ap_test_srand(&rng_state); } /* in [-1, 1) */
 
 static int rs_metric(double t, const double *q, double *g, void *u) {
   (void)t, (void)q;

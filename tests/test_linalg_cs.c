@@ -29,6 +29,7 @@
 #include "check.h"
 #include "linalg/linalg.h"
 #include "linalg/scalar.h"
+#include "testrand.h"
 
 typedef double _Complex cplx;
 
@@ -37,13 +38,8 @@ typedef double _Complex cplx;
 
 static uint64_t rng = 0x2545F4914F6CDD1Dull;
 
-static double urand(void) { /* xorshift64*, uniform in [-1, 1) */
-  rng ^= rng >> 12, rng ^= rng << 25, rng ^= rng >> 27;
-  return (double)((rng * 2685821657736338717ull) >> 11) * 0x1.0p-52 - 1.0;
-}
-
 static void fill(size_t n, double *x) {
-  for (size_t i = 0; i < n; i++) x[i] = urand();
+  for (size_t i = 0; i < n; i++) x[i] = ap_test_srand(&rng); /* uniform in [-1, 1) */
 }
 
 static void seed(size_t n, const double *x, const double *dx, cplx *z) {
