@@ -90,6 +90,10 @@ typedef struct ap_scratch {
   double *ev;               /* evaluator scratch, m->ev.scratch doubles (may be NULL) */
   int *iwork;               /* linalg scratch, ap_la_iwork_size(b, k) ints */
   const ap_model *model;    /* the model the data was made for (buffers sized for it) */
+  int judge_at_accepted;    /* 1: the caller judges every redundant row's consistency at its
+                               accepted states (ap_core_judge_redundant after the stages):
+                               a multistep stepper's trial states (predictor, Newton
+                               iterates, difference-quotient columns) lie off A v + a0 = 0 */
 } ap_scratch;
 
 /* 1 when m and d are not NULL and d was made by ap_data_create for m: the public functions
@@ -179,6 +183,7 @@ typedef struct ap_scratch_cs {
   double _Complex *Qf, *dg, *gB, *tk1, *tk2, *tl, *tn, *work, *ev;
   int *iwork;
   const ap_model *model;
+  int judge_at_accepted;
 } ap_scratch_cs;
 
 static inline int ap_core_data_ok_cs(const ap_model *m, const ap_data_cs *d) {

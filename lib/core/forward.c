@@ -189,7 +189,8 @@ int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
 #else
   rc = d->basis == AP_BASIS_ORTHONORMAL ? basis_orthonormal(m, d) : basis_partitioned(m, d);
 #endif
-  if (rc != AP_OK || d->redundant_manifold) return rc;   /* judged at accepted states */
+  if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
+    return rc;                                            /* judged at accepted states */
   double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
   if (d->resid_a0 > AP_CONSISTENCY_RTOL * scale) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
@@ -264,7 +265,8 @@ static int particular(const ap_model *m, ap_data *d) {
 #endif
     rc = AP_SC(ap_la_partition_particular)(m->b, m->k, d->rank, d->perm, s->F, s->tau,
                                            d->gamma, d->w, &d->resid_gamma, s->work);
-  if (rc != AP_OK || d->redundant_manifold) return rc;   /* judged at accepted states */
+  if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
+    return rc;                                            /* judged at accepted states */
   double scale = fmax(1.0, max_abs(d->gamma, (size_t)m->b));
   if (d->resid_gamma > AP_CONSISTENCY_RTOL * scale) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "

@@ -140,6 +140,13 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   int rc = ap_partition(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   if (s->m->b == 0) return AP_OK;
+  if (s->def.mode == AP_MODE_PLAIN && d->redundant_manifold > 0)
+    return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "system '%s': plain mode cannot run it: %d "
+                       "constraint row%s redundant only where the loops and wheel contacts "
+                       "close, and plain mode never puts the speeds back on the constraints: "
+                       "as they drift, the dropped rows' gamma leaves the kept rows' "
+                       "combination (use minimal, projected or DAE mode)", s->m->name,
+                       d->redundant_manifold, d->redundant_manifold == 1 ? " is" : "s are");
   if (d->rank < s->m->b) snprintf(s->warning, sizeof s->warning, "%s", d->msg);
   rc = ap_fwd_position(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
@@ -221,6 +228,8 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
     s->gn_iwork = calloc(ap_la_iwork_size(s->n, nphi), sizeof *s->gn_iwork);
     if (!s->gn || !s->gn_iwork) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   }
+  /* CVODE's trial states lie off the constraints: redundant rows judged at accepted states */
+  ((ap_scratch *)s->d->internal)->judge_at_accepted = s->meth->backend == &ap_step_cvode;
   return ap_step_create(s->meth, s->ny, ap_drv_rhs, s, t0, s->y, &o, &s->st, s->msg,
                         sizeof s->msg);
 }

@@ -136,17 +136,23 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
  * towards the band with ever smaller steps; an accepted state within 2 flat_tol therefore
  * means the motion itself reached lying flat, and it stops here with a clear error. A step
  * could also jump over the band: the contact point would then jump to the far side of the rim
- * (the support function has a kink there). Between accepted steps the in-plane direction of
- * u = -R^T e_z turns continuously (an accurate step resolves the contact point's run round the
- * rim, a few degrees at most), so a turn beyond 90 degrees means the step crossed the kink. */
+ * (the support function has a kink there). The direction from the centre to the contact point,
+ * in world axes, c = -(e_z - a_z a) / |e_z - a_z a| (a = R e_z the axis), turns continuously
+ * along any motion that stays off the band: it does not depend on the spin about the axis (a
+ * wheel on a revolute joint may turn through more than 90 degrees in one accurate step: its
+ * angle grows linearly), and near upright it stays close to -e_z whatever the heading. So a
+ * turn of c beyond 90 degrees between accepted steps means the step crossed the kink. (The
+ * contact point's position on the rim, in body axes, runs round at the spin rate: it cannot
+ * tell a fast wheel from a flip.) */
 static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n, double turn,
                       double t_prev) {
   const char *what = B->shape.kind == AP_SHAPE_DISK ? "disk" : "torus";
   if (turn > 0)
     AP_BM_MSG(d, "model '%s': body '%s': the %s passed through lying flat between t = %.17g "
-              "and t = %.17g (its contact point jumped %.0f degrees round the rim): a falling "
-              "%s hits the ground with its face, which a single contact point does not "
-              "describe", m->name, B->name, what, t_prev, d->t, turn, what);
+              "and t = %.17g (the direction from its centre to its contact point turned by %.0f "
+              "degrees in one step): a falling %s hits the ground with its face, which a "
+              "single contact point does not describe", m->name, B->name, what, t_prev, d->t,
+              turn, what);
   else
     AP_BM_MSG(d, "model '%s': body '%s': the %s reached lying flat at t = %.17g (its axis is "
               "%.3g degrees from the vertical, within 2 flat_tol = %.3g): the contact point is "
@@ -156,17 +162,19 @@ static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n
   return AP_ERR_SINGULAR;
 }
 
-/* One disk or torus with rotation R (body to world) and tracking block trk. */
+/* One disk or torus with rotation R (body to world, column-major) and tracking block trk:
+ * c (3), whether it is set (1), its time (1). */
 static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const double *R,
                      double *trk, int track) {
-  double ux = -R[2], uy = -R[5], n = hypot(ux, uy);
+  const double *a = R + 6;                   /* the axis in world axes, R e_z */
+  double n = hypot(a[0], a[1]);              /* = |e_z - a_z a| = |u_perp| */
   if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
   if (!(n > 0)) return AP_OK;   /* exactly flat while assembling: the position stage reports it */
-  ux /= n, uy /= n;
-  double c = ux * trk[0] + uy * trk[1];
-  if (track && trk[2] != 0.0 && c < 0.0)
-    return flat_error(m, d, B, n, acos(fmax(-1.0, c)) * 57.29577951308232, trk[3]);
-  trk[0] = ux, trk[1] = uy, trk[2] = track ? 1.0 : 0.0, trk[3] = d->t;
+  double c[3] = {a[2] * a[0] / n, a[2] * a[1] / n, -n};
+  double cos_turn = c[0] * trk[0] + c[1] * trk[1] + c[2] * trk[2];
+  if (track && trk[3] != 0.0 && cos_turn < 0.0)
+    return flat_error(m, d, B, n, acos(fmax(-1.0, cos_turn)) * 57.29577951308232, trk[4]);
+  trk[0] = c[0], trk[1] = c[1], trk[2] = c[2], trk[3] = track ? 1.0 : 0.0, trk[4] = d->t;
   return AP_OK;
 }
 

@@ -184,8 +184,9 @@ typedef struct kjoint {
   ap_sc *RFP;                 /* parent joint frame rotation (world) */
   ap_sc *rc, *H, *u, *cb;     /* plane contact: contact vector (world), Hessian of sigma
                                  (body), u = -R^T e_z, contact point (body) */
-  ap_sc *track;               /* disk, torus: in-plane direction of u at the last accepted
-                                 step (2), whether it is set (1), its time (1) (project_q) */
+  ap_sc *track;               /* disk, torus: the direction from the centre to the contact
+                                 point (world) at the last accepted step (3), whether it is
+                                 set (1), its time (1) (project_q) */
 } kjoint;
 
 /* Contact geometry of a rolling or wheel knife-edge constraint (contact.c): the joint's block
