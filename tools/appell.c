@@ -50,18 +50,42 @@ int cli_exit_code(int status) {
   }
 }
 
+/* The separate value that cli_opt refused because it looked like an option, or NULL. */
+static const char *refused_value;
+
+/* "-o", "--out": a word that starts with '-' and is not "-" (standard output) or a number
+ * ("-1", "-.5", "-2*pi"). */
+static int looks_like_option(const char *v) {
+  return v[0] == '-' && v[1] != '\0' && !(v[1] >= '0' && v[1] <= '9') && v[1] != '.';
+}
+
 int cli_opt(int argc, char **argv, int *i, const char *name, const char **value) {
   size_t len = strlen(name);
   const char *a = argv[*i];
   if (strncmp(a, name, len) != 0) return 0;
+  refused_value = NULL;
   if (a[len] == '=') {
     *value = a + len + 1;
     return 1;
   }
   if (a[len] != '\0') return 0;
   if (*i + 1 >= argc) return -1;
+  if (looks_like_option(argv[*i + 1])) {   /* "--mode -o out.csv": -o is not the mode */
+    refused_value = argv[*i + 1];
+    return -1;
+  }
   *value = argv[++*i];
   return 1;
+}
+
+int cli_need(const char *cmd, const char *opt, const char *what) {
+  if (refused_value)
+    fprintf(stderr, "appell %s: %s needs %s; got the option %s (write %s=%s if that is the "
+            "value)\n", cmd, opt, what ? what : "a value", refused_value, opt, refused_value);
+  else
+    fprintf(stderr, "appell %s: %s needs %s (see appell %s --help)\n", cmd, opt,
+            what ? what : "a value", cmd);
+  return -1;
 }
 
 int cli_number(const char *cmd, const char *opt, const char *text, double *out) {

@@ -205,7 +205,7 @@ int cmd_bench(int argc, char **argv) {
     } else if (argv[i][0] == '-' && argv[i][1] != '\0') return cli_unknown("bench", argv[i], known);
     else if (!scene) scene = argv[i];
     else return fprintf(stderr, "appell bench: more than one scene ('%s')\n", argv[i]), EXIT_INPUT;
-    if (r < 0) return fprintf(stderr, "appell bench: %s needs a value\n", argv[i]), EXIT_INPUT;
+    if (r < 0) return cli_need("bench", argv[i], NULL), EXIT_INPUT;
   }
   if (!scene) return fprintf(stderr, "appell bench: no scene file (see appell bench --help)\n"),
                EXIT_INPUT;

@@ -118,8 +118,8 @@ int cmd_check(int argc, char **argv) {
     if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0)
       return fputs(help, stdout), EXIT_OK;
     if ((r = cli_opt(argc, argv, &i, "--set", &v)) != 0) {
-      if (r < 0 || nsets >= 256)
-        return fprintf(stderr, "appell check: --set needs PATH=VALUE\n"), EXIT_INPUT;
+      if (r < 0) return cli_need("check", "--set", "PATH=VALUE"), EXIT_INPUT;
+      if (nsets >= 256) return fprintf(stderr, "appell check: at most 256 --set\n"), EXIT_INPUT;
       sets[nsets++] = v;
     } else if (argv[i][0] == '-' && argv[i][1]) {
       return cli_unknown("check", argv[i], known);

@@ -21,8 +21,13 @@ int cmd_plot(int argc, char **argv);
 /* Exit code for a library status: bad input, numerical failure or internal error. */
 int cli_exit_code(int status);
 /* Option matching: "--name VALUE" or "--name=VALUE". Returns 1 and sets *value (advancing *i
- * past a separate value) when argv[*i] is the option; -1 when the value is missing. */
+ * past a separate value) when argv[*i] is the option; -1 when the value is missing or the next
+ * word is another option ("--mode -o": a separate value starting with '-' must be "-" or a
+ * number; "--name=-x" passes anything). Report -1 with cli_need. */
 int cli_opt(int argc, char **argv, int *i, const char *name, const char **value);
+/* After cli_opt returned -1 for opt: "appell CMD: OPT needs WHAT (a value when NULL)", naming
+ * the option taken for the value if that was the cause. Returns -1. */
+int cli_need(const char *cmd, const char *opt, const char *what);
 /* Parse a finite number for an option; prints a message and returns -1 when it is not. */
 int cli_number(const char *cmd, const char *opt, const char *text, double *out);
 /* Report an unknown option with the closest known one. */

@@ -150,7 +150,7 @@ static int parse(int argc, char **argv, lin_opts *o) {
     } else if (r == 0) {
       return fprintf(stderr, "appell linearize: one scene at a time\n"), -1;
     }
-    if (r < 0) return fprintf(stderr, "appell linearize: %s needs a value\n", argv[i]), -1;
+    if (r < 0) return cli_need("linearize", argv[i], NULL);
   }
   if (!o->scene) return fprintf(stderr, "appell linearize: no scene file (see --help)\n"), -1;
   if (o->plot && !o->count)

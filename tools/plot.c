@@ -62,7 +62,7 @@ static int parse(int argc, char **argv, plot_opts *o) {
     else if (argv[i][0] == '-' && argv[i][1]) return cli_unknown("plot", argv[i], known), -1;
     else if (!o->csv) o->csv = argv[i];
     else return fprintf(stderr, "appell plot: one CSV file at a time\n"), -1;
-    if (r < 0) return fprintf(stderr, "appell plot: %s needs a value\n", argv[i]), -1;
+    if (r < 0) return cli_need("plot", argv[i], NULL);
   }
   if (!o->csv || !o->ny || !o->out)
     return fprintf(stderr, "appell plot: need FILE.csv, at least one --y and -o FIG.png|svg "
@@ -79,10 +79,16 @@ typedef struct header {
 static int read_header(const char *csv, header *h) {
   FILE *f = fopen(csv, "r");
   if (!f) return fprintf(stderr, "appell plot: cannot open %s: %s\n", csv, strerror(errno)), -1;
-  size_t cap = 0;
-  ssize_t len = getline(&h->line, &cap, f);
+  size_t cap = 0, cap2 = 0;
+  char *row = NULL;
+  ssize_t len = getline(&h->line, &cap, f), len2 = len > 0 ? getline(&row, &cap2, f) : -1;
+  int data = len2 > 0 && row[strspn(row, " \t\r\n")] != '\0';   /* a non-blank second line */
+  free(row);
   fclose(f);
-  if (len <= 0) return fprintf(stderr, "appell plot: %s is empty\n", csv), -1;
+  if (len <= 0) return fprintf(stderr, "appell plot: %s is empty (0 bytes)\n", csv), -1;
+  if (!data)   /* gnuplot would fail on it and leave an empty figure */
+    return fprintf(stderr, "appell plot: %s has a header but no data rows: nothing to draw\n",
+                   csv), -1;
   h->line[strcspn(h->line, "\r\n")] = '\0';
   for (char *p = strtok(h->line, ","); p && h->n < MAX_COLS; p = strtok(NULL, ","))
     h->cols[h->n++] = p;

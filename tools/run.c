@@ -80,7 +80,7 @@ static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
     const char *v = NULL;
     int r = cli_opt(argc, argv, i, mapped[m][0], &v);
     if (r == 0) continue;
-    if (r < 0) return fprintf(stderr, "appell run: %s needs a value\n", mapped[m][0]), -1;
+    if (r < 0) return cli_need("run", mapped[m][0], NULL);
     double x;
     if (m >= 2 && m < 6 && cli_number("run", mapped[m][0], v, &x) != 0) return -1;
     snprintf(o->extra[*extra], sizeof o->extra[0], "%s=%s", mapped[m][1], v);
@@ -103,11 +103,12 @@ static int parse_args(int argc, char **argv, run_opts *o) {
       o->quiet = 1;
     } else if ((r = cli_opt(argc, argv, &i, "--out", &v)) != 0 ||
                (r = cli_opt(argc, argv, &i, "-o", &v)) != 0) {
-      if (r < 0) return fprintf(stderr, "appell run: --out needs a file name\n"), -1;
+      if (r < 0) return cli_need("run", "--out", "a file name");
       o->out = v;
     } else if ((r = cli_opt(argc, argv, &i, "--set", &v)) != 0) {
-      if (r < 0 || o->nsets >= MAX_SETS)
-        return fprintf(stderr, "appell run: --set needs PATH=VALUE (at most %d)\n", MAX_SETS), -1;
+      if (r < 0) return cli_need("run", "--set", "PATH=VALUE");
+      if (o->nsets >= MAX_SETS)
+        return fprintf(stderr, "appell run: at most %d --set\n", MAX_SETS), -1;
       o->sets[o->nsets++] = v;
     } else if ((r = mapped_opt(argc, argv, &i, o, &extra)) != 0) {
       if (r < 0) return -1;

@@ -74,7 +74,7 @@ typedef struct sweep_opts {
 } sweep_opts;
 
 static int need(const char *opt) {
-  return fprintf(stderr, "appell sweep: %s needs a value (see appell sweep --help)\n", opt), -1;
+  return cli_need("sweep", opt, NULL);
 }
 
 static int push(const char **list, int *n, const char *v, const char *opt) {
@@ -184,6 +184,9 @@ static int parse_args(int argc, char **argv, sweep_opts *o) {
     return fprintf(stderr, "appell sweep: %s\n", o->ninputs ? "one scene at a time"
                    : "no scene file (see appell sweep --help)"), -1;
   o->scene = o->inputs[0];
+  if (o->ntimes && !o->nchannels)
+    return fprintf(stderr, "appell sweep: --at gives the times to sample the --channel columns "
+                   "at; name at least one --channel\n"), -1;
   if (o->nrandoms && !o->samples)
     return fprintf(stderr, "appell sweep: --random needs --samples N\n"), -1;
   if (o->samples && !o->nrandoms)
@@ -258,6 +261,48 @@ static int build_batch(sweep_state *s) {
   if (rc != AP_OK)
     return fprintf(stderr, "appell sweep: the scene with every parameter at a typical value "
                    "(first grid value, mean): %s\n", msg), cli_exit_code(rc);
+  return EXIT_OK;
+}
+
+/* The range [t0, t_end] of every run of this shard: the scene's with --set, narrowed by the
+ * values a plan gives simulation.t0 or simulation.t_end. */
+static int run_range(const sweep_state *s, double *t0, double *t_end) {
+  const sweep_opts *o = s->o;
+  char msg[1024], buf[1024];
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load(o->scene, o->sets, o->nsets, &sc, msg, sizeof msg);
+  if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
+  ap_scene_run run;
+  ap_scene_get_run(sc, &run);
+  ap_scene_free(sc);
+  *t0 = run.t0, *t_end = run.t_end;
+  for (int r = 0; r < ap_plan_nparams(s->plan); r++) {
+    int is_t0 = strcmp(ap_plan_path(s->plan, r), "simulation.t0") == 0;
+    if (!is_t0 && strcmp(ap_plan_path(s->plan, r), "simulation.t_end") != 0) continue;
+    for (long i = s->first; i < s->first + s->count; i++) {
+      double x = NAN;
+      if (ap_plan_value(s->plan, i, r, &x, buf, sizeof buf) != AP_OK || isnan(x)) continue;
+      if (is_t0) *t0 = fmax(*t0, x);
+      else *t_end = fmin(*t_end, x);
+    }
+  }
+  return EXIT_OK;
+}
+
+/* Every --at time inside every run's [t0, t_end] (a time outside would give rows of NaN). */
+static int check_times(const sweep_state *s) {
+  const sweep_opts *o = s->o;
+  if (o->ntimes == 0) return EXIT_OK;
+  double t0 = 0.0, t_end = 0.0;
+  int code = run_range(s, &t0, &t_end);
+  if (code != EXIT_OK) return code;
+  double tol = 1e-12 * fmax(fabs(t0), fabs(t_end));
+  for (int i = 0; i < o->ntimes; i++)
+    if (!(o->times[i] >= t0 - tol && o->times[i] <= t_end + tol))
+      return fprintf(stderr, "appell sweep: --at %.10g is outside the runs' time range t0 = %.10g "
+                     ".. t_end = %.10g (simulation.t0, simulation.t_end%s)\n", o->times[i], t0,
+                     t_end, t0 < t_end ? "" : "; the plan leaves no time common to every run"),
+             EXIT_INPUT;
   return EXIT_OK;
 }
 
@@ -350,6 +395,7 @@ int cmd_sweep(int argc, char **argv) {
   s.o = &o;
   code = build_plan(&s);
   if (code == EXIT_OK) code = build_batch(&s);
+  if (code == EXIT_OK) code = check_times(&s);
   if (code == EXIT_OK) code = run_sweep(&s, &out);
   if (s.messages) ap_batch_messages_free(s.count, s.messages);
   free(s.messages);

@@ -84,6 +84,9 @@ static int record(one_run *r, double t, int grid, double tol) {
     if (r->rows++ == 0) r->E0 = E;
     r->drift = fmax(r->drift, fabs(E - r->E0));
   }
+  if (b->def.nchannels == 0)   /* nothing to sample; the times still pass (the loop waits for
+                                  them: without this it spun for ever on a time it had reached) */
+    for (; r->next < b->def.ntimes && fabs(b->times[b->order[r->next]] - t) <= tol; r->next++) {}
   if (b->def.nchannels == 0 || (!grid && !due)) return AP_OK;
   int rc = ap_scene_output_row(r->sc, r->sim, r->orow);
   if (rc != AP_OK) return fail(r, rc, "output row failed: ", ap_sim_message(r->sim));

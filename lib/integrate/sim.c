@@ -26,6 +26,7 @@
 #include "appell/body.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
+#include "model/model.h"
 
 int ap_drv_fail(ap_sim *s, int status, const char *fmt, ...) {
        va_list ap;
@@ -80,16 +81,23 @@ static int check_def(ap_sim *s, const ap_sim_def *def) {
       !(def->h_max >= 0 && def->h_max <= HUGE_VAL))
     return ap_drv_fail(s, AP_ERR_ARG, "h_init and h_max must be >= 0 (0: none; got %g, %g)",
                        def->h_init, def->h_max);
-  if (!(def->switch_growth >= 1.0) || !(def->rank_rtol > 0) || def->max_steps < 1 ||
-      !(def->init_tol > 0))
-    return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), rank_rtol and "
-                         "init_tol positive (%g, %g), max_steps >= 1 (%ld)", def->switch_growth,
-                         def->rank_rtol, def->init_tol, def->max_steps);
+  if (!(def->rank_rtol > 0 && def->rank_rtol < 1))
+    return ap_drv_fail(s, AP_ERR_ARG, "rank_rtol = %g: the relative rank tolerance must lie in "
+                       "(0, 1) (default 1e-10)", def->rank_rtol);
+  if (!(def->switch_growth >= 1.0) || def->max_steps < 1 || !(def->init_tol > 0))
+    return ap_drv_fail(s, AP_ERR_ARG, "switch_growth must be >= 1 (got %g), init_tol positive "
+                         "(%g), max_steps >= 1 (%ld)", def->switch_growth, def->init_tol,
+                         def->max_steps);
   return AP_OK;
 }
 
+/* "NaN", "+Inf" or "-Inf" for a value that is not finite (printf's "-nan" hides what it is). */
+static const char *nonfinite(double x) { return isnan(x) ? "NaN" : x > 0 ? "+Inf" : "-Inf"; }
+
 static int check_initial(ap_sim *s, double t0, const double *q0, const double *v0) {
-  if (!isfinite(t0)) return ap_drv_fail(s, AP_ERR_ARG, "the initial time t0 is %g", t0);
+  if (!isfinite(t0))
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_create: the initial time t0 is %s; it must be a "
+                       "finite number", nonfinite(t0));
   for (int i = 0; i < s->n; i++)
     if (!isfinite(q0[i]))
       return ap_drv_fail(s, AP_ERR_ARG, "initial coordinate '%s' is %g",
@@ -280,43 +288,90 @@ void ap_sim_free(ap_sim *s) {
 
 /* ---- advancing ----------------------------------------------------------------------------- */
 
+/* A motor, spring or damper of a body model, or NULL: the usual source of stiffness. */
+static const ap_meff *stiff_effect(const ap_model *m) {
+  if (!ap_model_is_body_model(m)) return NULL;
+  const ap_bmodel *M = ap_bm(m);
+  for (int i = 0; i < M->ne; i++) {
+    const ap_effect_def *e = &M->effs[i].def;
+    if (e->kind == AP_EFFECT_MOTOR || e->kind == AP_EFFECT_JOINT_DAMPING ||
+        (e->kind == AP_EFFECT_SPRING && (e->stiffness > 0 || e->damping > 0)))
+      return &M->effs[i];
+  }
+  return NULL;
+}
+
+/* A failed step (status rc, message in s->msg): when the integrator gave up (max_steps, the step
+ * size collapsed) or the solution blew up with an explicit or Adams method on a model with a
+ * motor, spring or damper, append the hint to try BDF. The status is unchanged. */
+static int stiff_hint(ap_sim *s, int rc) {
+  const ap_meff *e = rc == AP_ERR_SOLVER || rc == AP_ERR_NAN ? stiff_effect(s->m) : NULL;
+  if (!e || s->dae || strcmp(s->meth->name, "bdf") == 0) return rc;
+  const char *kind = e->def.kind == AP_EFFECT_MOTOR ? "motor"
+                     : e->def.kind == AP_EFFECT_SPRING ? "spring" : "damper";
+  size_t len = strlen(s->msg);
+  snprintf(s->msg + len, sizeof s->msg - len, "; the model has the %s '%s': large gains make "
+           "it stiff, which explicit methods such as %s can only follow in tiny steps: try "
+           "--method bdf (simulation.method: bdf)", kind, e->name, s->meth->name);
+  return rc;
+}
+
+/* tout must be a finite time at or after the current one. */
+static int check_tout(ap_sim *s, double tout) {
+  if (!isfinite(tout))
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: the output time tout is %s; it must be "
+                       "a finite number", nonfinite(tout));
+  if (!(tout >= s->t))
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: the output time tout = %.17g is before "
+                       "the current time t = %.17g", tout, s->t);
+  return AP_OK;
+}
+
+/* One step towards tout of the stepper or IDA; AP_OK or the failure with s->msg set. */
+static int advance_one(ap_sim *s, double tout) {
+  double t = s->t;
+  s->rhs_status = AP_OK;
+  if (s->dae) {
+    int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
+    if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
+    rc = ap_drv_after_step_dae(s, t);
+    if (rc != AP_OK) return s->failed = rc;   /* IDA went on; this run cannot */
+    s->t = t;
+    memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
+    return AP_OK;
+  }
+  int rc = ap_step_one(s->st, tout, &t, s->ytry);
+  if (rc != AP_OK) {
+    if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
+    return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
+                                     s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
+                                     s->rhs_status > 0 ? s->rhs_msg : ""));
+  }
+  s->t = t;
+  memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
+  return ap_drv_after_step(s, t);
+}
+
 int ap_sim_advance(ap_sim *s, double tout) {
   if (!s) return AP_ERR_ARG;
   if (s->failed) return s->failed;              /* s->msg still says why */
-  if (!(tout >= s->t) || !isfinite(tout))
-    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_advance: tout = %.17g is not a finite time at or "
-                       "after t = %.17g", tout, s->t);
+  int rc = check_tout(s, tout);
+  if (rc != AP_OK) return rc;
+  double t_start = s->t;
   for (long steps = 0; s->t < tout; steps++) {
     int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
     if (stop) {
-      int rc = ap_drv_evaluate_current(s);
+      rc = ap_drv_evaluate_current(s);
       return rc != AP_OK ? rc : ap_drv_fail(s, AP_ERR_INTERRUPTED, "interrupted at t = %.17g "
                                             "(the poll function returned %d)", s->t, stop);
     }
     if (steps >= s->def.max_steps)
-      return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': more than max_steps = %ld steps between "
-                           "t = %.17g and %.17g", s->m->name, s->def.max_steps, s->t, tout);
-    double t = s->t;
-    s->rhs_status = AP_OK;
-    if (s->dae) {
-      int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
-      if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
-      rc = ap_drv_after_step_dae(s, t);
-      if (rc != AP_OK) return s->failed = rc;   /* IDA went on; this run cannot */
-      s->t = t;
-      memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-      continue;
-    }
-    int rc = ap_step_one(s->st, tout, &t, s->ytry);
-    if (rc != AP_OK) {
-      if (s->rhs_status < 0) return ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg);
-      return ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
-                           s->rhs_status > 0 ? "; last right-hand-side failure: " : "",
-                           s->rhs_status > 0 ? s->rhs_msg : "");
-    }
-    s->t = t;
-    memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-    rc = ap_drv_after_step(s, t);
+      return stiff_hint(s, ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps "
+                                       "from t = %.17g reached only t = %.17g, short of the "
+                                       "output time %.17g (raise max_steps, in a scene "
+                                       "simulation.max_steps)", s->m->name, s->def.max_steps,
+                                       t_start, s->t, tout));
+    rc = advance_one(s, tout);
     if (rc != AP_OK) return rc;
   }
   return ap_drv_evaluate_current(s);

@@ -204,6 +204,9 @@ static int parse_sim(sc_ctx *c, sc_scene *s) {
       sc_check_positive(c, n, "rank_rtol", r->sim.rank_rtol) ||
       sc_check_positive(c, n, "max_steps", (double)r->sim.max_steps))
     return AP_ERR_ARG;
+  if (!(r->sim.rank_rtol < 1))   /* |R_ii| > rank_rtol |R_00| with rank_rtol >= 1: rank 1 */
+    return sc_err(c, sc_map_get(n, "rank_rtol"), "must be below 1 (got %g; default 1e-10)",
+                  r->sim.rank_rtol);
   if (r->sim.switch_growth < 1)
     return sc_err(c, sc_map_get(n, "switch_growth"), "must be >= 1 (got %g)",
                   r->sim.switch_growth);

@@ -185,6 +185,10 @@ static int advance_released(apx_sim *s, double t, double *due, int *interrupted,
   return rc;
 }
 
+/* The most rows one run() records: the scene loader's limit on (t_end - t0) / output.interval
+ * (lib/scene/parse_run.c), which appell run therefore obeys too. */
+#define APX_MAX_ROWS 1e7
+
 /* Rows at t0 + i dt (the last at t_end), with the GIL released. */
 static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) {
   double due = now() + 0.2;
@@ -249,10 +253,19 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
     PyErr_SetString(PyExc_ValueError, msg);
     return NULL;
   }
+  double nrows = ceil((t_end - t0) / dt - 1e-9) + 1;   /* may be Inf: dt = 1e-300 */
+  if (!(nrows <= APX_MAX_ROWS + 1)) {
+    char msg[240];
+    snprintf(msg, sizeof msg, "run(t_end=%.17g, dt=%.17g) would record %.3g rows, more than "
+             "the 10^7 output rows a scene allows (output.interval): use a larger dt or "
+             "advance() in steps", t_end, dt, nrows);
+    PyErr_SetString(PyExc_ValueError, msg);
+    return NULL;
+  }
   const ap_model *m = ap_scene_model(s->model->sc);
   rec r = {NULL, NULL, NULL, ap_scene_output_count(s->model->sc), ap_model_n(m), ap_model_k(m),
            0, 0, AP_OK, 0};
-  r.rows = (long)ceil((t_end - t0) / dt - 1e-9) + 1;
+  r.rows = (long)nrows;
   if (r.rows < (t_end > t0 ? 2 : 1)) r.rows = t_end > t0 ? 2 : 1;   /* dt past t_end: t0, t_end */
   npy_intp d0[2] = {r.rows, r.nc}, d1[2] = {r.rows, r.n}, d2[2] = {r.rows, r.k};
   PyArrayObject *arr[3] = {(PyArrayObject *)PyArray_ZEROS(2, d0, NPY_DOUBLE, 0),

@@ -259,3 +259,16 @@ def test_a_signal_stops_a_long_output_interval(disk):
     assert 0 < t < 1e6                   # stopped where it was, and goes on from there
     sim.advance(t + 0.1)
     assert sim.t == t + 0.1
+
+
+def test_absurd_row_counts_are_refused(disk):
+    # dt = 1e-300 cast ceil(T / dt) = Inf to long (undefined behaviour), and dt = 1e-7 over 10 s
+    # asked NumPy for 10^8 rows (gigabytes) before integrating a step. The limit is the scene
+    # loader's, 10^7 output rows, as for appell run.
+    sim = appell.Simulation(appell.load(disk))
+    for t_end, dt, rows in ((1.0, 1e-300, r"1e\+300 rows"), (10.0, 1e-7, r"1e\+08 rows")):
+        with pytest.raises(ValueError, match="would record " + rows) as info:
+            sim.run(t_end=t_end, dt=dt)
+        assert "10^7" in str(info.value) and sim.t == 0.0
+    assert len(sim.run(t_end=0.01, dt=1e-3).t) == 11
+
