@@ -75,9 +75,17 @@ static ap_effect_def eff(ap_effect_kind kind, int body) {
   return e;
 }
 
+static const char *const no_words[3] = {"mass", "masses", NULL};
+
 static void cases_status_system(void) {
   CASE(ap_strerror, "unknown code", ap_strerror(12345) && ap_strerror(12345)[0]);
   CASE(ap_strerror, "INT_MIN", ap_strerror(INT_MIN) != NULL);
+  CASE(ap_suggest, "word NULL", ap_suggest(NULL, no_words, -1) == NULL);
+  CASE(ap_suggest, "words NULL", ap_suggest("mass", NULL, 3) == NULL);
+  CASE(ap_suggest, "count 0", ap_suggest("mass", no_words, 0) == NULL);
+  CASE(ap_suggest, "a close word (case-insensitive)",
+       ap_suggest("MAS", no_words, -1) == no_words[0]);
+  CASE(ap_suggest, "no close word", ap_suggest("inertia", no_words, 2) == NULL);
   CASE(ap_system_def_default, "no arguments", ap_system_def_default().n == 0);
   CASE(ap_model_from_system, "def NULL",
        ap_model_from_system(NULL, &om, msg, sizeof msg) == AP_ERR_ARG && !om);

@@ -99,35 +99,8 @@ int cli_number(const char *cmd, const char *opt, const char *text, double *out) 
   return 0;
 }
 
-/* Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
- * neighbouring letters each cost 1. */
-static int distance(const char *a, const char *b) {
-  size_t la = strlen(a), lb = strlen(b);
-  if (la > 63 || lb > 63) return 99;
-  int d[64][64];
-  for (size_t i = 0; i <= la; i++) d[i][0] = (int)i;
-  for (size_t j = 0; j <= lb; j++) d[0][j] = (int)j;
-  for (size_t i = 1; i <= la; i++)
-    for (size_t j = 1; j <= lb; j++) {
-      int cost = a[i - 1] != b[j - 1], best = d[i - 1][j - 1] + cost;
-      if (d[i - 1][j] + 1 < best) best = d[i - 1][j] + 1;
-      if (d[i][j - 1] + 1 < best) best = d[i][j - 1] + 1;
-      int swap = i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1];
-      if (swap && d[i - 2][j - 2] + 1 < best) best = d[i - 2][j - 2] + 1;
-      d[i][j] = best;
-    }
-  return d[la][lb];
-}
-
 const char *cli_suggest(const char *word, const char *const *words, int count) {
-  const char *best = NULL;
-  int bd = 99;
-  for (int i = 0; i < count && words[i]; i++) {
-    int d = distance(word, words[i]);
-    if (d < bd) bd = d, best = words[i];
-  }
-  int allow = strlen(word) <= 4 ? 1 : strlen(word) <= 8 ? 2 : 3;
-  return bd <= allow ? best : NULL;
+  return ap_suggest(word, words, count);
 }
 
 int cli_unknown(const char *cmd, const char *arg, const char *const *known) {

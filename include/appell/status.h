@@ -32,6 +32,12 @@ enum {
 /* A short, static text for a status code ("unknown status" for any other int). */
 AP_API const char *ap_strerror(int status);
 
+/* The closest of words[0 .. count-1] (count < 0: up to a NULL entry) to a misspelt word, for
+ * "did you mean" messages: optimal string alignment distance, case-insensitive, within 1 edit
+ * for words of up to 4 letters, 2 up to 8, else 3; NULL when none is that close or an argument
+ * is NULL. */
+AP_API const char *ap_suggest(const char *word, const char *const *words, int count);
+
 #ifdef __cplusplus
 }
 #endif

@@ -132,7 +132,7 @@ static int check_var_names(ap_lin *L, const char *const *list, const char *what)
     int nv = L->ch.nc + L->k;
     const char **names = calloc((size_t)nv + 1, sizeof *names);
     for (int j = 0; names && j < nv; j++) names[j] = ap_an_var_name(L, j);
-    const char *sug = names ? ap_core_suggest(list[i], names, nv) : NULL;
+    const char *sug = names ? ap_suggest(list[i], names, nv) : NULL;
     char hint[300] = "";
     size_t used = 0;
     if (sug) snprintf(hint, sizeof hint, "did you mean '%s'?", sug);

@@ -163,10 +163,6 @@ void ap_core_msg(ap_data *d, const char *fmt, ...)
 #endif
     ;
 
-/* The name among keys (count of them, or NULL-terminated when count < 0) closest to word
- * within a few edits, for "did you mean" (suggest.c); NULL when none is close. */
-const char *ap_core_suggest(const char *word, const char *const *keys, int count);
-
 /* ---- the complex-step mirror ------------------------------------------------------------- */
 
 /* ap_data with double _Complex value arrays (field by field as in appell/system.h). */

@@ -28,7 +28,7 @@ static int edit_distance(const char *a, const char *b) {
   return d[la][lb];
 }
 
-const char *ap_core_suggest(const char *word, const char *const *keys, int count) {
+const char *ap_suggest(const char *word, const char *const *keys, int count) {
   const char *best = NULL;
   int bd = 99;
   for (int i = 0; word && keys && (count < 0 ? keys[i] != NULL : i < count); i++) {

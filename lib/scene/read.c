@@ -44,7 +44,7 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
 }
 
 const char *sc_suggest(const char *word, const char *const *keys) {
-  return ap_core_suggest(word, keys, -1);
+  return ap_suggest(word, keys, -1);
 }
 
 int sc_expect(sc_ctx *c, const sc_node *n, sc_kind kind) {
