@@ -10,16 +10,19 @@
 
 char ct_src[1024], ct_bin[1024], ct_tmp[64], ct_log[1200];
 
-int ct_init(const char *test) {
+void ct_find_source(char *out, size_t len) {
   const char *env = getenv("APPELL_SOURCE_DIR");
-  snprintf(ct_src, sizeof ct_src, "%s", env ? env : __FILE__);
-  if (!env) {
-    char *slash = strrchr(ct_src, '/');
-    if (slash) *slash = '\0', slash = strrchr(ct_src, '/');
-    if (slash) *slash = '\0';
-    else snprintf(ct_src, sizeof ct_src, ".");
-  }
-  env = getenv("APPELL_BIN");
+  snprintf(out, len, "%s", env ? env : __FILE__);
+  if (env) return;
+  char *slash = strrchr(out, '/');
+  if (slash) *slash = '\0', slash = strrchr(out, '/');
+  if (slash) *slash = '\0';
+  else snprintf(out, len, ".");
+}
+
+int ct_init(const char *test) {
+  ct_find_source(ct_src, sizeof ct_src);
+  const char *env = getenv("APPELL_BIN");
   snprintf(ct_bin, sizeof ct_bin, "%s", env ? env : "tools/appell");
   snprintf(ct_tmp, sizeof ct_tmp, "/tmp/appell_cli_XXXXXX");
   if (!mkdtemp(ct_tmp) || access(ct_bin, X_OK) != 0) {

@@ -15,6 +15,9 @@ extern char ct_bin[1024];   /* the appell binary */
 extern char ct_tmp[64];     /* a scratch directory of this run */
 extern char ct_log[1200];   /* the children's stdout and stderr */
 
+/* The source tree into out: $APPELL_SOURCE_DIR, else two levels up from this file's __FILE__
+ * (tests/clitest.c), else ".". For tests that read example scenes without running the binary. */
+void ct_find_source(char *out, size_t len);
 /* Find the binary and the sources, make the scratch directory; 0 on success. */
 int ct_init(const char *test);
 /* Remove the log and the scratch directory (which must be empty by then). */

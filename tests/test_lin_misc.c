@@ -19,21 +19,9 @@
 #include "analyze/analyze_int.h"
 #include "appell/scene.h"
 #include "check.h"
+#include "clitest.h"
 
 static char srcdir[1024];
-
-static void find_srcdir(void) {
-  const char *env = getenv("APPELL_SOURCE_DIR");
-  if (env) {
-    snprintf(srcdir, sizeof srcdir, "%s", env);
-    return;
-  }
-  snprintf(srcdir, sizeof srcdir, "%s", __FILE__);
-  char *slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0', slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0';
-  else snprintf(srcdir, sizeof srcdir, ".");
-}
 
 /* ---- sweeps on a synthetic spectrum --------------------------------------------------------
  * Real eigenvalues p - 1 and 0.5 - p (they cross each other at 0.75: sorting would swap them;
@@ -338,7 +326,7 @@ static void test_bad_names_and_values(void) {
 }
 
 int main(void) {
-  find_srcdir();
+  ct_find_source(srcdir, sizeof srcdir);
   test_bad_names_and_values();
   test_sweep();
   test_scene_section();

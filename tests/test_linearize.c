@@ -43,24 +43,12 @@
 
 #include "analyze/analyze_int.h"
 #include "check.h"
+#include "clitest.h"
 #include "refsys.h"
 
 #define RK 2.0   /* entries within RK Ridders estimates */
 
 static char srcdir[1024];
-
-static void find_srcdir(void) {
-  const char *env = getenv("APPELL_SOURCE_DIR");
-  if (env) {
-    snprintf(srcdir, sizeof srcdir, "%s", env);
-    return;
-  }
-  snprintf(srcdir, sizeof srcdir, "%s", __FILE__);
-  char *slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0', slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0';
-  else snprintf(srcdir, sizeof srcdir, ".");
-}
 
 static double worst_entry = 0.0;   /* largest |A - closed form| / error estimate seen */
 static double worst_eig = 0.0;     /* largest |eigenvalue - closed form| seen */
@@ -479,7 +467,7 @@ static void test_sleigh(void) {
 }
 
 int main(void) {
-  find_srcdir();
+  ct_find_source(srcdir, sizeof srcdir);
   test_disk();
   test_hoffmann();
   test_sleigh();

@@ -16,22 +16,10 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "clitest.h"
 #include "scene/scene_int.h"
 
 static char srcdir[1024];
-
-static void find_srcdir(void) {
-  const char *env = getenv("APPELL_SOURCE_DIR");
-  if (env) {
-    snprintf(srcdir, sizeof srcdir, "%s", env);
-    return;
-  }
-  snprintf(srcdir, sizeof srcdir, "%s", __FILE__);
-  char *slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0', slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0';
-  else snprintf(srcdir, sizeof srcdir, ".");
-}
 
 static void path_of(char *out, size_t len, const char *dir, const char *name) {
   snprintf(out, len, "%s/%s/%s", srcdir, dir, name);
@@ -474,7 +462,7 @@ static void test_moving_plane(void) {
 }
 
 int main(void) {
-  find_srcdir();
+  ct_find_source(srcdir, sizeof srcdir);
   test_bad_scenes();
   test_examples();
   test_overrides();

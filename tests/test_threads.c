@@ -19,6 +19,7 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "clitest.h"
 
 #define NT 8
 #define T_END 1.0
@@ -26,16 +27,6 @@
 #define NROWS 21   /* t = 0, 0.05, ..., 1 */
 
 static char srcdir[1024];
-
-static void find_srcdir(void) {
-  const char *env = getenv("APPELL_SOURCE_DIR");
-  snprintf(srcdir, sizeof srcdir, "%s", env ? env : __FILE__);
-  if (env) return;
-  char *slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0', slash = strrchr(srcdir, '/');
-  if (slash) *slash = '\0';
-  else snprintf(srcdir, sizeof srcdir, ".");
-}
 
 static ap_scene *load(const char *name, const char *const *sets, int nsets) {
   char path[1200], msg[1024];
@@ -204,7 +195,7 @@ static void table_variant(int i, char *a, char *b) {
 }
 
 int main(void) {
-  find_srcdir();
+  ct_find_source(srcdir, sizeof srcdir);
   shared_model("rolling_disk.yaml", NULL);
   shared_model("hoffmann.yaml", NULL);
   shared_model("turntable_ball.yaml", "ground.omega=2*tanh(t)+0.3*sin(5*t)");
