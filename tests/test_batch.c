@@ -16,19 +16,13 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "clitest.h"
 
 static char scene_path[1200];
 
 static void find_scene(void) {
-  const char *env = getenv("APPELL_SOURCE_DIR");
   char dir[1024];
-  snprintf(dir, sizeof dir, "%s", env ? env : __FILE__);
-  if (!env) {
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0', slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-  }
+  ct_find_source(dir, sizeof dir);
   snprintf(scene_path, sizeof scene_path, "%s/examples/scenes/rolling_disk.yaml", dir);
 }
 

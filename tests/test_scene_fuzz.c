@@ -14,6 +14,7 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "clitest.h"
 
 #define TRUNCATIONS 25
 #define MUTATIONS 50
@@ -115,14 +116,7 @@ int main(void) {
                                        "chaplygin_sleigh.yaml", "turntable_ball.yaml",
                                        "hoffmann.yaml", "rattleback.yaml", "heavy_top.yaml"};
   char dir[1024];
-  const char *env = getenv("APPELL_SOURCE_DIR");
-  snprintf(dir, sizeof dir, "%s", env ? env : __FILE__);
-  if (!env) {
-    char *slash = strrchr(dir, '/');
-    if (slash) *slash = '\0', slash = strrchr(dir, '/');
-    if (slash) *slash = '\0';
-    else snprintf(dir, sizeof dir, ".");
-  }
+  ct_find_source(dir, sizeof dir);
   strncat(dir, "/examples/scenes", sizeof dir - strlen(dir) - 1);
   for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) fuzz_scene(dir, scenes[i]);
   return ap_check_finish("test_scene_fuzz");
