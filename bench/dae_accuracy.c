@@ -91,29 +91,17 @@ static void table(problem *p) {
 }
 
 int main(void) {
-  problem p[6];
+  static const double t_end[BS_DAE_CASES] = {10.0, 2.0, 10.0, 10.0, 10.0, 5.0};
+  problem p[BS_DAE_CASES];
   memset(p, 0, sizeof p);
-  bs_disk dp = bs_disk_default();
-  p[0].name = "rolling disk", p[0].m = bs_disk_model(&dp), p[0].t_end = 10.0;
-  if (p[0].m) bs_disk_state(p[0].m, NULL, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, p[0].q0, p[0].v0);
-  p[1].name = "rattleback", p[1].m = bs_rattleback_model(0.1), p[1].t_end = 2.0;
-  if (p[1].m) bs_rattleback_state(p[1].m, NULL, 0.02, 5.0, p[1].q0, p[1].v0);
-  static rs_turntable tp = {1.2, 0.3, 0.4, 1.1, 0.25};
-  double t5[5];
-  p[2].name = "ball on turntable", p[2].m = bs_turntable_model(&tp), p[2].t_end = 10.0;
-  rs_turntable_initial(&tp, 0.5, -0.2, 1.0, 2.0, 3.0, t5, p[2].v0);
-  p[2].q0[0] = t5[0], p[2].q0[1] = t5[1], p[2].q0[2] = 1.0;
-  const double I[3] = {2e-3, 3e-3, 4.5e-3}, pq[4] = {0.9, 0.2, -0.3, 0.1}, w[3] = {1, -2, 3};
-  p[3].name = "Chaplygin ball", p[3].m = bs_chaplygin_ball_model(1.0, 0.1, I);
-  p[3].t_end = 10.0;
-  if (p[3].m) bs_chaplygin_ball_state(p[3].m, NULL, pq, w, p[3].q0, p[3].v0);
-  rs_hoffmann hp = bs_hoffmann_params();
-  p[4].name = "Hoffmann sliding", p[4].m = bs_hoffmann_tree(&hp, 1, 0.3), p[4].t_end = 10.0;
-  if (p[4].m) bs_hoffmann_sliding_state(p[4].m, p[4].q0, p[4].v0, NULL);
-  p[5].name = "Hoffmann hinge", p[5].m = bs_hoffmann_primitive(&hp), p[5].t_end = 5.0;
-  bs_hoffmann_primitive_state(&hp, 0.3, -0.5, 0.5, 0.6, p[5].q0, p[5].v0);
+  bs_case c[BS_DAE_CASES];
+  bs_dae_cases(c);
+  for (int i = 0; i < BS_DAE_CASES; i++) {
+    p[i].name = c[i].name, p[i].m = c[i].m, p[i].t_end = t_end[i];
+    memcpy(p[i].q0, c[i].q0, sizeof p[i].q0), memcpy(p[i].v0, c[i].v0, sizeof p[i].v0);
+  }
   printf("max |x - xref| / (rtol |x|max + atol) over q and v, and steps, per requested rtol\n");
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < BS_DAE_CASES; i++) {
     if (p[i].m) table(&p[i]);
     ap_model_free(p[i].m);
   }

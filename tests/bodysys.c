@@ -445,3 +445,25 @@ void bs_chaplygin_ball_momentum(double mass, double a, const double I[3], const 
   for (int i = 0; i < 3; i++) K[i] = R[i] * Iw[0] + R[i + 3] * Iw[1] + R[i + 6] * Iw[2];
   K[0] += -mass * a * v[1], K[1] += mass * a * v[0];   /* m (G - P) x v_G = m a e_z x v_G */
 }
+
+void bs_dae_cases(bs_case c[BS_DAE_CASES]) {
+  memset(c, 0, sizeof(bs_case) * BS_DAE_CASES);
+  bs_disk dp = bs_disk_default();
+  c[0].name = "rolling disk", c[0].m = bs_disk_model(&dp);
+  if (c[0].m) bs_disk_state(c[0].m, NULL, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, c[0].q0, c[0].v0);
+  c[1].name = "rattleback", c[1].m = bs_rattleback_model(0.1);
+  if (c[1].m) bs_rattleback_state(c[1].m, NULL, 0.02, 5.0, c[1].q0, c[1].v0);
+  static rs_turntable tp = {1.2, 0.3, 0.4, 1.1, 0.25};   /* the model keeps a pointer to it */
+  double t5[5];
+  c[2].name = "ball on turntable", c[2].m = bs_turntable_model(&tp);
+  rs_turntable_initial(&tp, 0.5, -0.2, 1.0, 2.0, 3.0, t5, c[2].v0);
+  c[2].q0[0] = t5[0], c[2].q0[1] = t5[1], c[2].q0[2] = 1.0;
+  const double I[3] = {2e-3, 3e-3, 4.5e-3}, p[4] = {0.9, 0.2, -0.3, 0.1}, w[3] = {1, -2, 3};
+  c[3].name = "Chaplygin ball", c[3].m = bs_chaplygin_ball_model(1.0, 0.1, I);
+  if (c[3].m) bs_chaplygin_ball_state(c[3].m, NULL, p, w, c[3].q0, c[3].v0);
+  rs_hoffmann hp = bs_hoffmann_params();
+  c[4].name = "Hoffmann sliding", c[4].m = bs_hoffmann_tree(&hp, 1, 0.3);
+  if (c[4].m) bs_hoffmann_sliding_state(c[4].m, c[4].q0, c[4].v0, NULL);
+  c[5].name = "Hoffmann hinge", c[5].m = bs_hoffmann_primitive(&hp);
+  bs_hoffmann_primitive_state(&hp, 0.3, -0.5, 0.5, 0.6, c[5].q0, c[5].v0);
+}

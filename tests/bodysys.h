@@ -165,4 +165,16 @@ int bs_chaplygin_ball_state(const ap_model *m, ap_data *d, const double p[4], co
 void bs_chaplygin_ball_momentum(double mass, double a, const double I[3], const double q[6],
                                 const double v[5], double K[3]);
 
+/* The six models of the DAE accuracy table (tests/test_dae_tight.c, bench/dae_accuracy.c), each
+ * with its initial state: rolling disk, rattleback, ball on a turntable, Chaplygin's ball,
+ * Hoffmann's sliding rod (loop) and hinged rods (primitive, 2 loop rows). A model that cannot be
+ * built is NULL (and counted by bs_failures); free each with ap_model_free. */
+#define BS_DAE_CASES 6
+typedef struct bs_case {
+  const char *name;
+  ap_model *m;
+  double q0[8], v0[8];
+} bs_case;
+void bs_dae_cases(bs_case c[BS_DAE_CASES]);
+
 #endif

@@ -107,31 +107,18 @@ static void table_row(const scene *sc) {
 }
 
 static void test_table(void) {
-  scene sc[6];
-  memset(sc, 0, sizeof sc);
-  bs_disk dp = bs_disk_default();
-  sc[0].name = "rolling disk", sc[0].m = bs_disk_model(&dp), sc[0].t_end = 2.0;
-  if (sc[0].m) bs_disk_state(sc[0].m, NULL, 0.3, 0.25, 0.7, 0.4, 1.2, 7.0, sc[0].q0, sc[0].v0);
-  sc[1].name = "rattleback", sc[1].m = bs_rattleback_model(0.1), sc[1].t_end = 0.5;
-  if (sc[1].m) bs_rattleback_state(sc[1].m, NULL, 0.02, 5.0, sc[1].q0, sc[1].v0);
-  static rs_turntable tp = {1.2, 0.3, 0.4, 1.1, 0.25};
-  double t5[5];
-  sc[2].name = "ball on turntable", sc[2].m = bs_turntable_model(&tp), sc[2].t_end = 2.0;
-  rs_turntable_initial(&tp, 0.5, -0.2, 1.0, 2.0, 3.0, t5, sc[2].v0);
-  sc[2].q0[0] = t5[0], sc[2].q0[1] = t5[1], sc[2].q0[2] = 1.0;
-  const double I[3] = {2e-3, 3e-3, 4.5e-3}, p[4] = {0.9, 0.2, -0.3, 0.1}, w[3] = {1, -2, 3};
-  sc[3].name = "Chaplygin ball", sc[3].m = bs_chaplygin_ball_model(1.0, 0.1, I);
-  sc[3].t_end = 2.0;
-  if (sc[3].m) bs_chaplygin_ball_state(sc[3].m, NULL, p, w, sc[3].q0, sc[3].v0);
-  rs_hoffmann hp = bs_hoffmann_params();
-  sc[4].name = "Hoffmann sliding", sc[4].m = bs_hoffmann_tree(&hp, 1, 0.3), sc[4].t_end = 2.0;
-  if (sc[4].m) bs_hoffmann_sliding_state(sc[4].m, sc[4].q0, sc[4].v0, NULL);
-  sc[5].name = "Hoffmann hinge", sc[5].m = bs_hoffmann_primitive(&hp), sc[5].t_end = 1.0;
-  bs_hoffmann_primitive_state(&hp, 0.3, -0.5, 0.5, 0.6, sc[5].q0, sc[5].v0);
+  static const double t_end[BS_DAE_CASES] = {2.0, 0.5, 2.0, 2.0, 2.0, 1.0};
+  bs_case c[BS_DAE_CASES];
+  scene sc[BS_DAE_CASES];
+  bs_dae_cases(c);
+  for (int i = 0; i < BS_DAE_CASES; i++) {
+    sc[i].name = c[i].name, sc[i].m = c[i].m, sc[i].t_end = t_end[i];
+    memcpy(sc[i].q0, c[i].q0, sizeof sc[i].q0), memcpy(sc[i].v0, c[i].v0, sizeof sc[i].v0);
+  }
   printf("DAE against minimal (verner6, rtol 1e-13): max |dq| / (rtol |q| + atol), same for v\n"
          "%-18s %6s  %-11s %-11s %-11s %-11s %-11s %-11s %-11s\n", "", "", "1e-6", "1e-7",
          "1e-8", "1e-9", "1e-10", "1e-11", "1e-12");
-  for (int i = 0; i < 6; i++) {
+  for (int i = 0; i < BS_DAE_CASES; i++) {
     if (sc[i].m) table_row(&sc[i]);
     ap_model_free(sc[i].m);
   }
