@@ -76,4 +76,10 @@ const char *cli_out_name(const cli_out *o);   /* the path, or "standard output" 
 /* The subcommand its messages name ("run" unless set; appell sweep sets "sweep"). */
 void cli_out_command(const char *name);
 
+/* A file name gnuplot can take inside single quotes (no quotes, backslashes or newlines). */
+int cli_safe_name(const char *s);
+/* Run gnuplot on the script that script(g, user) writes; 0, or -1 with a message naming
+ * `appell CMD` (gnuplot missing, failing, or the pipe or fork failing). tools/gnuplot.c. */
+int cli_gnuplot(const char *cmd, void (*script)(FILE *g, const void *user), const void *user);
+
 #endif

@@ -98,8 +98,6 @@ int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
   return close_out(&o);
 }
 
-static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
-
 static void script(FILE *g, const char *fig, const char *csv, const char *param,
                    const ap_lin_sweep *sw, const char *title, const lin_opts *o) {
   const char *ext = strrchr(fig, '.');
@@ -126,41 +124,28 @@ static void script(FILE *g, const char *fig, const char *csv, const char *param,
   fprintf(g, "\n");
 }
 
+typedef struct lin_job {
+  const char *fig, *csv, *param;
+  const ap_lin_sweep *sw;
+  const char *title;
+  const lin_opts *o;
+} lin_job;
+
+static void lin_script(FILE *g, const void *user) {
+  const lin_job *j = user;
+  script(g, j->fig, j->csv, j->param, j->sw, j->title, j->o);
+}
+
 int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
              const char *title, const lin_opts *o) {
   const char *ext = strrchr(fig, '.');
   if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
     return fprintf(stderr, "appell linearize: --plot %s: the figure must end in .png or .svg\n",
                    fig), -1;
-  if (!safe_name(fig) || !safe_name(csv) || !safe_name(param) || !safe_name(title))
+  if (!cli_safe_name(fig) || !cli_safe_name(csv) || !cli_safe_name(param) ||
+      !cli_safe_name(title))
     return fprintf(stderr, "appell linearize: file names must not contain quotes, backslashes "
                    "or newlines\n"), -1;
-  int fd[2];
-  if (pipe(fd) != 0) return fprintf(stderr, "appell linearize: pipe: %s\n", strerror(errno)), -1;
-  pid_t pid = fork();
-  if (pid < 0) return fprintf(stderr, "appell linearize: fork: %s\n", strerror(errno)), -1;
-  if (pid == 0) {
-    dup2(fd[0], STDIN_FILENO);
-    close(fd[0]), close(fd[1]);
-    execlp("gnuplot", "gnuplot", (char *)NULL);
-    fprintf(stderr, "appell linearize: cannot run gnuplot (%s); install the Debian package "
-            "gnuplot-nox\n", strerror(errno));
-    _exit(127);
-  }
-  close(fd[0]);
-  FILE *g = fdopen(fd[1], "w");
-  if (g) {
-    script(g, fig, csv, param, sw, title, o);
-    fclose(g);
-  } else {
-    close(fd[1]);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 127)
-      fprintf(stderr, "appell linearize: gnuplot failed (status %d)\n", WEXITSTATUS(status));
-    return -1;
-  }
-  return 0;
+  lin_job job = {fig, csv, param, sw, title, o};
+  return cli_gnuplot("linearize", lin_script, &job);
 }

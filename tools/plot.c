@@ -105,8 +105,6 @@ static int column(const header *h, const char *csv, const char *name) {
   return 0;
 }
 
-static int safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
-
 static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   const char *ext = strrchr(o->out, '.');
   int svg = ext && strcmp(ext, ".svg") == 0;
@@ -125,38 +123,15 @@ static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   fprintf(g, "\n");
 }
 
-/* Run gnuplot with the script on its standard input. */
-static int gnuplot(const plot_opts *o, int xc, const int *yc) {
-  int fd[2];
-  if (pipe(fd) != 0) return fprintf(stderr, "appell plot: pipe: %s\n", strerror(errno)), 1;
-  pid_t pid = fork();
-  if (pid < 0) return fprintf(stderr, "appell plot: fork: %s\n", strerror(errno)), 1;
-  if (pid == 0) {
-    dup2(fd[0], STDIN_FILENO);
-    close(fd[0]), close(fd[1]);
-    int null = open("/dev/null", O_WRONLY);   /* never the figure on the terminal */
-    if (null >= 0) dup2(null, STDOUT_FILENO), close(null);
-    execlp("gnuplot", "gnuplot", (char *)NULL);
-    fprintf(stderr, "appell plot: cannot run gnuplot (%s); install the Debian package "
-            "gnuplot-nox\n", strerror(errno));
-    _exit(127);
-  }
-  close(fd[0]);
-  FILE *g = fdopen(fd[1], "w");
-  if (g) {
-    script(g, o, xc, yc);
-    fclose(g);
-  } else {
-    close(fd[1]);
-  }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 127)
-      fprintf(stderr, "appell plot: gnuplot failed (status %d)\n", WEXITSTATUS(status));
-    return EXIT_INTERNAL;
-  }
-  return EXIT_OK;
+typedef struct plot_job {
+  const plot_opts *o;
+  int xc;
+  const int *yc;
+} plot_job;
+
+static void plot_script(FILE *g, const void *user) {
+  const plot_job *j = user;
+  script(g, j->o, j->xc, j->yc);
 }
 
 /* The figure's directory exists and the figure is not a directory; else a message, exit 2. */
@@ -184,7 +159,7 @@ int cmd_plot(int argc, char **argv) {
   if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
     return fprintf(stderr, "appell plot: -o %s: the figure must end in .png or .svg\n", o.out),
            EXIT_INPUT;
-  if (!safe_name(o.csv) || !safe_name(o.out) || (o.title && !safe_name(o.title)))
+  if (!cli_safe_name(o.csv) || !cli_safe_name(o.out) || (o.title && !cli_safe_name(o.title)))
     return fprintf(stderr, "appell plot: file names and titles must not contain quotes, "
                    "backslashes or newlines\n"), EXIT_INPUT;
   if (check_figure(o.out) != EXIT_OK) return EXIT_INPUT;
@@ -194,7 +169,8 @@ int cmd_plot(int argc, char **argv) {
   if (code == EXIT_OK && !xc) code = EXIT_INPUT;
   for (int i = 0; code == EXIT_OK && i < o.ny; i++)
     if (!(yc[i] = column(&h, o.csv, o.y[i]))) code = EXIT_INPUT;
-  if (code == EXIT_OK) code = gnuplot(&o, xc, yc);
+  plot_job job = {&o, xc, yc};
+  if (code == EXIT_OK && cli_gnuplot("plot", plot_script, &job) != 0) code = EXIT_INTERNAL;
   if (code == EXIT_OK) printf("%s\n", o.out);
   free(h.line);
   return code;
