@@ -116,59 +116,66 @@ static void free_list(char **l) {
   free(l);
 }
 
-/* "initial.J.K=V" (or ".e=V" per entry of a sequence) for every JOINT: {KEY: VALUE}. */
-static int override_sets(const sc_node *n, ap_scene_lin *out) {
-  int count = 0;
-  for (int i = 0; n && i < n->n; i++)
-    for (int j = 0; j < n->kids[i]->n; j++) {
-      const sc_node *v = n->kids[i]->kids[j];
-      count += v->kind == SC_SEQ ? v->n : 1;
-    }
-  out->sets = calloc((size_t)count + 1, sizeof *out->sets);
-  if (!out->sets) return AP_ERR_NOMEM;
+/* Every entry of a map JOINT: {KEY: VALUE or [VALUES]} as its path "initial.J.K" (".e" added
+ * per entry of a sequence, e.g. omega: [0, 0, 1]) and its value node, passed to f (counted
+ * only, when f is NULL). *count: the entries; the first status of f that is not AP_OK. */
+typedef int (*entry_fn)(const char *path, const sc_node *value, void *user);
+
+static int each_entry(const sc_node *n, entry_fn f, void *user, int *count) {
+  *count = 0;
   for (int i = 0; n && i < n->n; i++) {
     const sc_node *m = n->kids[i];
     for (int j = 0; j < m->n; j++) {
       const sc_node *v = m->kids[j];
       int seq = v->kind == SC_SEQ, ne = seq ? v->n : 1;
-      for (int e = 0; e < ne; e++) {
-        char buf[512], idx[16] = "";
+      for (int e = 0; e < ne; e++, ++*count) {
+        char path[512], idx[16] = "";
         if (seq) snprintf(idx, sizeof idx, ".%d", e);
-        snprintf(buf, sizeof buf, "initial.%s.%s%s=%s", n->keys[i]->text, m->keys[j]->text, idx,
-                 seq ? v->kids[e]->text : v->text);
-        if (!(out->sets[out->nsets++] = strdup(buf))) return AP_ERR_NOMEM;
+        snprintf(path, sizeof path, "initial.%s.%s%s", n->keys[i]->text, m->keys[j]->text, idx);
+        int rc = f ? f(path, seq ? v->kids[e] : v, user) : AP_OK;
+        if (rc != AP_OK) return rc;
       }
     }
   }
   return AP_OK;
 }
 
-/* "initial.J.K" (or ".e" per entry of a sequence, e.g. omega: [0, 0, 1]) and coefficients. */
+static int add_set(const char *path, const sc_node *value, void *user) {
+  ap_scene_lin *out = user;
+  char buf[1024];
+  snprintf(buf, sizeof buf, "%s=%s", path, value->text);
+  return (out->sets[out->nsets++] = strdup(buf)) ? AP_OK : AP_ERR_NOMEM;
+}
+
+/* "initial.J.K=V" for every entry of the section's initial: map (overrides of the guess). */
+static int override_sets(const sc_node *n, ap_scene_lin *out) {
+  int count;
+  each_entry(n, NULL, NULL, &count);
+  out->sets = calloc((size_t)count + 1, sizeof *out->sets);
+  return out->sets ? each_entry(n, add_set, out, &count) : AP_ERR_NOMEM;
+}
+
+typedef struct speed_job {
+  sc_ctx *c;
+  ap_scene_lin *out;
+} speed_job;
+
+static int add_speed(const char *path, const sc_node *value, void *user) {
+  speed_job *j = user;
+  ap_scene_lin *out = j->out;
+  if (sc_number(j->c, value, &out->speed_coef[out->nspeed])) return AP_ERR_ARG;
+  return (out->speed_keys[out->nspeed++] = strdup(path)) ? AP_OK : AP_ERR_NOMEM;
+}
+
+/* "initial.J.K" and its coefficient for every entry of the section's speed: map. */
 static int speed_keys(sc_ctx *c, const sc_node *n, ap_scene_lin *out) {
-  int count = 0;
-  for (int i = 0; n && i < n->n; i++)
-    for (int j = 0; j < n->kids[i]->n; j++) {
-      const sc_node *v = n->kids[i]->kids[j];
-      count += v->kind == SC_SEQ ? v->n : 1;
-    }
+  int count;
+  each_entry(n, NULL, NULL, &count);
   out->speed_keys = calloc((size_t)count + 1, sizeof *out->speed_keys);
   out->speed_coef = calloc((size_t)count + 1, sizeof *out->speed_coef);
   if (!out->speed_keys || !out->speed_coef) return AP_ERR_NOMEM;
-  for (int i = 0; n && i < n->n; i++) {
-    const sc_node *m = n->kids[i];
-    for (int j = 0; j < m->n; j++) {
-      const sc_node *v = m->kids[j];
-      int seq = v->kind == SC_SEQ, ne = seq ? v->n : 1;
-      for (int e = 0; e < ne; e++) {
-        char buf[512], idx[16] = "";
-        if (seq) snprintf(idx, sizeof idx, ".%d", e);
-        snprintf(buf, sizeof buf, "initial.%s.%s%s", n->keys[i]->text, m->keys[j]->text, idx);
-        if (sc_number(c, seq ? v->kids[e] : v, &out->speed_coef[out->nspeed])) return AP_ERR_ARG;
-        if (!(out->speed_keys[out->nspeed++] = strdup(buf))) return AP_ERR_NOMEM;
-      }
-    }
-  }
-  return AP_OK;
+  speed_job job = {c, out};
+  return each_entry(n, add_speed, &job, &count);
 }
 
 int ap_scene_get_linearize(const ap_scene *sc, ap_scene_lin *out, char *msg, size_t msg_len) {
