@@ -130,8 +130,10 @@ int AP_SC(ap_data_create)(const ap_model *m, ap_data **out) {
   d->manifold_rtol = 1e-8;
   d->rank = 0, d->l = m->k;
   for (int i = 0; i < m->k; i++) d->perm[i] = i, d->B[i + (size_t)i * k] = 1.0;
+  /* N is n x k: its identity has min(n, k) ones (body models with quaternions have n > k and
+   * write N in their position stage). */
   if (!m->sys.kinematic)
-    for (int i = 0; i < m->n; i++) d->N[i + (size_t)i * n] = 1.0;
+    for (int i = 0; i < m->n && i < m->k; i++) d->N[i + (size_t)i * n] = 1.0;
   d->rcond_R = 1.0, d->rcond_G = 1.0;
   *out = d;
   return AP_OK;
