@@ -24,6 +24,12 @@ const char *cli_outcome(int status) {
   return status == AP_OK ? CLI_STATUS_OK : CLI_STATUS_FAILED;
 }
 
+void sweep_outcome_cells(FILE *f, int status) {
+  /* The batch records no events yet: when lib/batch reports a run's events, write them here
+   * as "NAME@T;NAME@T" (T with %.17g), quoted like the message. */
+  fprintf(f, ",%s,\"\"", cli_outcome(status));
+}
+
 /* Length of the well-formed UTF-8 sequence at s (1 to 4), or 0 when there is none. */
 static int utf8_len(const unsigned char *s) {
   int n = s[0] < 0x80 ? 1 : s[0] >= 0xC2 && s[0] <= 0xDF ? 2 : s[0] >= 0xE0 && s[0] <= 0xEF ? 3

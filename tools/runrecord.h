@@ -68,5 +68,7 @@ int cli_record_read(const char *path, cli_record_info *info);
 
 /* A sweep row's outcome word for a run's status (AP_OK: ok; a failure: failed). */
 const char *cli_outcome(int status);
+/* A sweep row's outcome and events cells (",ok,\"\"") after its status. */
+void sweep_outcome_cells(FILE *f, int status);
 
 #endif
