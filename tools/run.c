@@ -235,10 +235,10 @@ static int loop(run_state *rs, cli_out *out) {
     rc = ap_sim_advance(rs->sim, t);
     if (rc == AP_ERR_INTERRUPTED && cli_interrupted()) break;
     if (rc != AP_OK) {
-      int code = failed(rs, rc, t, "the simulation failed");
-      /* A last row where it stopped (the last accepted step), past the last output time. */
-      if (ap_sim_time(rs->sim) > rs->t_last) write_row(rs, out->f);
-      return cli_out_failed(out) ? write_failed(rs, out) : code;
+      /* The rows end at the last output time reached: after a failure inside an advance the
+       * simulation's time is where the integrator gave up (the record's t) but its q and v
+       * may still be those of the last output time, so no row is made there. */
+      return failed(rs, rc, t, "the simulation failed");
     }
     rc = write_row(rs, out->f);
     if (cli_out_failed(out)) return write_failed(rs, out);
@@ -254,7 +254,8 @@ static int loop(run_state *rs, cli_out *out) {
              cli_signal_name(sig), ap_sim_time(rs->sim));
     fprintf(stderr, "%s\n", rs->message);
     rs->status = CLI_STATUS_INTERRUPTED;
-    if (ap_sim_time(rs->sim) > rs->t_last) write_row(rs, out->f);   /* where it stopped */
+    /* A row where it stopped: an interrupted advance leaves q and v at that step. */
+    if (ap_sim_time(rs->sim) > rs->t_last) write_row(rs, out->f);
     return cli_out_failed(out) ? write_failed(rs, out) : EXIT_SIGNAL(sig);
   }
   if (rc != AP_OK) return failed(rs, rc, ap_sim_time(rs->sim), "output failed");

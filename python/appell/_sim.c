@@ -200,8 +200,9 @@ static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) 
     r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
     if (r->rc == AP_OK) r->rc = record(s, r);
   }
-  /* Stopped early (a failure, a signal): a last row where it stopped, as appell run writes. */
-  if ((r->rc != AP_OK || r->interrupted) && r->done > 0 && r->done < r->rows &&
+  /* Stopped by a signal: a last row where it stopped, as appell run writes (an interrupted
+   * advance leaves q and v at that step; a failed one may not, so a failure gets none). */
+  if (r->interrupted && r->done > 0 && r->done < r->rows &&
       ap_sim_time(s->sim) > r->table[(size_t)(r->done - 1) * (size_t)r->nc])
     record(s, r);
   PyEval_RestoreThread(ts);
