@@ -6,8 +6,10 @@
  * t0 + i * interval up to t_end -> summary on stderr. A terminating signal is seen between
  * internal steps (the simulation polls cli_interrupted) and a failed write after the row.
  * Invariant: with --out naming a regular file, rows go to a temporary file beside the target,
- * renamed over it only after the last row; any failure or interruption removes the temporary
- * file, so a file at the target path is always complete. */
+ * renamed over it after the last row, with the run record (OUT.run.json, tools/runrecord.c)
+ * renamed beside it: a run that reached t_end, failed (exit 3) or was stopped by a signal
+ * (128 + N) keeps every row up to where it stopped and says why; a failed write or a second
+ * signal removes the temporary files, so a file at the target path is always complete. */
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -32,7 +34,9 @@ static const char help[] =
     "\n"
     "options:\n"
     "  --out FILE.csv     write the CSV to FILE.csv (default or -: standard output); a\n"
-    "                     regular file appears only when the run succeeds, a FIFO or a\n"
+    "                     regular file appears when the run ends, with every row up to\n"
+    "                     where it ended (also after a failure or a signal) and the run\n"
+    "                     record FILE.csv.run.json saying how (docs/cli.md); a FIFO or a\n"
     "                     device is written in place; a directory or the scene is refused\n"
     "  --set PATH=VALUE   override a scalar of the scene by its dotted key path, e.g.\n"
     "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
