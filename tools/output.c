@@ -15,20 +15,18 @@
  * handler through sigaction (never reset on delivery). The first one of those that arrive
  * asynchronously (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGXFSZ, ...) is recorded, the run
  * stops at the next internal step (cli_interrupted, polled by the library through
- * ap_sim_set_poll); a second one removes the temporary files at once and exits 128 + the signal (repeats of SIGXFSZ and SIGPIPE, which failed writes raise,
- * do not count: the failed write is reported instead). A fault (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP,
- * SIGSYS) removes the temporary file and re-raises with the handler that was there before.
+ * ap_sim_set_poll); a second one removes the temporary files at once and exits 128 + the
+ * signal (repeats of SIGXFSZ and SIGPIPE, which failed writes raise, do not count: the failed
+ * write is reported instead). A fault (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP,
+ * SIGSYS) removes the temporary files and re-raises with the handler that was there before.
  * SIGKILL cannot be caught: its temporary file stays, and the next run to the same target
  * removes it when the process named in it no longer exists (and the file is a regular file
  * of this user). Invariant: a file at the target path is complete (every row up to where the
  * run stopped), never a fragment cut by a failed write. */
 #include <errno.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <appell/outfile.h>

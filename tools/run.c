@@ -145,6 +145,7 @@ typedef struct run_state {
   long rows;
   int progress;
   const char *status;      /* how the run ended (CLI_STATUS_*); NULL after a failed write */
+  int quiet_events;        /* --quiet: no line for a stop event */
   const char *error;       /* ap_strerror of the failure, or NULL */
   char message[4096];      /* what stopped it, as printed on stderr */
 } run_state;
@@ -228,6 +229,22 @@ static int write_failed(run_state *rs, const cli_out *out) {
   return out->err == EPIPE ? EXIT_SIGNAL(SIGPIPE) : EXIT_INTERNAL;
 }
 
+/* An advance that returned before its output time because a stop event fired (its row, at
+ * the event time, is written): the run ends there with exit 0, the record saying "event".
+ * The events come from cli_run_events (tools/runrecord.c), where the library's are connected;
+ * until then no run stops this way. */
+static int stopped_by_event(run_state *rs) {
+  cli_event ev[64];
+  int n = cli_run_events(rs->sim, ev, 64);
+  const cli_event *last = n > 0 ? &ev[n > 64 ? 63 : n - 1] : NULL;
+  if (!last || strcmp(last->action, "stop") != 0) return 0;
+  snprintf(rs->message, sizeof rs->message, "appell run: stopped by event '%s' at t = %.10g",
+           last->name, last->t);
+  if (!rs->quiet_events) fprintf(stderr, "%s%s\n", rs->progress ? "\r\033[K" : "", rs->message);
+  rs->status = CLI_STATUS_EVENT;
+  return 1;
+}
+
 static int loop(run_state *rs, cli_out *out) {
   long nrows = (long)ceil((rs->run.t_end - rs->run.t0) / rs->run.interval - 1e-9);
   if (nrows < 1) nrows = 1;   /* an interval past t_end: still the row at t_end (t_end > t0) */
@@ -246,6 +263,7 @@ static int loop(run_state *rs, cli_out *out) {
     }
     rc = write_row(rs, out->f);
     if (cli_out_failed(out)) return write_failed(rs, out);
+    if (rc == AP_OK && ap_sim_time(rs->sim) < t && stopped_by_event(rs)) return EXIT_OK;
     if (rs->progress && (now() - last_draw > 0.1 || i == nrows)) {
       progress(rs, t, 0);
       last_draw = now();
@@ -351,8 +369,13 @@ static int finish(run_state *rs, const run_opts *o, cli_out *out, cli_out *rec, 
   int recorded = keep && rec->kind == CLI_OUT_FILE && cli_out_open(rec) == EXIT_OK;
   if (recorded) fill_record(rec->f, rs, o, code);
   int csv = cli_out_finish(out, code, keep);
-  if (!recorded) return rec->kind == CLI_OUT_FILE && keep && csv == code ? EXIT_INTERNAL : csv;
+  if (!recorded && rec->kind == CLI_OUT_FILE && keep && csv == code) {
+    unlink(rec->file.path);   /* an older record must not describe these rows */
+    return csv == EXIT_OK ? EXIT_INTERNAL : csv;
+  }
+  if (!recorded) return csv;
   int rc = cli_out_finish(rec, csv == code ? EXIT_OK : EXIT_INTERNAL, csv == code);
+  if (csv == code && rc != EXIT_OK) unlink(rec->file.path);   /* as above */
   return csv != code || rc == EXIT_OK || code != EXIT_OK ? csv : rc;
 }
 
@@ -378,6 +401,7 @@ int cmd_run(int argc, char **argv) {
   if (code == EXIT_OK) {
     ap_sim_set_poll(rs.sim, poll_signal, NULL);
     rs.progress = !o.quiet && isatty(STDERR_FILENO);
+    rs.quiet_events = o.quiet;
     double t_start = now();
     write_header(rs.sc, out.f);
     code = loop(&rs, &out);
