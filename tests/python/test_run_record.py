@@ -9,6 +9,7 @@ crash the interpreter runs in a subprocess."""
 
 import json
 import os
+import shutil
 import stat
 import subprocess
 import sys
@@ -21,7 +22,8 @@ import pytest
 import appell
 from conftest import BAD, SCENES, run_cli
 
-SQRT = {"joints.wheel.drive.angle": "sqrt(1.005 - t)"}   # not differentiable at t = 1.005
+DRIVE = "t*t + 0/step(1.005 - t)"            # t^2, then 0/0 (NaN) after t = 1.005
+NAN_DRIVE = {"joints.wheel.drive.angle": DRIVE}
 
 
 def _python(code, **kw):
@@ -43,12 +45,12 @@ def _no_temporaries(directory):
 
 def test_failed_run_keeps_rows_and_says_why():
     drive = BAD / "drive_abs.yaml"
-    ok = appell.Simulation(appell.load(drive, set=SQRT)).run(t_end=1, dt=0.01)
+    ok = appell.Simulation(appell.load(drive, set=NAN_DRIVE)).run(t_end=1, dt=0.01)
     assert ok.status == "ok" and ok.message == "" and ok.events == []
     with pytest.raises(appell.Error) as info:
-        appell.Simulation(appell.load(drive, set=SQRT)).run(t_end=2, dt=0.01)
+        appell.Simulation(appell.load(drive, set=NAN_DRIVE)).run(t_end=2, dt=0.01)
     r = info.value.result
-    assert r.status == "failed" and "the simulation failed at t = 1.00" in r.message
+    assert r.status == "failed" and "the simulation failed at t = 1" in r.message
     assert r.events == []
     assert len(r) == len(ok) == 101                        # every row up to the failure
     assert np.array_equal(r.table, ok.table)               # the same steps up to t = 1
@@ -56,7 +58,7 @@ def test_failed_run_keeps_rows_and_says_why():
 
 def test_cli_failure_record_reads_back(tmp_path):
     out = tmp_path / "fail.csv"
-    r = run_cli("run", BAD / "drive_abs.yaml", "--set", "joints.wheel.drive.angle=sqrt(1.005 - t)",
+    r = run_cli("run", BAD / "drive_abs.yaml", "--set", f"joints.wheel.drive.angle={DRIVE}",
                 "--t-end", "2", "--out", out, "--quiet", check=False)
     assert r.returncode == 3
     run = appell.read_run(out)
@@ -64,12 +66,13 @@ def test_cli_failure_record_reads_back(tmp_path):
     assert run.record == rec and run.status == rec["status"] == "failed"
     assert rec["exit_code"] == 3 and rec["rows"] == len(run) == 101
     assert rec["message"] == r.stderr.strip() == run.message
-    assert run.t[-1] == 1 and 1 < rec["t"] <= 1.005       # the last row, where it gave up
-    assert rec["overrides"] == ["joints.wheel.drive.angle=sqrt(1.005 - t)", "simulation.t_end=2"]
+    assert run.t[-1] == 1 and 1 <= rec["t"] <= 1.005      # the last row, where it gave up
+    assert "0 / 0 = nan" in rec["message"]                 # the expression, located
+    assert rec["overrides"] == [f"joints.wheel.drive.angle={DRIVE}", "simulation.t_end=2"]
     assert rec["settings"]["mode"] == "minimal" and rec["settings"]["t_end"] == 2
     # the Python run of the same scene has the same rows (15 digits in the CSV)
     with pytest.raises(appell.Error) as info:
-        appell.Simulation(appell.load(BAD / "drive_abs.yaml", set=SQRT)).run(t_end=2)
+        appell.Simulation(appell.load(BAD / "drive_abs.yaml", set=NAN_DRIVE)).run(t_end=2)
     assert np.allclose(info.value.result.table, run.table, rtol=1e-14, atol=1e-300)
     assert appell.read_run(tmp_path / "fail.csv.run.json").status == "failed"
 
@@ -204,3 +207,19 @@ def test_to_csv_on_dev_full_is_written_in_place():
     assert stat.S_ISCHR(after.st_mode) and after.st_rdev == before.st_rdev
     assert after.st_ino == before.st_ino
     assert not [n for n in os.listdir("/dev") if n.startswith("full.")]
+
+
+@pytest.mark.skipif(shutil.which("gnuplot") is None, reason="gnuplot (gnuplot-nox) is missing")
+def test_plot_says_how_the_run_ended(tmp_path):
+    out = tmp_path / "fail.csv"
+    r = run_cli("run", BAD / "drive_abs.yaml", "--set", f"joints.wheel.drive.angle={DRIVE}",
+                "--t-end", "2", "--out", out, "--quiet", check=False)
+    assert r.returncode == 3
+    run_cli("plot", out, "--y", "arm.angle", "-o", tmp_path / "a.svg")
+    svg = (tmp_path / "a.svg").read_text()
+    assert "failed at t = 1" in svg and "user callback reported failure" in svg
+    run_cli("plot", out, "--y", "arm.angle", "--title", "mine", "-o", tmp_path / "b.svg")
+    assert "failed at" not in (tmp_path / "b.svg").read_text()        # --title wins
+    (tmp_path / "fail.csv.run.json").write_text('{"format": "appell run record 1", "status": ')
+    run_cli("plot", out, "--y", "arm.angle", "-o", tmp_path / "c.svg")  # not a record: ignored
+    assert "failed at" not in (tmp_path / "c.svg").read_text()
