@@ -82,5 +82,6 @@ ap_system_def sysdef(int n, int k, int b);
 /* The two halves of the cases, in registration order. */
 void api_cases_low(void);
 void api_cases_high(void);
+void api_cases_io(void);      /* api_cases_io.c: output files (outfile.h) */
 
 #endif

@@ -63,11 +63,26 @@ int ct_wait(pid_t pid) {
 
 int ct_run(const char *const *argv) { return ct_wait(ct_spawn(argv, NULL, NULL, NULL)); }
 
-int ct_log_has(const char *what) {
+int ct_file_has(const char *path, const char *what) {
   static char buf[1 << 16];
-  FILE *f = fopen(ct_log, "r");
+  FILE *f = fopen(path, "r");
   size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
   if (f) fclose(f);
   buf[n] = '\0';
-  return strstr(buf, what) != NULL;
+  return f && strstr(buf, what) != NULL;
+}
+
+int ct_log_has(const char *what) { return ct_file_has(ct_log, what); }
+
+int ct_record_has(const char *csv, const char *what) {
+  char path[1300];
+  snprintf(path, sizeof path, "%s.run.json", csv);
+  return ct_file_has(path, what);
+}
+
+void ct_remove_run(const char *csv) {
+  char path[1300];
+  snprintf(path, sizeof path, "%s.run.json", csv);
+  unlink(csv);
+  unlink(path);
 }

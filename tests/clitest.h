@@ -33,7 +33,12 @@ pid_t ct_spawn(const char *const *argv, const char *out_file, ct_setup_fn setup,
 int ct_wait(pid_t pid);
 /* ct_spawn + ct_wait. */
 int ct_run(const char *const *argv);
-/* Does the log contain what? */
+/* Does the log contain what? Does the file at path (the first 64 kB)? */
 int ct_log_has(const char *what);
+int ct_file_has(const char *path, const char *what);
+/* Does the run record of `appell run --out csv` (csv.run.json) contain what? */
+int ct_record_has(const char *csv, const char *what);
+/* Remove csv and its run record. */
+void ct_remove_run(const char *csv);
 
 #endif

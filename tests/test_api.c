@@ -76,6 +76,7 @@ int id, given[8];
 static void all_cases(void) {
   api_cases_low();
   api_cases_high();
+  api_cases_io();
 }
 
 /* ---- fixtures ------------------------------------------------------------------------------ */

@@ -4,8 +4,9 @@
  * temporary output file exists, it gets SIGHUP, SIGQUIT, SIGTERM twice, SIGXFSZ (sent), or
  * SIGINT during one long output interval whose steps would run into max_steps. Each must end
  * the run with exit 128 + the signal and "interrupted by SIG..." (SIGINT: 130, not the
- * max_steps failure), and leave no temporary file. A real SIGXFSZ (a file size limit) is a
- * failed write: exit 1, "File too large", nothing left. SIGKILL leaves its temporary file;
+ * max_steps failure), leave no temporary file, and keep the rows so far (the row at t0) with
+ * a run record saying "interrupted"; a second signal (SIGTERM twice) leaves nothing. A real
+ * SIGXFSZ (a file size limit) is a failed write: exit 1, "File too large", nothing left. SIGKILL leaves its temporary file;
  * the next run to the same target removes it and says so, and keeps one whose process lives.
  *
  * Targets: a directory is refused before anything is simulated (a scene that would fail
@@ -79,6 +80,15 @@ static void test_signal(int sig, int twice, const char *name) {
   snprintf(what, sizeof what, "interrupted by %s", name);
   AP_CHECK(twice || ct_log_has(what));
   if (code != 128 + sig) fprintf(stderr, "  %s: exit %d\n", name, code);
+  AP_CHECK_EQ_INT(files_like("long.csv.appell-tmp."), 0);
+  if (!twice) {   /* the rows so far: at t0 and where it stopped; the record says why */
+    AP_CHECK(ct_file_has(out, "t,disk.x,") && ct_record_has(out, "\"status\": \"interrupted\"") &&
+             ct_record_has(out, what) && ct_record_has(out, "\"rows\": 2,"));
+    char code_text[32];
+    snprintf(code_text, sizeof code_text, "\"exit_code\": %d,", 128 + sig);
+    AP_CHECK(ct_record_has(out, code_text));
+  }
+  ct_remove_run(out);
   AP_CHECK_EQ_INT(files_like("long.csv"), 0);
 }
 
@@ -114,7 +124,7 @@ static void test_signals(void) {
   AP_CHECK_EQ_INT(files_like("long.csv.appell-tmp."), 1);   /* the live one */
   AP_CHECK_EQ_INT(access(live, F_OK), 0);
   unlink(live);
-  unlink(out);
+  ct_remove_run(out);
 }
 
 /* ---- targets -------------------------------------------------------------------------------- */
@@ -158,7 +168,8 @@ static void test_targets(void) {
   struct stat st;
   AP_CHECK(lstat(alias, &st) == 0 && S_ISLNK(st.st_mode));
   AP_CHECK_EQ_INT(strncmp(first_line(out), "t,disk.x,", 9), 0);
-  unlink(alias), unlink(out);
+  AP_CHECK(ct_record_has(alias, "\"status\": \"ok\""));   /* beside the name given */
+  ct_remove_run(alias), unlink(out);
   /* A link to a device, and a FIFO: written in place. (/dev/zero rather than /dev/null,
    * which other programs on a shared machine use: its identity is checked before and after.) */
   struct stat dev;
@@ -235,10 +246,10 @@ static void test_full_and_modes(void) {
   chmod(out, 0640);   /* a file that exists keeps its permissions */
   AP_CHECK_EQ_INT(ct_wait(ct_spawn(argv, NULL, set_umask, (void *)(size_t)0)), 0);
   AP_CHECK(stat(out, &st) == 0 && (st.st_mode & 0777) == 0640);
-  unlink(out);
+  ct_remove_run(out);
   AP_CHECK_EQ_INT(ct_wait(ct_spawn(argv, NULL, set_umask, (void *)(size_t)077)), 0);
   AP_CHECK(stat(out, &st) == 0 && (st.st_mode & 0777) == 0600);
-  unlink(out);
+  ct_remove_run(out);
 }
 
 int main(void) {

@@ -37,9 +37,9 @@ const char *cli_suggest(const char *word, const char *const *words, int count);
 
 /* ---- appell run's output target and signals (tools/output.c) ---- */
 
-#include <limits.h>
 #include <stdio.h>
-#include <sys/types.h>
+
+#include <appell/outfile.h>
 
 typedef enum cli_out_kind {
   CLI_OUT_STDOUT,          /* no --out, or "-" */
@@ -50,9 +50,7 @@ typedef enum cli_out_kind {
 typedef struct cli_out {
   cli_out_kind kind;
   const char *target;      /* --out as given */
-  char path[PATH_MAX];     /* the file written (links to regular files resolved) */
-  char tmp[PATH_MAX + 64]; /* CLI_OUT_FILE: PATH.appell-tmp.PID.XXXXXX */
-  mode_t mode;             /* permissions of the new file */
+  ap_outfile file;         /* DIRECT, FILE: the library's rules (include/appell/outfile.h) */
   FILE *f;
   int err;                 /* errno of the first failed write, or 0 */
 } cli_out;
@@ -72,6 +70,10 @@ int cli_out_failed(cli_out *o);
 /* Finish: on code EXIT_OK rename the temporary file over the target, else remove it; a
  * failed write is reported. Returns the exit code. */
 int cli_out_close(cli_out *o, int code);
+/* The same, renaming the temporary file over the target also when code is not EXIT_OK but
+ * keep is set (a run that failed or was interrupted keeps its rows); never after a failed
+ * write (the partial file is removed, exit 1 when code was EXIT_OK). */
+int cli_out_finish(cli_out *o, int code, int keep);
 const char *cli_out_name(const cli_out *o);   /* the path, or "standard output" */
 /* The subcommand its messages name ("run" unless set; appell sweep sets "sweep"). */
 void cli_out_command(const char *name);

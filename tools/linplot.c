@@ -8,10 +8,7 @@
  * draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
  * the same colour, with a vertical line at each characteristic point: the classic picture of
  * eigenvalues against speed. */
-#define _XOPEN_SOURCE 700   /* realpath */
-
 #include <errno.h>
-#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,54 +17,57 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <appell/outfile.h>
+
 #include "cli.h"
 #include "linearize.h"
 
-/* Output files are written to FILE.appell-tmp.PID and renamed over FILE only when complete,
- * so that no partial file is left as if it were whole. A target that exists and is not a
- * regular file is written in place (direct): renaming over /dev/null, run as root, would
- * replace the device with a regular file. */
+/* Output files follow appell run --out's rules (include/appell/outfile.h, lib/io/outfile.c):
+ * a regular file is written to FILE.appell-tmp.PID.XXXXXX and renamed over FILE only when
+ * complete, so that no partial file is left as if it were whole; a target that exists and is
+ * not a regular file is written in place (renaming over /dev/null, run as root, would replace
+ * the device with a regular file); a link to a regular file stays a link. */
 typedef struct out_file {
-  char target[4200];
-  char tmp[4300];
+  ap_outfile o;
   FILE *f;
-  int direct;
 } out_file;
 
 int lin_check_target(const char *opt, const char *file, const char *scene) {
-  struct stat st, sc;
-  if (strlen(file) > 4000)
-    return fprintf(stderr, "appell linearize: %s %s: the path is too long\n", opt, file), -1;
-  if (stat(file, &st) == 0 && S_ISDIR(st.st_mode))
-    return fprintf(stderr, "appell linearize: %s %s: is a directory; name a file\n", opt,
-                   file), -1;
-  if (stat(file, &st) == 0 && stat(scene, &sc) == 0 && st.st_dev == sc.st_dev &&
-      st.st_ino == sc.st_ino)
+  ap_outfile o;
+  char msg[AP_OUT_PATH_MAX + 300];
+  const char *keep[1] = {scene};
+  if (ap_out_check(&o, file, keep, 1, msg, sizeof msg) == AP_OK) return 0;
+  if (strstr(msg, ": is the input file "))
     return fprintf(stderr, "appell linearize: %s %s: is the scene file; refusing to overwrite "
                    "it\n", opt, file), -1;
-  return 0;
+  return fprintf(stderr, "appell linearize: %s %s\n", opt, msg), -1;
 }
 
 static FILE *open_out(out_file *o, const char *file) {
-  struct stat st;
-  char real[PATH_MAX];
-  snprintf(o->target, sizeof o->target, "%s", file);
-  o->direct = stat(file, &st) == 0 && !S_ISREG(st.st_mode);
-  if (!o->direct && lstat(file, &st) == 0 && S_ISLNK(st.st_mode) && realpath(file, real))
-    snprintf(o->target, sizeof o->target, "%s", real);   /* the link stays; its file is new */
-  snprintf(o->tmp, sizeof o->tmp, "%s.appell-tmp.%ld", o->target, (long)getpid());
-  o->f = fopen(o->direct ? o->target : o->tmp, "w");
-  if (!o->f) fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
+  char msg[AP_OUT_PATH_MAX + 300];
+  o->f = NULL;
+  if (ap_out_check(&o->o, file, NULL, 0, msg, sizeof msg) != AP_OK ||
+      ap_out_open(&o->o, msg, sizeof msg) != AP_OK) {
+    fprintf(stderr, "appell linearize: %s\n", msg);
+    return NULL;
+  }
+  o->f = fdopen(o->o.fd, "w");
+  if (!o->f) {
+    fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
+    ap_out_finish(&o->o, 0, NULL, 0);
+  }
   return o->f;
 }
 
 static int close_out(out_file *o) {
   int bad = ferror(o->f) != 0;
-  bad |= fclose(o->f) != 0;
-  if (!bad && (o->direct || rename(o->tmp, o->target) == 0)) return 0;
-  fprintf(stderr, "appell linearize: cannot write %s: %s\n", o->target,
-          strerror(errno ? errno : EIO));
-  if (!o->direct) remove(o->tmp);
+  int err = bad ? errno : 0;
+  if (fclose(o->f) != 0 && !bad) bad = 1, err = errno;
+  o->o.fd = -1;   /* closed with the FILE */
+  char msg[2 * AP_OUT_PATH_MAX + 300];
+  if (bad) snprintf(msg, sizeof msg, "%s: %s", o->o.path, strerror(err ? err : EIO));
+  if (ap_out_finish(&o->o, !bad, msg, sizeof msg) == AP_OK && !bad) return 0;
+  fprintf(stderr, "appell linearize: cannot write %s\n", msg);
   return -1;
 }
 

@@ -1,48 +1,62 @@
 /* appell run: where the CSV goes, and what a signal does to it (docs/cli.md, "Output files and
  * signals").
  *
- * The target is checked before anything is simulated: standard output ("-" or no --out), a
- * FIFO or a device (a symbolic link is followed) are written in place; a directory, a dangling
- * link or the scene file itself (same device and inode, whatever the name) are refused; a
- * regular file (new, or an existing one, through a link too) is written as a temporary file
- * beside it, named FILE.appell-tmp.PID.XXXXXX, and renamed over it after the last row. The
- * new file gets the permissions of the file it replaces, or 0666 minus the umask.
+ * The target is checked before anything is simulated, by the library's rules (lib/io/outfile.c,
+ * include/appell/outfile.h; the Python package uses the same): standard output ("-" or no
+ * --out), a FIFO or a device (a symbolic link is followed) are written in place; a directory,
+ * a dangling link or the scene file itself (same device and inode, whatever the name) are
+ * refused; a regular file (new, or an existing one, through a link too) is written as a
+ * temporary file beside it, named FILE.appell-tmp.PID.XXXXXX, and renamed over it after the
+ * last row (cli_out_finish with keep: also after a failed or interrupted run, whose rows up to
+ * where it stopped are kept, appell run's run record saying why). The new file gets the
+ * permissions of the file it replaces, or 0666 minus the umask.
  *
  * Signals: every signal whose default action ends the process and that can be caught gets a
  * handler through sigaction (never reset on delivery). The first one of those that arrive
  * asynchronously (SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGPIPE, SIGXFSZ, ...) is recorded, the run
  * stops at the next internal step (cli_interrupted, polled by the library through
- * ap_sim_set_poll) and removes its temporary file; a second one removes the temporary file at
- * once and exits 128 + the signal (repeats of SIGXFSZ and SIGPIPE, which failed writes raise,
- * do not count: the failed write is reported instead). A fault (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP,
- * SIGSYS) removes the temporary file and re-raises with the handler that was there before.
+ * ap_sim_set_poll); a second one removes the temporary files at once and exits 128 + the
+ * signal (repeats of SIGXFSZ and SIGPIPE, which failed writes raise, do not count: the failed
+ * write is reported instead). A fault (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP,
+ * SIGSYS) removes the temporary files and re-raises with the handler that was there before.
  * SIGKILL cannot be caught: its temporary file stays, and the next run to the same target
  * removes it when the process named in it no longer exists (and the file is a regular file
- * of this user). Invariant: a file at the target path is always complete. */
-#define _XOPEN_SOURCE 700   /* realpath */
-
-#include <dirent.h>
+ * of this user). Invariant: a file at the target path is complete (every row up to where the
+ * run stopped), never a fragment cut by a failed write. */
 #include <errno.h>
-#include <fcntl.h>
-#include <limits.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
-#include "cli.h"
+#include <appell/outfile.h>
 
-#define TMP_TAG ".appell-tmp."
+#include "cli.h"
 
 /* ---- signals ------------------------------------------------------------------------------ */
 
 static volatile sig_atomic_t caught = 0;    /* the first terminating signal, or 0 */
-static volatile sig_atomic_t armed = 0;     /* cleanup_path names a file to remove */
-static char cleanup_path[sizeof ((cli_out *)0)->tmp];
+/* The files being written (the CSV, the run record): their temporary files are removed by a
+ * second signal or a fault. A slot is set before the file is created and cleared after it is
+ * renamed or removed; o->tmp holds the complete name before the file exists. */
+#define CLEANUP_SLOTS 4
+static ap_outfile *volatile cleanup[CLEANUP_SLOTS];
 static struct sigaction previous[65];       /* the actions replaced for faults */
+
+static void remove_temporaries(void) {
+  for (int i = 0; i < CLEANUP_SLOTS; i++) {
+    ap_outfile *o = cleanup[i];
+    if (o && o->tmp[0]) unlink(o->tmp);
+  }
+}
+
+static void arm(ap_outfile *o, int on) {
+  for (int i = 0; i < CLEANUP_SLOTS; i++)
+    if (on ? !cleanup[i] : cleanup[i] == o) {
+      cleanup[i] = on ? o : NULL;
+      return;
+    }
+}
 
 /* SIGXFSZ and SIGPIPE come from our own writes, once per failed write (a file size limit, a
  * reader gone): the failed write is reported, and their repeats do not count as a second
@@ -56,14 +70,14 @@ static int from_writes(int sig) {
 
 static void on_signal(int sig) {
   if (caught && !from_writes(sig) && !from_writes(caught)) {
-    if (armed) unlink(cleanup_path);   /* the second one: do not wait for the run to notice */
+    remove_temporaries();   /* the second one: do not wait for the run to notice */
     _exit(128 + sig);
   }
   if (!caught) caught = sig;
 }
 
 static void on_fault(int sig) {
-  if (armed) unlink(cleanup_path);
+  remove_temporaries();
   if (sig > 0 && sig < 65) sigaction(sig, &previous[sig], NULL);
   raise(sig);   /* delivered when this handler returns, with the previous action */
 }
@@ -143,124 +157,55 @@ const char *cli_signal_name(int sig) {
   return other;
 }
 
-/* ---- the target --------------------------------------------------------------------------- */
-
-static int fail(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
+/* ---- the target (the rules: lib/io/outfile.c) -------------------------------------------- */
 
 /* The subcommand named in messages (appell sweep writes its table through these too). */
 static const char *command = "run";
 
 void cli_out_command(const char *name) { command = name; }
 
-static int fail(const char *fmt, ...) {
-  va_list ap;
-  va_start(ap, fmt);
-  fprintf(stderr, "appell %s: ", command);
-  vfprintf(stderr, fmt, ap);
-  fputc('\n', stderr);
-  va_end(ap);
-  return EXIT_INPUT;
-}
-
-/* The directory part of path ("." when there is none). */
-static void dir_of(const char *path, char *dir, size_t len) {
-  const char *slash = strrchr(path, '/');
-  if (!slash) snprintf(dir, len, ".");
-  else if (slash == path) snprintf(dir, len, "/");
-  else snprintf(dir, len, "%.*s", (int)(slash - path), path);
-}
-
 int cli_out_check(cli_out *o, const char *target, const char *scene) {
   memset(o, 0, sizeof *o);
-  mode_t mask = umask(0);
-  umask(mask);
-  o->mode = 0666 & ~mask;
+  o->file.fd = -1;
   if (!target || strcmp(target, "-") == 0) return o->kind = CLI_OUT_STDOUT, EXIT_OK;
   o->target = target;
-  struct stat st, sc;
-  if (strlen(target) >= PATH_MAX) return fail("--out %s: the path is too long", target);
-  snprintf(o->path, sizeof o->path, "%s", target);
-  if (lstat(target, &st) != 0) {
-    char dir[PATH_MAX];
-    dir_of(target, dir, sizeof dir);
-    if (errno != ENOENT || stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
-      return fail("--out %s: %s", target, errno == ENOENT ? "its directory does not exist"
-                                                           : strerror(errno));
-    return o->kind = CLI_OUT_FILE, EXIT_OK;
+  char msg[AP_OUT_PATH_MAX + 300];
+  const char *keep[1] = {scene};
+  if (ap_out_check(&o->file, target, keep, scene ? 1 : 0, msg, sizeof msg) != AP_OK) {
+    const char *input = strstr(msg, ": is the input file ");
+    if (input)   /* the only input is the scene */
+      fprintf(stderr, "appell %s: --out %s: is the scene file %s; refusing to overwrite it\n",
+              command, target, scene);
+    else
+      fprintf(stderr, "appell %s: --out %s\n", command, msg);
+    return EXIT_INPUT;
   }
-  int link = S_ISLNK(st.st_mode);
-  if (link && stat(target, &st) != 0)
-    return fail("--out %s: a symbolic link to a file that cannot be reached (%s)", target,
-                strerror(errno));
-  if (S_ISDIR(st.st_mode)) return fail("--out %s: is a directory; name a file", target);
-  if (scene && stat(scene, &sc) == 0 && sc.st_dev == st.st_dev && sc.st_ino == st.st_ino)
-    return fail("--out %s: is the scene file %s; refusing to overwrite it", target, scene);
-  if (!S_ISREG(st.st_mode)) return o->kind = CLI_OUT_DIRECT, EXIT_OK;
-  if (link && !realpath(target, o->path))
-    return fail("--out %s: cannot resolve the link: %s", target, strerror(errno));
-  o->mode = st.st_mode & 07777;
-  return o->kind = CLI_OUT_FILE, EXIT_OK;
-}
-
-/* Remove temporary files of earlier runs to the same path whose process is gone. */
-static void remove_stale(const cli_out *o) {
-  char dir[PATH_MAX], file[PATH_MAX + 300];
-  dir_of(o->path, dir, sizeof dir);
-  const char *base = strrchr(o->path, '/') ? strrchr(o->path, '/') + 1 : o->path;
-  size_t blen = strlen(base), tlen = strlen(TMP_TAG);
-  DIR *d = opendir(dir);
-  for (struct dirent *e; d && (e = readdir(d));) {
-    const char *n = e->d_name, *p = n + blen + tlen;
-    if (strncmp(n, base, blen) != 0 || strncmp(n + blen, TMP_TAG, tlen) != 0) continue;
-    char *end = NULL;
-    long pid = strtol(p, &end, 10);
-    if (end == p || pid <= 0 || *end != '.' || strlen(end + 1) != 6 || pid == (long)getpid())
-      continue;
-    if (kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;   /* alive, or not ours to ask */
-    struct stat st;
-    snprintf(file, sizeof file, "%s/%s", dir, n);
-    if (lstat(file, &st) != 0 || !S_ISREG(st.st_mode) || st.st_uid != geteuid()) continue;
-    if (unlink(file) == 0)
-      fprintf(stderr, "appell %s: removed %s, left by an earlier run (process %ld) that was "
-              "killed\n", command, file, pid);
-  }
-  if (d) closedir(d);
+  o->kind = o->file.kind == AP_OUT_FILE ? CLI_OUT_FILE : CLI_OUT_DIRECT;
+  return EXIT_OK;
 }
 
 int cli_out_open(cli_out *o) {
   if (o->kind == CLI_OUT_STDOUT) return o->f = stdout, EXIT_OK;
-  if (o->kind == CLI_OUT_DIRECT) {
-    int fd = open(o->path, O_WRONLY | O_NOCTTY);
-    o->f = fd >= 0 ? fdopen(fd, "w") : NULL;
-    if (!o->f) {
-      if (fd >= 0) close(fd);
-      return fail("cannot open %s for writing: %s", o->path, strerror(errno)), EXIT_INTERNAL;
-    }
-    return EXIT_OK;
+  char msg[AP_OUT_PATH_MAX + 300];
+  arm(&o->file, 1);
+  if (ap_out_open(&o->file, msg, sizeof msg) != AP_OK) {
+    arm(&o->file, 0);
+    return fprintf(stderr, "appell %s: %s\n", command, msg), EXIT_INTERNAL;
   }
-  remove_stale(o);
-  int n = snprintf(o->tmp, sizeof o->tmp, "%s" TMP_TAG "%ld.XXXXXX", o->path, (long)getpid());
-  if (n < 0 || (size_t)n >= sizeof o->tmp) return fail("--out %s: path too long", o->target);
-  memcpy(cleanup_path, o->tmp, (size_t)n + 1);
-  armed = 1;
-  int fd = mkstemp(cleanup_path);   /* the name is complete before the file exists */
-  memcpy(o->tmp, cleanup_path, (size_t)n + 1);
-  o->f = fd >= 0 && fchmod(fd, o->mode) == 0 ? fdopen(fd, "w") : NULL;
+  if (o->file.note[0]) fprintf(stderr, "appell %s: %s\n", command, o->file.note);
+  o->f = fdopen(o->file.fd, "w");
   if (!o->f) {
     int err = errno;
-    if (fd >= 0) close(fd), unlink(o->tmp);
-    armed = 0;
-    return fail("cannot create %s: %s", o->tmp, strerror(err)), EXIT_INTERNAL;
+    ap_out_finish(&o->file, 0, NULL, 0);
+    arm(&o->file, 0);
+    return fprintf(stderr, "appell %s: cannot write %s: %s\n", command, o->file.path,
+                   strerror(err)), EXIT_INTERNAL;
   }
   return EXIT_OK;
 }
 
 const char *cli_out_name(const cli_out *o) {
-  return o->kind == CLI_OUT_STDOUT ? "standard output" : o->path;
+  return o->kind == CLI_OUT_STDOUT ? "standard output" : o->file.path;
 }
 
 int cli_out_failed(cli_out *o) {
@@ -268,24 +213,28 @@ int cli_out_failed(cli_out *o) {
   return o->err;
 }
 
-int cli_out_close(cli_out *o, int code) {
+int cli_out_finish(cli_out *o, int code, int keep) {
   if (!o->f) return code;
   cli_out_failed(o);
   int rc = o->kind == CLI_OUT_STDOUT ? fflush(stdout) : fclose(o->f);
   if (rc != 0 && !o->err) o->err = errno ? errno : EIO;
   o->f = NULL;
+  o->file.fd = -1;   /* closed with the FILE */
   if (o->kind == CLI_OUT_STDOUT) clearerr(stdout);   /* reported here, not again at exit */
   if (o->err && o->err != EPIPE)
-    fprintf(stderr, "appell %s: writing %s failed: %s%s\n", command, cli_out_name(o), strerror(o->err),
-            o->kind == CLI_OUT_FILE ? " (the partial file is removed)" : "");
-  if (o->err && code == EXIT_OK) code = o->err == EPIPE ? 128 + SIGPIPE : EXIT_INTERNAL;
+    fprintf(stderr, "appell %s: writing %s failed: %s%s\n", command, cli_out_name(o),
+            strerror(o->err), o->kind == CLI_OUT_FILE ? " (the partial file is removed)" : "");
+  if (o->err && code == EXIT_OK)
+    code = o->err == EPIPE ? 128 + SIGPIPE : EXIT_INTERNAL;
   if (o->kind != CLI_OUT_FILE) return code;
-  if (code == EXIT_OK && rename(o->tmp, o->path) != 0) {
-    fprintf(stderr, "appell %s: cannot rename %s to %s: %s\n", command, o->tmp, o->path,
-            strerror(errno));
+  char msg[2 * AP_OUT_PATH_MAX + 300];
+  keep = !o->err && (code == EXIT_OK || keep);
+  if (ap_out_finish(&o->file, keep, msg, sizeof msg) != AP_OK) {
+    fprintf(stderr, "appell %s: %s\n", command, msg);
     code = EXIT_INTERNAL;
   }
-  if (code != EXIT_OK) unlink(o->tmp);
-  armed = 0;
+  arm(&o->file, 0);
   return code;
 }
+
+int cli_out_close(cli_out *o, int code) { return cli_out_finish(o, code, code == EXIT_OK); }

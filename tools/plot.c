@@ -5,8 +5,11 @@
  * -o) and waits for it. Columns are addressed by number in the script, so names need no
  * quoting; file names are refused if they contain a quote or a newline, and a figure whose
  * directory is missing, or that is a directory, before gnuplot runs (gnuplot would go on and
- * write the figure to its standard output, which is sent to /dev/null in any case). Exit 2 for
- * bad input, 1 when gnuplot is missing or fails. */
+ * write the figure to its standard output, which is sent to /dev/null in any case). When the
+ * CSV has a run record beside it (FILE.csv.run.json, tools/runrecord.h) saying the run did
+ * not reach its end, the figure says so: a title "failed at t = ...: MESSAGE" (unless --title
+ * is given) and, against t, a dashed vertical line where it stopped and one at each event.
+ * Exit 2 for bad input, 1 when gnuplot is missing or fails. */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -17,6 +20,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "runrecord.h"
 
 #define MAX_COLS 4096
 #define MAX_Y 16
@@ -40,6 +44,8 @@ static const char help[] =
 typedef struct plot_opts {
   const char *csv, *x, *y[MAX_Y], *out, *title;
   int ny, equal, logy;
+  int has_record;          /* rec read from CSV.run.json */
+  cli_record_info rec;
 } plot_opts;
 
 static int parse(int argc, char **argv, plot_opts *o) {
@@ -105,6 +111,40 @@ static int column(const header *h, const char *csv, const char *name) {
   return 0;
 }
 
+/* text (at most max bytes) as a gnuplot string in double quotes: a double quote becomes a
+ * single one, a backslash or a control character a space. */
+static void quoted(FILE *g, const char *text, size_t max) {
+  fputc('"', g);
+  for (size_t i = 0; text[i] && i < max; i++)
+    fputc(text[i] == '"' ? '\'' : text[i] == '\\' || (unsigned char)text[i] < 0x20 ? ' '
+                                                                                   : text[i], g);
+  fputs(max < strlen(text) ? "...\"" : "\"", g);
+}
+
+/* What the run record adds: how a run that did not reach t_end ended, and its events. */
+static void record_marks(FILE *g, const plot_opts *o) {
+  const cli_record_info *r = &o->rec;
+  int stopped = strcmp(r->status, CLI_STATUS_OK) != 0, against_t = strcmp(o->x, "t") == 0;
+  if (stopped && !o->title) {   /* "failed at t = 4.12715", then the cause on a second line */
+    const char *m = strncmp(r->message, "appell run: ", 12) == 0 ? r->message + 12 : r->message;
+    const char *at = strstr(m, " at t = "), *cause = at ? strstr(at, ": ") : NULL;
+    m = cause ? cause + 2 : m;
+    fprintf(g, "set title \"%s at t = %.6g\\n\" . ", r->status, r->t);
+    quoted(g, m, 100);
+    fputs(" font ',10'\n", g);
+  }
+  if (stopped && against_t)
+    fprintf(g, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 2 lw 2 lc rgb "
+            "'#c00000'\n", r->t, r->t);
+  for (int i = 0; against_t && i < r->nevents; i++) {
+    fprintf(g, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 3 lc rgb '#606060'\n",
+            r->event_t[i], r->event_t[i]);
+    fprintf(g, "set label %d ", i + 1);
+    quoted(g, r->event_name[i], 40);
+    fprintf(g, " at %.17g, graph 0.97 rotate by 90 right font ',9'\n", r->event_t[i]);
+  }
+}
+
 static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   const char *ext = strrchr(o->out, '.');
   int svg = ext && strcmp(ext, ".svg") == 0;
@@ -116,6 +156,7 @@ static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   if (o->title) fprintf(g, "set title '%s'\n", o->title);
   if (o->equal) fprintf(g, "set size ratio -1\n");
   if (o->logy) fprintf(g, "set logscale y\nset format y '%%.0e'\n");
+  if (o->has_record) record_marks(g, o);
   fprintf(g, "plot ");
   for (int i = 0; i < o->ny; i++)
     fprintf(g, "%s'%s' skip 1 using %d:%d with lines lw 2 title '%s'", i ? ", " : "", o->csv, xc,
@@ -165,6 +206,9 @@ int cmd_plot(int argc, char **argv) {
   if (check_figure(o.out) != EXIT_OK) return EXIT_INPUT;
   header h = {0};
   int code = read_header(o.csv, &h) == 0 ? EXIT_OK : EXIT_INPUT;
+  char record[4200];
+  if ((size_t)snprintf(record, sizeof record, "%s.run.json", o.csv) < sizeof record)
+    o.has_record = cli_record_read(record, &o.rec) == 0;
   int xc = code == EXIT_OK ? column(&h, o.csv, o.x) : 0, yc[MAX_Y];
   if (code == EXIT_OK && !xc) code = EXIT_INPUT;
   for (int i = 0; code == EXIT_OK && i < o.ny; i++)

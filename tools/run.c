@@ -6,8 +6,10 @@
  * t0 + i * interval up to t_end -> summary on stderr. A terminating signal is seen between
  * internal steps (the simulation polls cli_interrupted) and a failed write after the row.
  * Invariant: with --out naming a regular file, rows go to a temporary file beside the target,
- * renamed over it only after the last row; any failure or interruption removes the temporary
- * file, so a file at the target path is always complete. */
+ * renamed over it after the last row, with the run record (OUT.run.json, tools/runrecord.c)
+ * renamed beside it: a run that reached t_end, failed (exit 3) or was stopped by a signal
+ * (128 + N) keeps every row up to where it stopped and says why; a failed write or a second
+ * signal removes the temporary files, so a file at the target path is always complete. */
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -20,6 +22,7 @@
 #include <appell/appell.h>
 
 #include "cli.h"
+#include "runrecord.h"
 
 #define MAX_SETS 256
 
@@ -31,7 +34,9 @@ static const char help[] =
     "\n"
     "options:\n"
     "  --out FILE.csv     write the CSV to FILE.csv (default or -: standard output); a\n"
-    "                     regular file appears only when the run succeeds, a FIFO or a\n"
+    "                     regular file appears when the run ends, with every row up to\n"
+    "                     where it ended (also after a failure or a signal) and the run\n"
+    "                     record FILE.csv.run.json saying how (docs/cli.md); a FIFO or a\n"
     "                     device is written in place; a directory or the scene is refused\n"
     "  --set PATH=VALUE   override a scalar of the scene by its dotted key path, e.g.\n"
     "                     --set bodies.disk.mass=2 --set initial.disk.tilt=80*deg (repeatable)\n"
@@ -134,10 +139,15 @@ typedef struct run_state {
   ap_sim *sim;
   ap_scene_run run;
   double *buf, *row, E0, drift, wall;   /* buf: q0, v0, row */
+  double t_last;           /* time of the last row written */
   char *lift;              /* per column: 1 = a contact normal force (.contact.Fz) not yet
                               negative, 2 = warned about, 0 = another column */
   long rows;
   int progress;
+  const char *status;      /* how the run ended (CLI_STATUS_*); NULL after a failed write */
+  int quiet_events;        /* --quiet: no line for a stop event */
+  const char *error;       /* ap_strerror of the failure, or NULL */
+  char message[4096];      /* what stopped it, as printed on stderr */
 } run_state;
 
 static double now(void) {
@@ -170,6 +180,7 @@ static void warn_lift_off(run_state *rs, int nc) {
 static int write_row(run_state *rs, FILE *f) {
   int rc = ap_scene_output_row(rs->sc, rs->sim, rs->row), nc = ap_scene_output_count(rs->sc);
   if (rc != AP_OK) return rc;
+  rs->t_last = ap_sim_time(rs->sim);
   for (int i = 0; i < nc; i++) fprintf(f, i ? ",%.15g" : "%.15g", rs->row[i]);
   fputc('\n', f);
   warn_lift_off(rs, nc);
@@ -182,15 +193,28 @@ static int write_row(run_state *rs, FILE *f) {
 }
 
 /* A run that failed in a callback or on a NaN: name the scene expression that is not finite
- * where it failed (at the failing evaluation's time, or at the output time). */
-static void locate(const run_state *rs, int rc, double tout) {
+ * where it failed (at the failing evaluation's time, or at the output time), on stderr and
+ * after the message of the run record. */
+static void locate(run_state *rs, int rc, double tout) {
   char msg[1024];
   double when[2] = {ap_sim_data(rs->sim)->t, tout};
   for (int i = 0; i < 2 && (rc == AP_ERR_CALLBACK || rc == AP_ERR_NAN); i++)
     if (ap_scene_check_time(rs->sc, when[i], msg, sizeof msg) != AP_OK) {
       fprintf(stderr, "%s\n", msg);
+      size_t used = strlen(rs->message);
+      snprintf(rs->message + used, sizeof rs->message - used, "\n%s", msg);
       return;
     }
+}
+
+/* The run stopped at a failure (status rc): the message on stderr and in the record. */
+static int failed(run_state *rs, int rc, double tout, const char *what) {
+  snprintf(rs->message, sizeof rs->message, "appell run: %s at t = %.10g: %s: %s", what,
+           ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
+  fprintf(stderr, "%s%s\n", rs->progress ? "\r\033[K" : "", rs->message);
+  locate(rs, rc, tout);
+  rs->status = CLI_STATUS_FAILED, rs->error = ap_strerror(rc);
+  return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
 }
 
 /* The simulation's poll (ap_sim_set_poll): stop at a terminating signal. */
@@ -199,9 +223,26 @@ static int poll_signal(double t, void *user) {
   return cli_interrupted();
 }
 
-/* After a failed write: the message comes from cli_out_close. */
-static int write_failed(const cli_out *out) {
+/* After a failed write: the message comes from cli_out_close; the rows are not kept. */
+static int write_failed(run_state *rs, const cli_out *out) {
+  rs->status = NULL;
   return out->err == EPIPE ? EXIT_SIGNAL(SIGPIPE) : EXIT_INTERNAL;
+}
+
+/* An advance that returned before its output time because a stop event fired (its row, at
+ * the event time, is written): the run ends there with exit 0, the record saying "event".
+ * The events come from cli_run_events (tools/runrecord.c), where the library's are connected;
+ * until then no run stops this way. */
+static int stopped_by_event(run_state *rs) {
+  cli_event ev[64];
+  int n = cli_run_events(rs->sim, ev, 64);
+  const cli_event *last = n > 0 ? &ev[n > 64 ? 63 : n - 1] : NULL;
+  if (!last || strcmp(last->action, "stop") != 0) return 0;
+  snprintf(rs->message, sizeof rs->message, "appell run: stopped by event '%s' at t = %.10g",
+           last->name, last->t);
+  if (!rs->quiet_events) fprintf(stderr, "%s%s\n", rs->progress ? "\r\033[K" : "", rs->message);
+  rs->status = CLI_STATUS_EVENT;
+  return 1;
 }
 
 static int loop(run_state *rs, cli_out *out) {
@@ -209,19 +250,20 @@ static int loop(run_state *rs, cli_out *out) {
   if (nrows < 1) nrows = 1;   /* an interval past t_end: still the row at t_end (t_end > t0) */
   double last_draw = 0.0;
   int rc = write_row(rs, out->f);
-  if (cli_out_failed(out)) return write_failed(out);
+  if (cli_out_failed(out)) return write_failed(rs, out);
   for (long i = 1; rc == AP_OK && i <= nrows && !cli_interrupted(); i++) {
     double t = i == nrows ? rs->run.t_end : rs->run.t0 + (double)i * rs->run.interval;
     rc = ap_sim_advance(rs->sim, t);
     if (rc == AP_ERR_INTERRUPTED && cli_interrupted()) break;
     if (rc != AP_OK) {
-      fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
-              ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
-      locate(rs, rc, t);
-      return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
+      /* The rows end at the last output time reached: after a failure inside an advance the
+       * simulation's time is where the integrator gave up (the record's t) but its q and v
+       * may still be those of the last output time, so no row is made there. */
+      return failed(rs, rc, t, "the simulation failed");
     }
     rc = write_row(rs, out->f);
-    if (cli_out_failed(out)) return write_failed(out);
+    if (cli_out_failed(out)) return write_failed(rs, out);
+    if (rc == AP_OK && ap_sim_time(rs->sim) < t && stopped_by_event(rs)) return EXIT_OK;
     if (rs->progress && (now() - last_draw > 0.1 || i == nrows)) {
       progress(rs, t, 0);
       last_draw = now();
@@ -229,13 +271,18 @@ static int loop(run_state *rs, cli_out *out) {
   }
   if (rs->progress) progress(rs, rs->run.t_end, 1);
   int sig = cli_interrupted();
-  if (sig)
-    return fprintf(stderr, "appell run: interrupted by %s at t = %.10g\n", cli_signal_name(sig),
-                   ap_sim_time(rs->sim)), EXIT_SIGNAL(sig);
-  if (rc != AP_OK)
-    return fprintf(stderr, "appell run: output at t = %.10g failed: %s\n", ap_sim_time(rs->sim),
-                   ap_strerror(rc)), cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC
-                                                                     : cli_exit_code(rc);
+  if (sig) {
+    snprintf(rs->message, sizeof rs->message, "appell run: interrupted by %s at t = %.10g",
+             cli_signal_name(sig), ap_sim_time(rs->sim));
+    fprintf(stderr, "%s\n", rs->message);
+    rs->status = CLI_STATUS_INTERRUPTED;
+    /* A row where it stopped: an interrupted advance leaves q and v at that step. */
+    if (ap_sim_time(rs->sim) > rs->t_last) write_row(rs, out->f);
+    return cli_out_failed(out) ? write_failed(rs, out) : EXIT_SIGNAL(sig);
+  }
+  if (rc != AP_OK) return failed(rs, rc, ap_sim_time(rs->sim), "output failed");
+  snprintf(rs->message, sizeof rs->message, "%s", ap_sim_warning(rs->sim));
+  rs->status = CLI_STATUS_OK;
   return EXIT_OK;
 }
 
@@ -292,12 +339,54 @@ static void write_header(const ap_scene *sc, FILE *f) {
   fputc('\n', f);
 }
 
+/* ---- the run record (tools/runrecord.c) --------------------------------------------------- */
+
+/* With --out naming a file: OUT.run.json beside it, checked by the same rules before the run
+ * (a directory or the scene there is refused). No record for standard output, a FIFO or a
+ * device. */
+static int check_record(cli_out *rec, const cli_out *out, const run_opts *o, char *path,
+                        size_t len) {
+  rec->kind = CLI_OUT_STDOUT, rec->f = NULL;
+  if (out->kind != CLI_OUT_FILE) return EXIT_OK;
+  if ((size_t)snprintf(path, len, "%s.run.json", o->out) >= len)
+    return fprintf(stderr, "appell run: --out %s: the path is too long\n", o->out), EXIT_INPUT;
+  return cli_out_check(rec, path, o->scene);
+}
+
+static void fill_record(FILE *f, const run_state *rs, const run_opts *o, int code) {
+  cli_record r = {o->scene, ap_scene_name(rs->sc), o->out, o->sets, o->nsets, &rs->run,
+                  ap_scene_model(rs->sc), rs->status, code, rs->error, rs->message,
+                  ap_sim_time(rs->sim), rs->rows > 0 ? rs->rows : 0, rs->sim, rs->drift,
+                  rs->E0, rs->wall, ap_scene_conserves_energy(rs->sc)};
+  cli_record_write(f, &r);
+}
+
+/* Finish the CSV and the record: a run that reached t_end, failed or was interrupted keeps its
+ * rows (rs->status says how it ended) and gets its record, renamed into place right after the
+ * CSV; a failed write keeps nothing. Returns the exit code. */
+static int finish(run_state *rs, const run_opts *o, cli_out *out, cli_out *rec, int code) {
+  int keep = rs->status != NULL;
+  int recorded = keep && rec->kind == CLI_OUT_FILE && cli_out_open(rec) == EXIT_OK;
+  if (recorded) fill_record(rec->f, rs, o, code);
+  int csv = cli_out_finish(out, code, keep);
+  if (!recorded && rec->kind == CLI_OUT_FILE && keep && csv == code) {
+    unlink(rec->file.path);   /* an older record must not describe these rows */
+    return csv == EXIT_OK ? EXIT_INTERNAL : csv;
+  }
+  if (!recorded) return csv;
+  int rc = cli_out_finish(rec, csv == code ? EXIT_OK : EXIT_INTERNAL, csv == code);
+  if (csv == code && rc != EXIT_OK) unlink(rec->file.path);   /* as above */
+  return csv != code || rc == EXIT_OK || code != EXIT_OK ? csv : rc;
+}
+
 int cmd_run(int argc, char **argv) {
   run_opts o = {0};
   int rc = parse_args(argc, argv, &o);
   if (rc != 0) return rc > 0 ? (fputs(help, stdout), print_methods(), EXIT_OK) : EXIT_INPUT;
-  cli_out out;
+  cli_out out, rec;
+  char rec_path[AP_OUT_PATH_MAX + 16];
   int code = cli_out_check(&out, o.out, o.scene);
+  if (code == EXIT_OK) code = check_record(&rec, &out, &o, rec_path, sizeof rec_path);
   if (code != EXIT_OK) return code;
   cli_signals_install();
   char msg[1024];
@@ -312,11 +401,12 @@ int cmd_run(int argc, char **argv) {
   if (code == EXIT_OK) {
     ap_sim_set_poll(rs.sim, poll_signal, NULL);
     rs.progress = !o.quiet && isatty(STDERR_FILENO);
+    rs.quiet_events = o.quiet;
     double t_start = now();
     write_header(rs.sc, out.f);
     code = loop(&rs, &out);
     rs.wall = now() - t_start;
-    code = cli_out_close(&out, code);
+    code = finish(&rs, &o, &out, &rec, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
   }
   free(rs.buf);

@@ -5,7 +5,8 @@
  * batch (the scene with --set and the shorthands, the channels and times) -> one check of the
  * overrides with typical values -> this shard's runs on --jobs threads -> the CSV, written
  * atomically (tools/output.c, as appell run writes). Columns: run, runs (the plan's size, so that --merge can tell
- * a complete set of shards), each parameter's path, status, the batch's columns, message.
+ * a complete set of shards), each parameter's path, status, outcome and events (as in a run
+ * record: tools/runrecord.c), the batch's columns, message.
  * Numbers are written with 17 significant digits, which read back to the same double.
  * Invariant: a file at --out holds every run of its shard; an interrupted or failed sweep
  * leaves none. --merge lives in tools/sweep_merge.c. */
@@ -20,6 +21,7 @@
 #include <appell/appell.h>
 
 #include "cli.h"
+#include "runrecord.h"
 #include "sweep.h"
 
 #define MAX_ARGS 256
@@ -29,9 +31,9 @@ static const char help[] =
     "       appell sweep --merge --out FILE.csv SHARD.csv...\n"
     "\n"
     "Run SCENE once per point of a grid or random sample of its values and write one CSV row\n"
-    "per run: run, runs, the parameters, status, t, steps, rhs_evals, err_fails, max_residual,\n"
-    "energy_drift, the coordinates and speeds at the end (NAME@end), the channels asked for at\n"
-    "the times asked for (CHANNEL@T), message (docs/sweeps.md).\n"
+    "per run: run, runs, the parameters, status, outcome, events, t, steps, rhs_evals,\n"
+    "err_fails, max_residual, energy_drift, the coordinates and speeds at the end (NAME@end),\n"
+    "the channels asked for at the times asked for (CHANNEL@T), message (docs/sweeps.md).\n"
     "\n"
     "parameters (a product: the first grid varies slowest, random samples fastest):\n"
     "  --grid PATH=A:B:N      N values from A to B, both included (A, B may be 70*deg, pi/2)\n"
@@ -311,7 +313,7 @@ static int check_times(const sweep_state *s) {
 static void write_header(const sweep_state *s, FILE *f) {
   fputs("run,runs", f);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) fprintf(f, ",%s", ap_plan_path(s->plan, r));
-  fputs(",status", f);
+  fputs(",status,outcome,events", f);
   for (int j = 0; j < ap_batch_ncols(s->batch); j++) fprintf(f, ",%s", ap_batch_col_name(s->batch, j));
   fputs(",message\n", f);
 }
@@ -325,6 +327,7 @@ static void write_row(const sweep_state *s, FILE *f, long i) {
     fprintf(f, ",%s", strchr(buf, '=') + 1);
   }
   fprintf(f, ",%d", s->status[i]);
+  sweep_outcome_cells(f, s->status[i]);
   int nc = ap_batch_ncols(s->batch);
   for (int j = 0; j < nc; j++) fprintf(f, ",%.17g", s->values[(size_t)i * (size_t)nc + (size_t)j]);
   fputc(',', f);

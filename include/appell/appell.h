@@ -11,6 +11,7 @@
 #include "appell/analyze.h"
 #include "appell/scene.h"
 #include "appell/batch.h"
+#include "appell/outfile.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

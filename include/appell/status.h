@@ -26,7 +26,8 @@ enum {
   AP_ERR_SOLVER = -8,         /* the integrator failed (too many steps, step too small, ...) */
   AP_ERR_UNSUPPORTED = -9,    /* method or option not available for this model */
   AP_ERR_INTERNAL = -10,      /* a bug in Appell: please report */
-  AP_ERR_INTERRUPTED = -11    /* the caller's poll function asked to stop (ap_sim_set_poll) */
+  AP_ERR_INTERRUPTED = -11,   /* the caller's poll function asked to stop (ap_sim_set_poll) */
+  AP_ERR_IO = -12             /* a file could not be created, written, closed or renamed */
 };
 
 /* A short, static text for a status code ("unknown status" for any other int). */

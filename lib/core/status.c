@@ -16,6 +16,7 @@ const char *ap_strerror(int status) {
     case AP_ERR_UNSUPPORTED: return "not supported";
     case AP_ERR_INTERNAL: return "internal error";
     case AP_ERR_INTERRUPTED: return "interrupted";
+    case AP_ERR_IO: return "input or output failed";
     default: return "unknown status";
   }
 }

@@ -145,36 +145,51 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
  * turn of c beyond 90 degrees between accepted steps means the step crossed the kink. (The
  * contact point's position on the rim, in body axes, runs round at the spin rate: it cannot
  * tell a fast wheel from a flip.) */
-static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n, double turn,
-                      double t_prev) {
+#define FLAT_HINT                                                                          \
+  "; to stop the run at the fall, add `collide: stop` to the body that touches the ground " \
+  "first (docs/scenes.md, Events)"
+
+/* via: the name of what holds the body on the ground, a plane-contact joint or a wheel-contact
+ * constraint (a joint when B's own joint has that name). The tilt from upright is 90 degrees
+ * minus the axis's angle from the vertical, asin(n). */
+static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, const char *name,
+                      double n, double turn, double t_prev) {
   const char *what = B->shape.kind == AP_SHAPE_DISK ? "disk" : "torus";
+  double from_vertical = asin(fmin(n, 1.0)) * 57.29577951308232;
+  char via[160];
+  const ap_bmodel *M = ap_bm(m);
+  int joint = 0;
+  for (int j = 0; j < M->nj; j++)
+    joint |= M->joints[j].kind == AP_JOINT_PLANE_CONTACT && &M->bodies[M->joints[j].child] == B &&
+             strcmp(M->joints[j].name, name) == 0;
+  snprintf(via, sizeof via, joint ? "joint '%s' (plane contact)" : "constraint '%s'", name);
   if (turn > 0)
-    AP_BM_MSG(d, "model '%s': body '%s': the %s passed through lying flat between t = %.17g "
-              "and t = %.17g (the direction from its centre to its contact point turned by %.0f "
-              "degrees in one step): a falling %s hits the ground with its face, which a "
-              "single contact point does not describe", m->name, B->name, what, t_prev, d->t,
-              turn, what);
+    AP_BM_MSG(d, "model '%s': body '%s', %s: the %s passed through lying flat between t = "
+              "%.17g and t = %.17g (its contact point turned by %.0f degrees about the centre "
+              "in one step; tilted %.6g degrees from upright now): a falling %s lands on its "
+              "face, which one contact point does not describe" FLAT_HINT, m->name, B->name,
+              via, what, t_prev, d->t, turn, 90.0 - from_vertical, what);
   else
-    AP_BM_MSG(d, "model '%s': body '%s': the %s reached lying flat at t = %.17g (its axis is "
-              "%.3g degrees from the vertical, within 2 flat_tol = %.3g): the contact point is "
-              "undefined and a falling %s hits the ground with its face, which a single "
-              "contact point does not describe", m->name, B->name, what, d->t,
-              asin(fmin(n, 1.0)) * 57.29577951308232, 2 * B->shape.flat_tol, what);
+    AP_BM_MSG(d, "model '%s': body '%s', %s: the %s reached lying flat at t = %.17g, tilted "
+              "%.6g degrees from upright (axis %.3g degrees from the vertical, within 2 flat_tol "
+              "= %.3g): its contact point is undefined (a falling %s lands on its face)"
+              FLAT_HINT, m->name, B->name, via, what, d->t, 90.0 - from_vertical, from_vertical,
+              2 * B->shape.flat_tol, what);
   return AP_ERR_SINGULAR;
 }
 
 /* One disk or torus with rotation R (body to world, column-major) and tracking block trk:
  * c (3), whether it is set (1), its time (1). */
-static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const double *R,
-                     double *trk, int track) {
+static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const char *via,
+                     const double *R, double *trk, int track) {   /* via: flat_error's name */
   const double *a = R + 6;                   /* the axis in world axes, R e_z */
   double n = hypot(a[0], a[1]);              /* = |e_z - a_z a| = |u_perp| */
-  if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
+  if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, via, n, 0.0, 0.0);
   if (!(n > 0)) return AP_OK;   /* exactly flat while assembling: the position stage reports it */
   double c[3] = {a[2] * a[0] / n, a[2] * a[1] / n, -n};
   double cos_turn = c[0] * trk[0] + c[1] * trk[1] + c[2] * trk[2];
   if (track && trk[3] != 0.0 && cos_turn < 0.0)
-    return flat_error(m, d, B, n, acos(fmax(-1.0, cos_turn)) * 57.29577951308232, trk[4]);
+    return flat_error(m, d, B, via, n, acos(fmax(-1.0, cos_turn)) * 57.29577951308232, trk[4]);
   trk[0] = c[0], trk[1] = c[1], trk[2] = c[2], trk[3] = track ? 1.0 : 0.0, trk[4] = d->t;
   return AP_OK;
 }
@@ -195,7 +210,7 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     if (J->kind != AP_JOINT_PLANE_CONTACT || !is_wheel_shape(B)) continue;
     double R[9];
     ap_quat_normalized_matrix(q + J->qidx[J->quat], R);
-    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track);
+    rc = track_one(m, d, B, J->name, R, ap_kin_joint(M, S, j).track, track);
   }
   if (rc != AP_OK || !M->nwheel) return rc;
   if (!fresh) rc = ap_kin_position(m, d, d->t, q, S);
@@ -203,8 +218,8 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     const ap_mcon *c = &M->cons[ci];
     const ap_mbody *B = c->wheel >= 0 ? &M->bodies[c->def.body] : NULL;
     if (!B || !is_wheel_shape(B)) continue;
-    rc = track_one(m, d, B, ap_kin_body(M, S, c->def.body).R, ap_contact_geom(M, S, c).track,
-                   track);
+    rc = track_one(m, d, B, c->name, ap_kin_body(M, S, c->def.body).R,
+                   ap_contact_geom(M, S, c).track, track);
   }
   return rc;
 }

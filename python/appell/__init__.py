@@ -6,6 +6,11 @@
     res = sim.run(t_end=5, dt=0.01)
     res.t, res.q, res.v, res["disk.tilt"]
 
+    res.status, res.message, res.events          # "ok" here; a failure's e.result says why
+
+    run = appell.read_run("disk.csv")           # appell run --out disk.csv: rows + run record
+    run.status, run.message, run.record["steps"]
+
     table = appell.sweep("examples/scenes/rolling_disk.yaml",
                          grid={"initial.disk.tilt": "70*deg:89*deg:20"}, jobs=2)
 
@@ -19,6 +24,7 @@ describes the package; docs/sweeps.md the sweeps (threads, shards, Dask); docs/l
 the linearization.
 """
 
+import json as _json
 import math as _math
 import os as _os
 
@@ -28,7 +34,7 @@ from ._sweep import Table, sweep
 
 __all__ = ["Error", "SceneError", "Model", "Simulation", "Result", "Table", "load", "loads",
            "sweep", "methods", "constant", "version", "linearize", "Linearization",
-           "LinearSweep"]
+           "LinearSweep", "read_run"]
 
 version = _appell.version
 
@@ -85,15 +91,28 @@ def constant(text):
 
 class Result:
     """Rows of a run: res.t, res.q (rows x n), res.v (rows x k), res["disk.tilt"] (any output
-    column of the scene, as in appell run's CSV), res.columns, res.table (rows x columns)."""
+    column of the scene, as in appell run's CSV), res.columns, res.table (rows x columns).
 
-    def __init__(self, columns, table, q, v, coordinate_names=(), speed_names=()):
+    How the run ended, as in appell run's run record (docs/cli.md "The run record"):
+    res.status   "ok" (reached t_end), "event" (a stop event ended it), "failed" (the
+                 Error's e.result) or "interrupted" (Ctrl-C: the KeyboardInterrupt's
+                 e.result); None for a CSV read without a record
+    res.message  what stopped it ("" or the run's warning when it ran to the end)
+    res.events   the events of the run: dicts with name, t, action, direction, state
+    res.record   the run record (a dict) when read by appell.read_run, else None"""
+
+    def __init__(self, columns, table, q, v, coordinate_names=(), speed_names=(),
+                 status="ok", message="", events=(), record=None):
         self.columns = tuple(columns)
         self.table = table
         self.q = q
         self.v = v
         self.coordinate_names = tuple(coordinate_names)
         self.speed_names = tuple(speed_names)
+        self.status = status
+        self.message = message
+        self.events = list(events)
+        self.record = record
         self._index = {name: i for i, name in enumerate(self.columns)}
 
     @property
@@ -119,7 +138,37 @@ class Result:
         return self.table.shape[0]
 
     def __repr__(self):
-        return f"<appell.Result: {len(self)} rows x {len(self.columns)} columns>"
+        return (f"<appell.Result: {len(self)} rows x {len(self.columns)} columns, "
+                f"status {self.status}>")
+
+
+def _run_events(sim):
+    """The events a Simulation recorded, as dicts (name, t, action, direction, state): the one
+    place to connect them once Simulation records events; until then a run has none."""
+    return []
+
+
+def read_run(path):
+    """The rows and the run record of `appell run --out PATH`: path names the CSV (its record
+    is PATH.run.json beside it) or the record itself. Returns a Result with the CSV's columns
+    (q and v are None), status, message and events from the record, and .record the whole
+    record as a dict (docs/cli.md "The run record"); without a record, status and record are
+    None."""
+    import numpy as np
+    path = _os.fspath(path)
+    csv = path[:-len(".run.json")] if path.endswith(".run.json") else path
+    record = None
+    try:
+        with open(csv + ".run.json", encoding="utf-8") as f:
+            record = _json.load(f)
+    except FileNotFoundError:
+        pass
+    with open(csv, encoding="utf-8") as f:
+        columns = f.readline().strip().split(",")
+        table = np.loadtxt(f, delimiter=",", ndmin=2).reshape(-1, len(columns))
+    rec = record or {}
+    return Result(columns, table, None, None, status=rec.get("status"),
+                  message=rec.get("message", ""), events=rec.get("events", ()), record=record)
 
 
 class Simulation(_appell.Simulation):
@@ -135,16 +184,23 @@ class Simulation(_appell.Simulation):
         """Integrate from the current time to t_end (default: the scene's), recording a row
         every dt (default: the scene's output interval), the last at t_end exactly; the first
         row is the current state. Returns a Result. On failure raises Error with .result, the
-        rows up to where the run stopped."""
+        rows up to where the run stopped (status "failed"); Ctrl-C raises KeyboardInterrupt
+        with .result the same way (status "interrupted")."""
         m = self.model
         try:
             columns, table, q, v = self._run(t_end, dt)
-        except Error as e:
+        except BaseException as e:
             partial = getattr(e, "partial", None)
             if partial is not None:
-                e.result = Result(*partial, m.coordinate_names, m.speed_names)
+                failed = isinstance(e, Error)
+                message = (str(e) if failed else
+                           f"interrupted by {type(e).__name__} at t = {self.t:.10g}")
+                e.result = Result(*partial, m.coordinate_names, m.speed_names,
+                                  status="failed" if failed else "interrupted",
+                                  message=message, events=_run_events(self))
             raise
-        return Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+        return Result(columns, table, q, v, m.coordinate_names, m.speed_names, status="ok",
+                      message=self.warning, events=_run_events(self))
 
 
 class Linearization:

@@ -5,6 +5,7 @@
  *   _sim.c      Simulation: one ap_sim with its own output evaluator (ap_scene_out)
  *   _batch.c    run_plan: a slice of a sweep plan on the batch API's thread pool
  *   _lin.c      linearize: operating points, A and B, eigenvalues, speed sweeps
+ *   _io.c       write_file: files written by the rules of appell run --out (outfile.h)
  *
  * Only the public C API (<appell/appell.h>) is used. Integration and batches run with the
  * GIL released; a Model is only read by Simulations and may be shared by Python threads. */
@@ -57,5 +58,6 @@ PyObject *apx_run_plan(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_plan_info(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_constant(PyObject *self, PyObject *args);
 PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw);
+PyObject *apx_write_file(PyObject *self, PyObject *args, PyObject *kw);
 
 #endif

@@ -149,6 +149,8 @@ static PyMethodDef module_methods[] = {
     {"linearize", (PyCFunction)(void (*)(void))apx_linearize, METH_VARARGS | METH_KEYWORDS,
      "linearize(model, speed, about, free, inputs, states, keep_cyclic, sweep, ptol) -> dict "
      "(appell.linearize wraps it)"},
+    {"write_file", (PyCFunction)(void (*)(void))apx_write_file, METH_VARARGS | METH_KEYWORDS,
+     "write_file(path, data, keep=()): write bytes by appell run --out's rules (_io.c)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {

@@ -5,8 +5,9 @@
  * current time, as `appell run` writes them: the output columns (table), q and v. The arrays
  * are allocated first; the integration then runs with the GIL released, taking it back about
  * every 0.2 s (between internal steps, through ap_sim_set_poll) to let Python handle signals:
- * Ctrl-C stops the run where it is, even inside one long output interval. A failure
- * raises appell.Error with .partial = (columns, table, q, v) up to the last time reached.
+ * Ctrl-C stops the run where it is, even inside one long output interval. A failure raises
+ * appell.Error, and a signal its handler's exception (KeyboardInterrupt), with .partial =
+ * (columns, table, q, v) up to the last time reached.
  * Invariant: at most one thread works on a Simulation at a time (busy), and the Simulation
  * holds a reference to its Model, so the scene outlives the simulation. */
 #include "_ext.h"
@@ -199,6 +200,11 @@ static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) 
     r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
     if (r->rc == AP_OK) r->rc = record(s, r);
   }
+  /* Stopped by a signal: a last row where it stopped, as appell run writes (an interrupted
+   * advance leaves q and v at that step; a failed one may not, so a failure gets none). */
+  if (r->interrupted && r->done > 0 && r->done < r->rows &&
+      ap_sim_time(s->sim) > r->table[(size_t)(r->done - 1) * (size_t)r->nc])
+    record(s, r);
   PyEval_RestoreThread(ts);
   if (r->interrupted && r->rc == AP_ERR_INTERRUPTED) r->rc = AP_OK;   /* the signal wins */
 }
@@ -221,21 +227,27 @@ static PyObject *result(apx_sim *s, PyArrayObject *arr[3], long done) {
                                          Py_XDECREF(t[2]), NULL);
 }
 
+/* The exception being raised (a failure's Error, or the KeyboardInterrupt of a signal) gets
+ * .partial = (columns, table, q, v): the rows recorded up to where the run stopped. */
+static PyObject *attach_partial(apx_sim *s, rec *r, PyArrayObject *arr[3]) {
+  PyObject *type, *value, *tb;
+  PyErr_Fetch(&type, &value, &tb);
+  PyObject *partial = result(s, arr, r->done);
+  PyErr_Clear();   /* a failure to build it leaves the original exception */
+  PyErr_NormalizeException(&type, &value, &tb);
+  if (partial && value) PyObject_SetAttrString(value, "partial", partial);
+  PyErr_Clear();
+  Py_XDECREF(partial);
+  PyErr_Restore(type, value, tb);
+  return NULL;
+}
+
 static PyObject *failed(apx_sim *s, rec *r, PyArrayObject *arr[3]) {
   char msg[1400];
   snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),
            ap_strerror(r->rc), ap_sim_message(s->sim));
-  PyObject *partial = result(s, arr, r->done);
   apx_raise(r->rc, msg);
-  if (partial) {
-    PyObject *type, *value, *tb;
-    PyErr_Fetch(&type, &value, &tb);
-    PyErr_NormalizeException(&type, &value, &tb);
-    if (value) PyObject_SetAttrString(value, "partial", partial);
-    PyErr_Restore(type, value, tb);
-    Py_DECREF(partial);
-  }
-  return NULL;
+  return attach_partial(s, r, arr);
 }
 
 static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
@@ -276,7 +288,7 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
     r.table = PyArray_DATA(arr[0]), r.q = PyArray_DATA(arr[1]), r.v = PyArray_DATA(arr[2]);
     record_rows(s, &r, t0, t_end, dt);
     s->busy = 0;
-    if (r.interrupted) out = NULL;   /* the signal handler's exception is set */
+    if (r.interrupted) out = attach_partial(s, &r, arr);   /* the handler's exception */
     else if (r.rc != AP_OK) out = failed(s, &r, arr);
     else out = result(s, arr, r.done);
   }

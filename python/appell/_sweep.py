@@ -21,11 +21,14 @@ _FIXED = ("t", "steps", "rhs_evals", "err_fails", "max_residual", "energy_drift"
 
 class Table(dict):
     """The result of a sweep: column name -> NumPy array, in the order of `appell sweep`'s CSV:
-    run, the parameters, status, t, steps, rhs_evals, err_fails, max_residual, energy_drift,
-    NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths the parameters' paths."""
+    run, the parameters, status, outcome ("ok", "event" or "failed", as in a run record),
+    events (the events of the run, "NAME@T;..."), t, steps, rhs_evals, err_fails,
+    max_residual, energy_drift, NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths
+    the parameters' paths, .scene the scene file (to_csv never overwrites it)."""
 
     runs = 0
     paths = ()
+    scene = None
 
     @property
     def columns(self):
@@ -37,14 +40,16 @@ class Table(dict):
         return np.nonzero(self["status"] != 0)[0]
 
     def to_csv(self, path):
-        """Write the table as `appell sweep --out` does (same bytes for the same runs)."""
+        """Write the table as `appell sweep --out` does (same bytes for the same runs), by the
+        same rules (docs/cli.md "Output files and signals"): a regular file appears complete
+        or not at all, a FIFO or a device is written in place, a symbolic link is followed, a
+        directory and the scene file are refused (OSError: IsADirectoryError,
+        FileExistsError, ...), and a failed write leaves nothing behind."""
         cols = [c for c in self.columns if c != "run"]
         lines = [",".join(["run", "runs"] + cols)]
-        tmp = f"{path}.tmp.{os.getpid()}"
-        with open(tmp, "w") as f:
-            f.write("\n".join(lines + [_row(self, i, cols) for i in range(len(self["run"]))]))
-            f.write("\n")
-        os.replace(tmp, path)
+        text = "\n".join(lines + [_row(self, i, cols) for i in range(len(self["run"]))]) + "\n"
+        keep = () if self.scene is None else (self.scene,)
+        _appell.write_file(os.fspath(path), text.encode(), keep=keep)
 
 
 def _g17(x):
@@ -60,7 +65,7 @@ def _row(table, i, cols):
     cells = [str(int(table["run"][i])), str(table.runs)]
     for c in cols:
         x = table[c][i]
-        if c == "message":
+        if c in ("message", "events"):
             cells.append('"' + (x or "").replace('"', '""').replace("\n", " ") + '"')
         elif c == "status":
             cells.append(str(int(x)))
@@ -122,12 +127,25 @@ def _assemble(parts, first):
         else:
             out[path] = np.concatenate([p["params"][0][:, r] for p in parts])
     out["status"] = np.concatenate([p["status"] for p in parts])
+    out["outcome"] = np.array([_outcome(s) for s in out["status"]], dtype=object)
+    out["events"] = np.array(_run_events(parts, len(out["status"])), dtype=object)
     values = np.concatenate([p["values"] for p in parts])
     for j, name in enumerate(p0["columns"]):
         col = values[:, j]
         out[name] = col.astype(np.int64) if name in _FIXED[1:4] and np.all(np.isfinite(col)) else col
     out["message"] = np.array(sum((p["messages"] for p in parts), []), dtype=object)
     return out
+
+
+def _outcome(status):
+    """A run's outcome word from its status, as appell sweep writes it (tools/runrecord.c)."""
+    return "ok" if status == 0 else "failed"
+
+
+def _run_events(parts, count):
+    """Each run's events as "NAME@T;..." (the sweep's events column). The batch records no
+    events yet: connect the runs' events here when lib/batch reports them."""
+    return [""] * count
 
 
 def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channels=(),
@@ -169,12 +187,16 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
     if client is None:
         part = _appell.run_plan(first=first, count=count, jobs=int(jobs),
                                 progress=progress, **args)
-        return _assemble([part], first)
-    from ._dask import run_on_dask
-    # The plan checked here, as a local sweep checks it, before any chunk goes to a worker
-    # (the chunks skip the check): a misspelt path raises instead of failing every run.
-    _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
-    return _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
+        table = _assemble([part], first)
+    else:
+        from ._dask import run_on_dask
+        # The plan checked here, as a local sweep checks it, before any chunk goes to a
+        # worker (the chunks skip the check): a misspelt path raises instead of failing
+        # every run.
+        _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
+        table = _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
+    table.scene = name if os.path.isfile(name) else None
+    return table
 
 
 def _run_chunk(args, first, count):

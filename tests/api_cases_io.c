@@ -1,0 +1,32 @@
+/* tests/test_api's cases for the output files of include/appell/outfile.h: NULL or missing
+ * arguments give AP_ERR_ARG (and nothing is written), a function called out of order too. */
+#include <errno.h>
+#include <string.h>
+
+#include <appell/appell.h>
+
+#include "api_case.h"
+
+void api_cases_io(void) {
+  static ap_outfile o;
+  static char msg[256];
+  static const char data[] = "x\n";
+  int err = 0;
+  CASE(ap_out_check, "o NULL", ap_out_check(NULL, "x.csv", NULL, 0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_out_check, "target NULL",
+       ap_out_check(&o, NULL, NULL, 0, msg, sizeof msg) == AP_ERR_ARG && o.err == EINVAL);
+  CASE(ap_out_check, "target empty", ap_out_check(&o, "", NULL, 0, NULL, 0) == AP_ERR_ARG);
+  CASE(ap_out_check, "keep NULL with nkeep 1",
+       ap_out_check(&o, "x.csv", NULL, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_out_check, "nkeep < 0", ap_out_check(&o, "x.csv", NULL, -1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_out_open, "o NULL", ap_out_open(NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_out_open, "not checked",
+       (memset(&o, 0, sizeof o), o.fd = -1, ap_out_open(&o, msg, sizeof msg) == AP_ERR_ARG));
+  CASE(ap_out_finish, "o NULL", ap_out_finish(NULL, 1, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_out_write_file, "target NULL",
+       ap_out_write_file(NULL, data, 2, NULL, 0, &err, msg, sizeof msg) == AP_ERR_ARG &&
+           err == EINVAL);
+  CASE(ap_out_write_file, "data NULL with len 2",
+       ap_out_write_file("never-written.csv", NULL, 2, NULL, 0, &err, msg, sizeof msg) ==
+           AP_ERR_ARG && access("never-written.csv", F_OK) != 0);
+}
