@@ -109,6 +109,8 @@ typedef struct ap_body_def {
                               3 x 3 column-major, symmetric positive definite; default 0 (must
                               be set, or filled by ap_body_def_uniform) */
   ap_shape shape;          /* default none */
+  int internal_check;       /* set by ap_body_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_body_def;
 
 AP_API ap_body_def ap_body_def_default(void);
@@ -169,6 +171,8 @@ typedef struct ap_joint_def {
    * on the angular velocity instead). */
   ap_time_fn drive[3];
   void *drive_user[3];
+  int internal_check;       /* set by ap_joint_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_joint_def;
 
 AP_API ap_joint_def ap_joint_def_default(void);
@@ -242,6 +246,8 @@ typedef struct ap_constraint_def {
   ap_constraint_fn user_constraint; /* user: A (rows x k, ld rows) and a0 (rows) */
   ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
   void *user;              /* passed to speed_fn and the user callbacks */
+  int internal_check;       /* set by ap_constraint_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_constraint_def;
 
 AP_API ap_constraint_def ap_constraint_def_default(void);
@@ -310,6 +316,8 @@ typedef struct ap_effect_def {
   double max_effort;       /* motor: |tau| <= max_effort (N m or N), > 0; default HUGE_VAL (no
                               limit) */
   void *user;              /* passed to wrench, generalized, value_fn and state_fn */
+  int internal_check;       /* set by ap_effect_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_effect_def;
 
 AP_API ap_effect_def ap_effect_def_default(void);
