@@ -12,7 +12,8 @@
  *                  it does not change the path of the next compile
  *   small_limit    the linalg small-size limit is per thread: moving it in one thread leaves
  *                  another's at its default
- *   names_cut      a scene file name longer than a model name: the name ends in "..."
+ *   names_cut      a scene file name longer than a model name: the name ends in "..."; the
+ *                  text helpers cut with "..." (never inside a UTF-8 character) or not at all
  *   dense_limit    a body model on the dense path with k > 46340 speeds (k x k past INT_MAX,
  *                  what a 32-bit LAPACK integer indexes) is refused at compile with a message
  * malloc is interposed (tests/alloc.h) and so is fstat (below). */
@@ -30,6 +31,7 @@
 #include "alloc.h"
 #include "appell/appell.h"
 #include "check.h"
+#include "core/text.h"
 #include "linalg/linalg.h"
 
 /* ---- fstat, interposed ------------------------------------------------------------------- */
@@ -217,6 +219,17 @@ static void test_names_cut(void) {
   AP_CHECK(sc && strcmp(ap_model_name(ap_scene_model(sc)), nm) == 0);
   printf("names_cut: %s\n", nm);
   ap_scene_free(sc);
+  char buf[8];
+  AP_CHECK(ap_core_copy_name(buf, sizeof buf, "abcdefg") == 0 && strcmp(buf, "abcdefg") == 0);
+  AP_CHECK(ap_core_copy_name(buf, sizeof buf, "abcdefgh") == 1 && strcmp(buf, "abcd...") == 0);
+  AP_CHECK(ap_core_copy_name(buf, sizeof buf, "abc\xc3\xa9xyz") == 1 &&
+           strcmp(buf, "abc...") == 0);   /* e-acute (2 bytes) not split */
+  char m1[32] = "the message";
+  ap_core_prefix(m1, sizeof m1, "dae mode: ");
+  AP_CHECK(strcmp(m1, "dae mode: the message") == 0);
+  char m2[16] = "a long message";
+  ap_core_prefix(m2, sizeof m2, "dae mode: ");
+  AP_CHECK(strcmp(m2, "dae mode: a ...") == 0 && strlen(m2) == 15);
 }
 
 static void test_dense_limit(void) {

@@ -25,6 +25,17 @@ const char *ap_core_errno_text(int err, char *buf, size_t len) {
       strerror_r(err, buf, len), err, buf, len);
 }
 
+void ap_core_prefix(char *msg, size_t len, const char *prefix) {
+  if (!msg || len < 4) return;
+  size_t np = strlen(prefix), nm = strnlen(msg, len - 1);
+  if (np >= len - 4) np = len - 4;
+  size_t keep = nm < len - 1 - np ? nm : len - 1 - np;
+  memmove(msg + np, msg, keep);
+  memcpy(msg, prefix, np);
+  msg[np + keep] = '\0';
+  if (keep < nm) memcpy(msg + len - 4, "...", 4);
+}
+
 int ap_core_copy_name(char *dst, size_t size, const char *src) {
   size_t n = strlen(src);
   if (n < size) {

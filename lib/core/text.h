@@ -14,4 +14,8 @@ const char *ap_core_errno_text(int err, char *buf, size_t len);
  * in every message that prints it. Returns 1 when src was shortened, else 0. */
 int ap_core_copy_name(char *dst, size_t size, const char *src);
 
+/* Put prefix in front of the message in msg (len bytes), in place. When the whole does not fit,
+ * the message is cut and ends with "..." (len >= 4). */
+void ap_core_prefix(char *msg, size_t len, const char *prefix);
+
 #endif
