@@ -14,8 +14,9 @@
  * Conventions: SI units; world z is up and the ground plane is z = 0; vectors "in body axes"
  * are components in the body frame, everything else in world axes; 3 x 3 matrices are
  * column-major; quaternions are [w x y z] and map body components to parent components.
- * Definitions are filled by their *_default() function and then edited (Box2D style); ids
- * are small integers in the order of creation. */
+ * Definitions are filled by their *_default() function and then edited (Box2D style); one
+ * that function did not make (its internal_check unset) is refused with AP_ERR_ARG. Ids are
+ * small integers in the order of creation. */
 #ifndef APPELL_BODY_H
 #define APPELL_BODY_H
 
@@ -332,7 +333,8 @@ AP_API int ap_builder_create(const char *name, ap_builder **out);
 AP_API void ap_builder_free(ap_builder *b);   /* NULL: nothing */
 /* Add an element; *id (may be NULL) receives its id. Definitions are copied (names too);
  * user pointers are kept. Validation happens in ap_builder_compile. AP_ERR_ARG when b or def
- * is NULL. */
+ * is NULL, and (with the message "ap_joint_def 'x' was not made by ap_joint_def_default()")
+ * when def was not made by its *_default() function. */
 AP_API int ap_builder_add_body(ap_builder *b, const ap_body_def *def, int *id);
 AP_API int ap_builder_add_joint(ap_builder *b, const ap_joint_def *def, int *id);
 AP_API int ap_builder_add_constraint(ap_builder *b, const ap_constraint_def *def, int *id);
