@@ -69,6 +69,12 @@ static const char SCENE[] =
 /* ---- tests ---------------------------------------------------------------------------------- */
 
 static void test_pool_nomem(void) {
+#if defined(__SANITIZE_ADDRESS__)
+  /* AddressSanitizer's thread start allocates (pthread_getattr_np) through the interposed
+   * malloc and aborts when that fails: the normal build runs this test */
+  printf("pool_nomem: skipped under AddressSanitizer\n");
+  return;
+#endif
   ap_batch_def def = ap_batch_def_default();
   def.threads = 1;
   ap_batch *b = NULL;
