@@ -5,7 +5,8 @@
  * allocation from now returns NULL with errno ENOMEM, i = 0 the next one; -1 switches
  * injection off). ap_alloc_on_fail, when set, is called at the failing call (tests/test_alloc.c
  * prints its stack there). Every allocation counts, whoever makes it: Appell, libyaml,
- * SUNDIALS, glibc (strdup, ...); under AddressSanitizer its own strdup and the like allocate
+ * SUNDIALS, glibc (strdup, ...); ap_alloc_largest keeps the largest size asked for (bytes;
+ * reset it to 0 to measure a phase); under AddressSanitizer its own strdup and the like allocate
  * without calling malloc and are not counted.
  * Include it in one source file of a test program: it defines malloc and friends. Link with
  * -ldl where dlsym is not in libc. */
@@ -37,6 +38,7 @@
 static long n_alloc AP_ALLOC_UNUSED = 0, n_live AP_ALLOC_UNUSED = 0;
 static long ap_alloc_countdown AP_ALLOC_UNUSED = -1;   /* allocations before the failing one */
 static int ap_alloc_failed AP_ALLOC_UNUSED = 0;        /* an allocation was made to fail */
+static size_t ap_alloc_largest AP_ALLOC_UNUSED = 0;    /* the largest size asked for */
 static void (*ap_alloc_on_fail)(void) AP_ALLOC_UNUSED = NULL;
 
 static void *(*ap_next_malloc)(size_t);
@@ -85,6 +87,7 @@ static int ap_alloc_inject(void) {
 void *malloc(size_t size) {
   ap_alloc_resolve();
   if (!ap_next_malloc) return ap_alloc_boot_block(size);
+  if (size > ap_alloc_largest) ap_alloc_largest = size;
   if (ap_alloc_inject()) return NULL;
   void *p = ap_next_malloc(size);
   n_alloc++, n_live += p != NULL;
@@ -93,6 +96,7 @@ void *malloc(size_t size) {
 void *calloc(size_t a, size_t b) {
   ap_alloc_resolve();
   if (!ap_next_calloc) return b && a > SIZE_MAX / b ? NULL : ap_alloc_boot_block(a * b);
+  if (b && a <= SIZE_MAX / b && a * b > ap_alloc_largest) ap_alloc_largest = a * b;
   if (ap_alloc_inject()) return NULL;
   void *p = ap_next_calloc(a, b);
   n_alloc++, n_live += p != NULL;
@@ -106,6 +110,7 @@ void *realloc(void *p, size_t size) {
     if (q && p) memmove(q, p, size < left ? size : left);
     return q;
   }
+  if (size > ap_alloc_largest) ap_alloc_largest = size;
   if (ap_alloc_inject()) return NULL;
   void *q = ap_next_realloc(p, size);
   n_alloc++, n_live += !p && q;

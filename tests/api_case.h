@@ -6,6 +6,8 @@
 #define APPELL_API_CASE_H
 
 #include <stddef.h>
+#include <stdio.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "bodysys.h"
@@ -74,6 +76,15 @@ static inline ap_joint_def joint(ap_joint_kind kind, int parent, int child) {
   ap_joint_def j = ap_joint_def_default();
   j.kind = kind, j.parent = parent, j.child = child;
   return j;
+}
+
+/* m says that a definition of type `type` (e.g. "ap_joint_def") was refused because its
+ * *_default() function did not make it, naming it as `name` when not NULL. */
+static inline int not_default_msg(const char *m, const char *type, const char *name) {
+  char want[160];
+  if (name) snprintf(want, sizeof want, "%s '%s' was not made by %s_default()", type, name, type);
+  else snprintf(want, sizeof want, "was not made by %s_default()", type);
+  return m && strstr(m, type) != NULL && strstr(m, want) != NULL;
 }
 
 /* The sleigh's math-level definition (api_cases_low.c; valid with n = k = 3, b = 1). */

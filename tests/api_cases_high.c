@@ -311,6 +311,10 @@ static void cases_batch(void) {
   CASE(ap_plan_typical, "r 5", ap_plan_typical(PL, 5, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_plan_typical, "buf NULL", ap_plan_typical(PL, 0, NULL, 10) == AP_ERR_ARG);
   CASE(ap_batch_def_default, "no arguments", ap_batch_def_default().threads >= 1);
+  CASE(ap_batch_create, "def zeroed, not from ap_batch_def_default",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &(ap_batch_def){.threads = 1}, &obt, msg,
+                       sizeof msg) == AP_ERR_ARG &&
+           !obt && not_default_msg(msg, "ap_batch_def", NULL));
   CASE(ap_batch_create, "text NULL",
        ap_batch_create(NULL, 9, "b", NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_create, "out NULL",
@@ -380,6 +384,9 @@ static void cases_lin(void) {
                               strstr(ap_lin_message(oln), "inf")));
   CASE(ap_lin_create, "def, v NULL (defaults, zero speeds)",
        (ap_lin_create(TM, NULL, 0.0, tq, NULL, &oln), oln != NULL));
+  CASE(ap_lin_create, "def zeroed, not from ap_lin_def_default (message in the linearizer)",
+       ap_lin_create(TM, &(ap_lin_def){0}, 0.0, tq, NULL, &oln) == AP_ERR_ARG && oln &&
+           not_default_msg(ap_lin_message(oln), "ap_lin_def", NULL));
   CASE(ap_lin_free, "NULL", (ap_lin_free(NULL), 1));
   CASE(ap_lin_message, "NULL: a fixed text", ap_lin_message(NULL) && ap_lin_message(NULL)[0]);
   CASE(ap_lin_operating_point, "L NULL", ap_lin_operating_point(NULL, 0.0) == AP_ERR_ARG);

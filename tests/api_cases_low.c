@@ -42,6 +42,39 @@ static ap_system_def no_constraint_fn(void) {
   return d;
 }
 
+/* ap_model_from_system refuses d with a message containing `what`. */
+static int refused_with(ap_system_def d, const char *what) {
+  return refused(d) && strstr(msg, what) != NULL;
+}
+/* A valid system with n = k (no constraint rows, h = 0 or the Christoffel bias): accepted. */
+static int accepted(int nk, ap_bias_source src) {
+  ap_system_def d = sysdef(nk, nk, 0);
+  d.bias_source = src;
+  d.coord_names = d.speed_names = d.constraint_names = NULL;   /* the sleigh's are 3 */
+  int rc = ap_model_from_system(&d, &om, msg, sizeof msg);
+  int ok = rc == AP_OK && om && ap_model_k(om) == nk;
+  ap_model_free(om), om = NULL;
+  return ok;
+}
+static ap_system_def unchecked_sys(void) {   /* every field valid but internal_check */
+  ap_system_def d = sysdef(3, 3, 1);
+  d.internal_check = 0;
+  return d;
+}
+/* A system whose name is longer than a model's name buffer: the name ends in "...". */
+static int long_name_cut(void) {
+  static const char nm[] = "a_system_name_that_is_much_longer_than_the_sixty_three_bytes_a_model"
+                           "_keeps_for_its_name";
+  ap_system_def d = sysdef(3, 3, 1);
+  d.name = nm;
+  int rc = ap_model_from_system(&d, &om, msg, sizeof msg);
+  const char *got = rc == AP_OK ? ap_model_name(om) : "";
+  size_t len = strlen(got);
+  int ok = len == 63 && strcmp(got + len - 3, "...") == 0 && strncmp(got, nm, 60) == 0;
+  ap_model_free(om), om = NULL;
+  return ok;
+}
+
 static ap_sim_def simdef(void) { return ap_sim_def_default(); }
 static int sim_create_def(ap_sim_def d) {
   int rc = ap_sim_create(BM, &d, 0.0, q, v, &os, msg, sizeof msg);
@@ -75,6 +108,24 @@ static ap_effect_def eff(ap_effect_kind kind, int body) {
   return e;
 }
 
+/* A builder whose name is longer than a model's name buffer: the compiled model's name is cut
+ * to 63 bytes ending in "...". */
+static int long_builder_name(void) {
+  static const char nm[] = "a_model_name_that_is_much_longer_than_the_sixty_three_bytes_a_model_"
+                           "keeps_for_its_name";
+  ap_builder *b = NULL;
+  ap_body_def d = ap_body_def_default();
+  d.inertia[0] = d.inertia[4] = d.inertia[8] = 1.0;
+  ap_joint_def j = joint(AP_JOINT_REVOLUTE, AP_GROUND, 0);
+  int ok = ap_builder_create(nm, &b) == AP_OK && ap_builder_add_body(b, &d, NULL) == AP_OK &&
+           ap_builder_add_joint(b, &j, NULL) == AP_OK && ap_builder_compile(b, &om) == AP_OK;
+  const char *got = ok ? ap_model_name(om) : "";
+  ok = ok && strlen(got) == 63 && strcmp(got + 60, "...") == 0 && strncmp(got, nm, 60) == 0;
+  ap_model_free(om), om = NULL;
+  ap_builder_free(b);
+  return ok;
+}
+
 static const char *const no_words[3] = {"mass", "masses", NULL};
 
 static void cases_status_system(void) {
@@ -106,6 +157,23 @@ static void cases_status_system(void) {
        refused(sysdef(1 << 22, 1 << 22, 0)));
   CASE(ap_model_from_system, "n = k = INT_MAX", refused(sysdef(INT_MAX, INT_MAX, 0)));
   CASE(ap_model_from_system, "b = INT_MAX", refused(sysdef(3, 3, INT_MAX)));
+  CASE(ap_model_from_system, "def zeroed, not from ap_system_def_default",
+       refused_with((ap_system_def){0}, "") &&
+           not_default_msg(msg, "ap_system_def", "system"));
+  CASE(ap_model_from_system, "def valid but internal_check 0",
+       refused(unchecked_sys()) && not_default_msg(msg, "ap_system_def", NULL));
+  CASE(ap_model_from_system, "k = 46341: k x k past INT_MAX (32-bit LAPACK)",
+       refused_with(sysdef(46341, 46341, 0), "32-bit LAPACK") &&
+           strstr(msg, "2147488281"));
+  CASE(ap_model_from_system, "k = 46340, the largest dense k, accepted",
+       accepted(46340, AP_BIAS_ZERO));
+  CASE(ap_model_from_system, "Christoffel n = k = 1291: n k^2 past INT_MAX",
+       refused_with(sysdef(1291, 1291, 0), "n x k x k array dg/dq"));
+  CASE(ap_model_from_system, "Christoffel n = k = 1290 accepted",
+       accepted(1290, AP_BIAS_CHRISTOFFEL));
+  CASE(ap_model_from_system, "b = 46341, k = 46340: b (k + 1) past INT_MAX",
+       refused_with(sysdef(46340, 46340, 46341), "b x (k + 1)"));
+  CASE(ap_model_from_system, "a name past 63 bytes ends in \"...\"", long_name_cut());
   CASE(ap_model_free, "NULL", (ap_model_free(NULL), 1));
   CASE(ap_model_n, "NULL", ap_model_n(NULL) == AP_ERR_ARG);
   CASE(ap_model_path, "NULL", ap_model_path(NULL) == AP_ERR_ARG);
@@ -183,6 +251,15 @@ static void cases_sim(void) {
   CASE(ap_sim_create, "max_steps 0", sim_create_def((bad.max_steps = 0, bad)));
   CASE(ap_sim_create, "h_max -1", sim_create_def((bad.h_max = -1, bad)));
   CASE(ap_sim_create, "h_init NaN", sim_create_def((bad.h_init = NAN, bad)));
+  CASE(ap_sim_create, "def zeroed, not from ap_sim_def_default",
+       sim_create_def((ap_sim_def){0}) && not_default_msg(msg, "ap_sim_def", NULL));
+  CASE(ap_sim_create, "def valid but internal_check 0",
+       sim_create_def((bad = simdef(), bad.internal_check = 0, bad)) &&
+           not_default_msg(msg, "ap_sim_def", NULL));
+  bad = simdef();
+  CASE(ap_crosscheck, "def zeroed, not from ap_sim_def_default",
+       ap_crosscheck(BM, &(ap_sim_def){0}, 0, q, v, 1, 2, &rep, msg, sizeof msg) == AP_ERR_ARG &&
+           not_default_msg(msg, "ap_sim_def", NULL));
   CASE(ap_sim_advance, "s NULL", ap_sim_advance(NULL, 1.0) == AP_ERR_ARG);
   CASE(ap_sim_advance, "tout NaN", ap_sim_advance(S, NAN) == AP_ERR_ARG);
   CASE(ap_sim_advance, "tout before t", ap_sim_advance(S, -1.0) == AP_ERR_ARG);
@@ -269,6 +346,29 @@ static void cases_builder(void) {
   CASE(ap_builder_add_effect, "b NULL", ap_builder_add_effect(NULL, &ed, &id) == AP_ERR_ARG);
   CASE(ap_builder_add_effect, "def NULL", ap_builder_add_effect(B, NULL, &id) == AP_ERR_ARG);
   CASE(ap_builder_add_effect, "id NULL (optional)", ap_builder_add_effect(B, &ed, NULL) == AP_OK);
+  CASE(ap_builder_add_body, "def zeroed, not from ap_body_def_default",
+       ap_builder_add_body(B, &(ap_body_def){.name = "wheel", .mass = 1}, &id) == AP_ERR_ARG &&
+           not_default_msg(ap_builder_message(B), "ap_body_def", "wheel"));
+  CASE(ap_builder_add_joint, "def zeroed (parent 0, not the ground): refused",
+       ap_builder_add_joint(B, &(ap_joint_def){.name = "hinge", .child = 0}, &id) ==
+               AP_ERR_ARG &&
+           not_default_msg(ap_builder_message(B), "ap_joint_def", "hinge"));
+  CASE(ap_builder_add_joint, "def zeroed, unnamed: named by its id",
+       ap_builder_add_joint(B, &(ap_joint_def){.child = 0}, &id) == AP_ERR_ARG &&
+           strstr(ap_builder_message(B), "ap_joint_def (joint 0) was not made by "
+                                         "ap_joint_def_default()"));
+  CASE(ap_builder_add_constraint, "def zeroed, not from ap_constraint_def_default",
+       ap_builder_add_constraint(B, &(ap_constraint_def){.name = "roll"}, &id) == AP_ERR_ARG &&
+           not_default_msg(ap_builder_message(B), "ap_constraint_def", "roll"));
+  CASE(ap_builder_add_effect, "def zeroed (gravity 0, not -9.81): refused",
+       ap_builder_add_effect(B, &(ap_effect_def){.name = "gravity"}, &id) == AP_ERR_ARG &&
+           not_default_msg(ap_builder_message(B), "ap_effect_def", "gravity"));
+  CASE(ap_builder_add_effect, "def valid but internal_check 0",
+       (ed.internal_check = 0, ap_builder_add_effect(B, &ed, &id) == AP_ERR_ARG &&
+                                   not_default_msg(ap_builder_message(B), "ap_effect_def",
+                                                   NULL)));
+  ed = ap_effect_def_default();
+  CASE(ap_builder_create, "a name past 63 bytes ends in \"...\"", long_builder_name());
   CASE(ap_builder_set_path, "b NULL", ap_builder_set_path(NULL, AP_PATH_TREE) == AP_ERR_ARG);
   CASE(ap_builder_set_path, "unknown path", ap_builder_set_path(B, (ap_path)9) == AP_ERR_ARG);
   CASE(ap_builder_message, "NULL", is_empty(ap_builder_message(NULL)));

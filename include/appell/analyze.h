@@ -86,6 +86,8 @@ typedef struct ap_lin_def {
                               4 times its error estimate plus zero_tol max|A|; default 1e-9 */
   double h0;               /* Ridders' first step, times max(1, |x_j|); default 0.01 */
   ap_lin_method method;    /* default AP_LIN_AUTO */
+  int internal_check;       /* set by ap_lin_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_lin_def;
 
 AP_API ap_lin_def ap_lin_def_default(void);

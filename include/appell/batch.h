@@ -88,6 +88,8 @@ typedef struct ap_batch_def {
    * May be NULL. */
   int (*progress)(long done, long total, void *user);
   void *user;
+  int internal_check;       /* set by ap_batch_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_batch_def;
 
 AP_API ap_batch_def ap_batch_def_default(void);
@@ -128,7 +130,10 @@ AP_API int ap_batch_check_plan(const ap_batch *b, const ap_plan *p, char *msg, s
  * AP_BATCH_NOT_RUN) and messages[i] (may be NULL: then no messages): NULL, or a malloc'd
  * text for a failed run (the scene's message with file:line:column, or the simulation's) or
  * a successful run with a warning; free them with ap_batch_messages_free. Returns AP_OK when
- * every run was attempted, AP_BATCH_CANCELLED, or AP_ERR_ARG / AP_ERR_NOMEM before any run. */
+ * every run was attempted, AP_BATCH_CANCELLED, AP_ERR_NOMEM when a worker thread could not
+ * allocate its own buffers (the runs it took have status AP_ERR_NOMEM and an "out of memory"
+ * message; a run that ran out of memory itself is only its row's status), or AP_ERR_ARG /
+ * AP_ERR_NOMEM before any run. */
 AP_API int ap_batch_run(ap_batch *b, long count, int nper, const char *const *sets,
                         double *values, int *status, char **messages);
 /* Runs first .. first + count - 1 of a plan (its overrides generated in the workers). */

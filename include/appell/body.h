@@ -14,8 +14,9 @@
  * Conventions: SI units; world z is up and the ground plane is z = 0; vectors "in body axes"
  * are components in the body frame, everything else in world axes; 3 x 3 matrices are
  * column-major; quaternions are [w x y z] and map body components to parent components.
- * Definitions are filled by their *_default() function and then edited (Box2D style); ids
- * are small integers in the order of creation. */
+ * Definitions are filled by their *_default() function and then edited (Box2D style); one
+ * that function did not make (its internal_check unset) is refused with AP_ERR_ARG. Ids are
+ * small integers in the order of creation. */
 #ifndef APPELL_BODY_H
 #define APPELL_BODY_H
 
@@ -109,6 +110,8 @@ typedef struct ap_body_def {
                               3 x 3 column-major, symmetric positive definite; default 0 (must
                               be set, or filled by ap_body_def_uniform) */
   ap_shape shape;          /* default none */
+  int internal_check;       /* set by ap_body_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_body_def;
 
 AP_API ap_body_def ap_body_def_default(void);
@@ -169,6 +172,8 @@ typedef struct ap_joint_def {
    * on the angular velocity instead). */
   ap_time_fn drive[3];
   void *drive_user[3];
+  int internal_check;       /* set by ap_joint_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_joint_def;
 
 AP_API ap_joint_def ap_joint_def_default(void);
@@ -242,6 +247,8 @@ typedef struct ap_constraint_def {
   ap_constraint_fn user_constraint; /* user: A (rows x k, ld rows) and a0 (rows) */
   ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
   void *user;              /* passed to speed_fn and the user callbacks */
+  int internal_check;       /* set by ap_constraint_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_constraint_def;
 
 AP_API ap_constraint_def ap_constraint_def_default(void);
@@ -310,6 +317,8 @@ typedef struct ap_effect_def {
   double max_effort;       /* motor: |tau| <= max_effort (N m or N), > 0; default HUGE_VAL (no
                               limit) */
   void *user;              /* passed to wrench, generalized, value_fn and state_fn */
+  int internal_check;       /* set by ap_effect_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_effect_def;
 
 AP_API ap_effect_def ap_effect_def_default(void);
@@ -324,7 +333,8 @@ AP_API int ap_builder_create(const char *name, ap_builder **out);
 AP_API void ap_builder_free(ap_builder *b);   /* NULL: nothing */
 /* Add an element; *id (may be NULL) receives its id. Definitions are copied (names too);
  * user pointers are kept. Validation happens in ap_builder_compile. AP_ERR_ARG when b or def
- * is NULL. */
+ * is NULL, and (with the message "ap_joint_def 'x' was not made by ap_joint_def_default()")
+ * when def was not made by its *_default() function. */
 AP_API int ap_builder_add_body(ap_builder *b, const ap_body_def *def, int *id);
 AP_API int ap_builder_add_joint(ap_builder *b, const ap_joint_def *def, int *id);
 AP_API int ap_builder_add_constraint(ap_builder *b, const ap_constraint_def *def, int *id);

@@ -48,6 +48,8 @@ typedef struct ap_sim_def {
                               loop closures are open by more than init_tol (m) are refused too
                               (ap_body_project_q assembles them); smaller gaps are closed and
                               quaternions normalized. Default 1e-6 */
+  int internal_check;       /* set by ap_sim_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_sim_def;
 
 AP_API ap_sim_def ap_sim_def_default(void);

@@ -45,7 +45,11 @@ typedef enum ap_bias_source {
   AP_BIAS_ZERO = 2          /* h = 0: the metric is constant and nothing else contributes */
 } ap_bias_source;
 
-/* The largest n, k and b a model may have (dense k x k and n k^2 buffers stay addressable). */
+/* The largest n, k and b a math-level system may have. Besides, every dense array of a model
+ * on the dense path must have at most INT_MAX entries, the most a 32-bit LAPACK integer
+ * indexes: k <= 46340 (k x k), n k and b (k + 1) <= INT_MAX, and n k^2 <= INT_MAX with
+ * AP_BIAS_CHRISTOFFEL. A larger model is refused when it is compiled (AP_ERR_ARG, with the
+ * array and the numbers in the message). */
 #define AP_MAX_SIZE 65536
 
 typedef struct ap_system_def {
@@ -67,6 +71,8 @@ typedef struct ap_system_def {
   const char *const *speed_names; /* optional, k names; default v0, v1, ... */
   const char *const *constraint_names; /* optional, b names; default row0, row1, ... */
   void *user;                  /* passed to every callback */
+  int internal_check;       /* set by ap_system_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_system_def;
 
 /* The definition with every default filled in (all callbacks NULL, sizes 0). */

@@ -23,6 +23,7 @@
 
 #include "analyze/analyze_int.h"
 #include "appell/body.h"
+#include "core/defcheck.h"
 #include "linalg/linalg.h"
 
 ap_lin_def ap_lin_def_default(void) {
@@ -34,6 +35,7 @@ ap_lin_def ap_lin_def_default(void) {
   d.zero_tol = 1e-9;
   d.h0 = 0.01;
   d.method = AP_LIN_AUTO;
+  d.internal_check = AP_DEF_CHECK;
   return d;
 }
 
@@ -182,6 +184,10 @@ static void normalize_quats(ap_lin *L) {
 
 static int setup(ap_lin *L, const ap_lin_def *def, double t, const double *q, const double *v) {
   int ok = 1;
+  if (def && def->internal_check != AP_DEF_CHECK) {   /* before its lists are read */
+    ap_an_msg(L, "ap_lin_def " AP_DEF_NOT_DEFAULT("ap_lin_def"));
+    return AP_ERR_ARG;
+  }
   L->def = def ? *def : ap_lin_def_default();
   L->def.free = (const char *const *)(L->names = copy_list(L->def.free, &ok));
   char **indep = copy_list(L->def.independent, &ok), **inputs = copy_list(L->def.inputs, &ok);

@@ -15,6 +15,8 @@
 
 #include "appell/scene.h"
 #include "batch/batch_int.h"
+#include "core/defcheck.h"
+#include "core/text.h"
 
 #define BAT_MAX_FILE (16L << 20)
 
@@ -23,6 +25,7 @@ ap_batch_def ap_batch_def_default(void) {
   memset(&d, 0, sizeof d);
   d.threads = 1;
   d.final_state = 1;
+  d.internal_check = AP_DEF_CHECK;
   return d;
 }
 
@@ -75,6 +78,26 @@ static int say(char *msg, size_t len, int rc, const char *fmt, ...) {
   return rc;
 }
 
+/* printf into a string of exactly the length needed (a column name is never cut). */
+static char *fmt_dup(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+static char *fmt_dup(const char *fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  int n = vsnprintf(NULL, 0, fmt, ap);
+  va_end(ap);
+  char *s = n >= 0 ? malloc((size_t)n + 1) : NULL;
+  if (!s) return NULL;
+  va_start(ap, fmt);
+  vsnprintf(s, (size_t)n + 1, fmt, ap);
+  va_end(ap);
+  return s;
+}
+
 /* The result columns; the channels must be columns of the scene. */
 static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
   static const char *const fixed[AP_BAT_FIXED_COLS] = {"t", "steps", "rhs_evals", "err_fails",
@@ -84,17 +107,16 @@ static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
   b->ncols = AP_BAT_FIXED_COLS + nfinal + b->def.ntimes * b->def.nchannels;
   b->cols = calloc((size_t)b->ncols, sizeof *b->cols);
   if (!b->cols) return AP_ERR_NOMEM;
-  char name[512];
   for (int j = 0; j < b->ncols; j++) {
     int f = j - AP_BAT_FIXED_COLS, s = f - nfinal;
-    if (j < AP_BAT_FIXED_COLS) snprintf(name, sizeof name, "%s", fixed[j]);
+    if (j < AP_BAT_FIXED_COLS) b->cols[j] = fmt_dup("%s", fixed[j]);
     else if (f < nfinal)
-      snprintf(name, sizeof name, "%s@end",
-               f < b->n ? ap_model_coord_name(m, f) : ap_model_speed_name(m, f - b->n));
+      b->cols[j] = fmt_dup("%s@end", f < b->n ? ap_model_coord_name(m, f)
+                                              : ap_model_speed_name(m, f - b->n));
     else
-      snprintf(name, sizeof name, "%s@%.10g", b->channels[s % b->def.nchannels],
-               b->times[s / b->def.nchannels]);
-    if (!(b->cols[j] = strdup(name))) return AP_ERR_NOMEM;
+      b->cols[j] = fmt_dup("%s@%.10g", b->channels[s % b->def.nchannels],
+                           b->times[s / b->def.nchannels]);
+    if (!b->cols[j]) return AP_ERR_NOMEM;
   }
   for (int c = 0; c < b->def.nchannels; c++) {
     int found = 0;
@@ -109,6 +131,8 @@ static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
 }
 
 static int copy_def(ap_batch *b, const ap_batch_def *def, char *msg, size_t len) {
+  if (def && def->internal_check != AP_DEF_CHECK)
+    return say(msg, len, AP_ERR_ARG, "ap_batch_def " AP_DEF_NOT_DEFAULT("ap_batch_def"));
   b->def = def ? *def : ap_batch_def_default();
   if (b->def.threads < 0)
     return say(msg, len, AP_ERR_ARG, "invalid batch definition: threads %d (need >= 0; 0: one "
@@ -177,8 +201,9 @@ int ap_batch_load(const char *path, const char *const *sets, int nsets, const ap
                   ap_batch **out, char *msg, size_t msg_len) {
   if (out) *out = NULL;
   FILE *f = path ? fopen(path, "rb") : NULL;
+  char ebuf[128];
   if (!f) return say(msg, msg_len, AP_ERR_ARG, "%s: cannot open: %s", path ? path : "(null)",
-                         strerror(errno));
+                     ap_core_errno_text(errno, ebuf, sizeof ebuf));
   char *buf = malloc((size_t)BAT_MAX_FILE + 1);
   size_t len = buf ? fread(buf, 1, (size_t)BAT_MAX_FILE + 1, f) : 0;
   int bad = !buf || ferror(f) || len > (size_t)BAT_MAX_FILE;

@@ -100,7 +100,7 @@ static int record(one_run *r, double t, int grid, double tol) {
 static int advance(one_run *r, double t) {
   int rc = ap_sim_advance(r->sim, t);
   if (rc == AP_OK) return AP_OK;
-  char what[96];
+  char what[160];   /* never cut: 29 + 24 (%.10g) + 2 + 58 (longest ap_strerror) + 2 bytes */
   snprintf(what, sizeof what, "the simulation failed at t = %.10g: %s: ", ap_sim_time(r->sim),
            ap_strerror(rc));
   return fail(r, rc, what, ap_sim_message(r->sim));

@@ -5,7 +5,11 @@
  * Cancelling (the progress callback returns non-zero) stops the handing out of indices and
  * interrupts the runs under way at their next internal step (ap_sim_set_poll; their rows say
  * AP_ERR_INTERRUPTED); rows never started keep status AP_BATCH_NOT_RUN and NaN values.
- * When no thread can be created the calling thread runs everything itself. */
+ * When no thread can be created the calling thread runs everything itself. A worker that
+ * cannot allocate its buffers still takes runs, and marks each AP_ERR_NOMEM with the message
+ * "out of memory ..." (never AP_BATCH_NOT_RUN, which means cancelled); ap_bat_pool then returns
+ * AP_ERR_NOMEM. Progress is timed on the monotonic clock (the condition variable waits on
+ * CLOCK_MONOTONIC too), so a change of the wall clock neither stalls nor floods it. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -31,6 +35,7 @@ typedef struct pool {
   pthread_cond_t cv;
   long next, done;         /* next index to hand out; runs finished */
   int cancel;
+  int nomem;               /* a worker could not allocate its buffers */
   atomic_int stop;         /* = cancel, read by the simulations' poll without the mutex */
   int active;              /* workers still running */
 } pool;
@@ -55,13 +60,21 @@ static void *worker(void *arg) {
   const char **sets = calloc((size_t)nper + 1, sizeof *sets);
   for (;;) {
     pthread_mutex_lock(&p->mu);
-    long i = p->cancel || !buf || !sets ? p->count : p->next;
+    long i = p->cancel ? p->count : p->next;
     if (i < p->count) p->next++;
+    if (i < p->count && (!buf || !sets)) p->nomem = 1;
     pthread_mutex_unlock(&p->mu);
     if (i >= p->count) break;
-    const char *const *vs = run_sets(p, i, buf, sets);
-    int rc = ap_bat_run_one(p->b, vs, nper, p->values + (size_t)i * (size_t)p->b->ncols, msg,
-                            sizeof msg, &p->stop);
+    int rc;
+    if (!buf || !sets) {   /* the run is reported, as out of memory, not left "not run" */
+      rc = AP_ERR_NOMEM;
+      snprintf(msg, sizeof msg, "out of memory: the batch worker could not allocate the "
+               "overrides of run %ld", i);
+    } else {
+      const char *const *vs = run_sets(p, i, buf, sets);
+      rc = ap_bat_run_one(p->b, vs, nper, p->values + (size_t)i * (size_t)p->b->ncols, msg,
+                          sizeof msg, &p->stop);
+    }
     p->status[i] = rc;
     if (p->messages) p->messages[i] = msg[0] ? strdup(msg) : NULL;
     pthread_mutex_lock(&p->mu);
@@ -95,7 +108,7 @@ static void wait_done(pool *p) {
   pthread_mutex_lock(&p->mu);
   while (p->active > 0 && p->done < p->count && !p->cancel) {
     struct timespec ts;
-    clock_gettime(CLOCK_REALTIME, &ts);
+    clock_gettime(CLOCK_MONOTONIC, &ts);   /* the clock of p->cv (pool_init) */
     ts.tv_nsec += 200000000L;
     if (ts.tv_nsec >= 1000000000L) ts.tv_sec++, ts.tv_nsec -= 1000000000L;
     pthread_cond_timedwait(&p->cv, &p->mu, &ts);
@@ -117,16 +130,31 @@ static int thread_count(const ap_batch *b, long count) {
   return (int)(t < count ? t : count);
 }
 
+/* The condition variable waits with deadlines on CLOCK_MONOTONIC. */
+static int pool_init(pool *p) {
+  pthread_condattr_t ca;
+  if (pthread_condattr_init(&ca) != 0) return AP_ERR_NOMEM;
+  int rc = pthread_condattr_setclock(&ca, CLOCK_MONOTONIC) == 0 &&
+           pthread_cond_init(&p->cv, &ca) == 0 ? AP_OK : AP_ERR_NOMEM;
+  pthread_condattr_destroy(&ca);
+  if (rc == AP_OK && pthread_mutex_init(&p->mu, NULL) != 0)
+    rc = AP_ERR_NOMEM, pthread_cond_destroy(&p->cv);
+  atomic_init(&p->stop, 0);
+  return rc;
+}
+
 int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
                 char **messages) {
-  pool p = {b, src, count, values, status, messages, PTHREAD_MUTEX_INITIALIZER,
-            PTHREAD_COND_INITIALIZER, 0, 0, 0, 0, 0};
-  atomic_init(&p.stop, 0);
+  pool p;
+  memset(&p, 0, sizeof p);
+  p.b = b, p.src = src, p.count = count, p.values = values, p.status = status;
+  p.messages = messages;
   for (long i = 0; i < count; i++) {
     status[i] = AP_BATCH_NOT_RUN;
     if (messages) messages[i] = NULL;
     for (int j = 0; j < b->ncols; j++) values[(size_t)i * (size_t)b->ncols + (size_t)j] = NAN;
   }
+  if (pool_init(&p) != AP_OK) return AP_ERR_NOMEM;
   pthread_t tid[POOL_MAX_THREADS];
   int nt = thread_count(b, count), started = 0;
   p.active = nt;
@@ -141,5 +169,5 @@ int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *value
   if (!cancelled) progress(&p, p.done);
   pthread_cond_destroy(&p.cv);
   pthread_mutex_destroy(&p.mu);
-  return cancelled ? AP_BATCH_CANCELLED : AP_OK;
+  return cancelled ? AP_BATCH_CANCELLED : p.nomem ? AP_ERR_NOMEM : AP_OK;
 }

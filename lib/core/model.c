@@ -3,18 +3,23 @@
  * ap_model_from_system validates a definition once (sizes, required callbacks, the bias
  * source) and keeps a private copy with names filled in, so the hot loop can trust it.
  * Invariant: a model is never modified after it is returned. */
+#include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/core.h"
+#include "core/defcheck.h"
+#include "core/sizes.h"
+#include "core/text.h"
 
 ap_system_def ap_system_def_default(void) {
   ap_system_def def;
   memset(&def, 0, sizeof def);
   def.name = "system";
   def.bias_source = AP_BIAS_CALLBACK;
+  def.internal_check = AP_DEF_CHECK;
   return def;
 }
 
@@ -58,14 +63,34 @@ static void free_names(char **names, int count) {
   free(names);
 }
 
+int ap_core_check_sizes(const char *model, int n, int k, int b, int christoffel, char *msg,
+                        size_t len) {
+  const double lim = (double)INT_MAX, dn = n, dk = k, db = b;
+  const char *what = NULL;
+  double entries = 0;
+  if (dk * dk > lim) what = "k x k matrices (g, B, G)", entries = dk * dk;
+  else if (dn * dk > lim) what = "n x k matrix N", entries = dn * dk;
+  else if (db * (dk + 1) > lim) what = "b x (k + 1) matrix [A a0]", entries = db * (dk + 1);
+  else if (christoffel && dn * dk * dk > lim) what = "n x k x k array dg/dq", entries = dn * dk * dk;
+  if (!what) return AP_OK;
+  return fail(msg, len, "model '%s' (n = %d, k = %d, b = %d): its %s would have %.0f entries, "
+              "more than the %d a 32-bit LAPACK integer indexes (at most %d speeds on the dense "
+              "path)", model, n, k, b, what, entries, INT_MAX, 46340);
+}
+
 static int validate(const ap_system_def *d, char *msg, size_t len) {
   const char *nm = d->name ? d->name : "system";
+  if (d->internal_check != AP_DEF_CHECK)
+    return fail(msg, len, "ap_system_def '%s' " AP_DEF_NOT_DEFAULT("ap_system_def"), nm);
   if (d->n < 1 || d->k < 1 || d->b < 0)
     return fail(msg, len, "system '%s': sizes n = %d, k = %d, b = %d (need n >= 1, k >= 1, "
                 "b >= 0)", nm, d->n, d->k, d->b);
   if (d->n > AP_MAX_SIZE || d->k > AP_MAX_SIZE || d->b > AP_MAX_SIZE)
     return fail(msg, len, "system '%s': sizes n = %d, k = %d, b = %d (at most %d each)", nm,
                 d->n, d->k, d->b, AP_MAX_SIZE);
+  int rc = ap_core_check_sizes(nm, d->n, d->k, d->b, d->bias_source == AP_BIAS_CHRISTOFFEL,
+                               msg, len);
+  if (rc != AP_OK) return rc;
   if (!d->kinematic && d->n != d->k)
     return fail(msg, len, "system '%s': n = %d coordinates but k = %d speeds and no kinematic "
                 "callback N(q): with N = I they must be equal", nm, d->n, d->k);
@@ -107,7 +132,7 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
   m->n = def->n;
   m->k = def->k;
   m->b = def->b;
-  snprintf(m->name, sizeof m->name, "%s", def->name ? def->name : "system");
+  ap_core_copy_name(m->name, sizeof m->name, def->name ? def->name : "system");   /* "..." if cut */
   m->coord_names = copy_names(def->coord_names, m->n, "q");
   m->speed_names = copy_names(def->speed_names, m->k, "v");
   m->constraint_names = copy_names(def->constraint_names, m->b, "row");

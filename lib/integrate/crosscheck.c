@@ -7,6 +7,7 @@
 
 #include "appell/sim.h"
 #include "core/core.h"
+#include "core/text.h"
 
 static const char *mode_name[3] = {"minimal", "projected", "DAE"};
 
@@ -72,9 +73,9 @@ int ap_crosscheck(const ap_model *m, const ap_sim_def *def, double t0, const dou
   if (rc != AP_OK && failed >= 0 && sim[failed] && msg && msg_len)
     snprintf(msg, msg_len, "%s mode: %s", mode_name[failed], ap_sim_message(sim[failed]));
   else if (rc != AP_OK && failed >= 0 && msg && msg_len) {
-    char tmp[256];
-    snprintf(tmp, sizeof tmp, "%s", msg);
-    snprintf(msg, msg_len, "%s mode: %s", mode_name[failed], tmp);
+    char prefix[32];   /* the message of ap_sim_create, kept whole as far as msg_len allows */
+    snprintf(prefix, sizeof prefix, "%s mode: ", mode_name[failed]);
+    ap_core_prefix(msg, msg_len, prefix);
   }
   for (int i = 0; i < 3; i++) {
     if (sim[i]) {

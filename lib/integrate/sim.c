@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "appell/body.h"
+#include "core/defcheck.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
 #include "model/model.h"
@@ -48,6 +49,7 @@ ap_sim_def ap_sim_def_default(void) {
   def.rank_rtol = 1e-10;
   def.switch_growth = 2.0;
   def.init_tol = 1e-6;
+  def.internal_check = AP_DEF_CHECK;
   return def;
 }
 
@@ -55,6 +57,8 @@ ap_sim_def ap_sim_def_default(void) {
 /* ---- creation ----------------------------------------------------------------------------- */
 
 static int check_def(ap_sim *s, const ap_sim_def *def) {
+  if (def->internal_check != AP_DEF_CHECK)
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_def " AP_DEF_NOT_DEFAULT("ap_sim_def"));
   if (def->mode != AP_MODE_MINIMAL && def->mode != AP_MODE_PROJECTED &&
       def->mode != AP_MODE_DAE && def->mode != AP_MODE_PLAIN)
     return ap_drv_fail(s, AP_ERR_ARG, "unknown mode %d", (int)def->mode);

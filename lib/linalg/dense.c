@@ -25,8 +25,10 @@
 #include <cblas.h>
 #include <lapacke.h>
 
-/* The size limit of the native kernels; tests and benchmarks move it (ap_la_set_small_limit). */
-static int small_limit = AP_LA_SMALL_LIMIT;
+/* The size limit of the native kernels; tests and benchmarks move it (ap_la_set_small_limit).
+ * One per thread: a thread that moves it changes its own calls only, never those of a
+ * simulation running in another thread (no process-wide writable state). */
+static _Thread_local int small_limit = AP_LA_SMALL_LIMIT;
 
 int ap_la_small_limit(void) { return small_limit; }
 

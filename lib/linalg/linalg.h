@@ -122,11 +122,11 @@ void ap_la_gemv_t(int m, int n, const double *M, const double *x, double *y);
  * (8, 16) and (10, 20), and even around (16, 32): 16 keeps the margin and the mechanism sizes. */
 #define AP_LA_SMALL_LIMIT 16
 
-/* The current limit. */
+/* The current limit of the calling thread. */
 int ap_la_small_limit(void);
-/* For tests and benchmarks only: set the limit (0: LAPACK/BLAS everywhere; a large value: native
- * everywhere) and return the previous one. A process-wide setting, not thread-safe: change it
- * only while no other thread runs these routines. */
+/* For tests and benchmarks only: set the calling thread's limit (0: LAPACK/BLAS everywhere; a
+ * large value: native everywhere) and return its previous one. Each thread has its own
+ * (thread-local, starting at AP_LA_SMALL_LIMIT): other threads are not affected. */
 int ap_la_set_small_limit(int n);
 
 /* ---- complex-step variants (linalg/scalar.h) ----------------------------------------------- */

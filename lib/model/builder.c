@@ -8,11 +8,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/defcheck.h"
+#include "core/text.h"
 #include "model/builder.h"
 
 ap_body_def ap_body_def_default(void) {
   ap_body_def def;
   memset(&def, 0, sizeof def);
+  def.internal_check = AP_DEF_CHECK;
   def.mass = 1.0;
   def.shape.flat_tol = 1e-6;
   return def;
@@ -21,6 +24,7 @@ ap_body_def ap_body_def_default(void) {
 ap_joint_def ap_joint_def_default(void) {
   ap_joint_def def;
   memset(&def, 0, sizeof def);
+  def.internal_check = AP_DEF_CHECK;
   def.kind = AP_JOINT_FREE;
   def.parent = AP_GROUND;
   def.child = AP_NONE;
@@ -33,6 +37,7 @@ ap_joint_def ap_joint_def_default(void) {
 ap_constraint_def ap_constraint_def_default(void) {
   ap_constraint_def def;
   memset(&def, 0, sizeof def);
+  def.internal_check = AP_DEF_CHECK;
   def.kind = AP_CON_ROLLING;
   def.body = AP_NONE;
   def.body2 = AP_GROUND;
@@ -46,6 +51,7 @@ ap_constraint_def ap_constraint_def_default(void) {
 ap_effect_def ap_effect_def_default(void) {
   ap_effect_def def;
   memset(&def, 0, sizeof def);
+  def.internal_check = AP_DEF_CHECK;
   def.kind = AP_EFFECT_GRAVITY;
   def.gravity[2] = -9.81;
   def.body = AP_NONE;
@@ -89,7 +95,7 @@ int ap_builder_create(const char *name, ap_builder **out) {
   if (!out) return AP_ERR_ARG;
   ap_builder *b = calloc(1, sizeof *b);
   if (!b) return AP_ERR_NOMEM;
-  snprintf(b->name, sizeof b->name, "%s", name ? name : "bodies");
+  ap_core_copy_name(b->name, sizeof b->name, name ? name : "bodies");   /* "..." if cut */
   *out = b;
   return AP_OK;
 }
@@ -134,6 +140,17 @@ static void *grow(void *arr, int count, int *cap, size_t size) {
   return p;
 }
 
+/* A definition that its *_default() function did not make: refused, named by its name or the
+ * id it would have had. */
+static int not_default(ap_builder *b, const char *type, const char *name, const char *what,
+                       int id) {
+  if (name) return ap_builder_fail(b, "%s '%.40s%s' was not made by %s_default() (start from "
+                                   "%s_default() and set the fields that differ)", type, name,
+                                   strlen(name) > 40 ? "..." : "", type, type);
+  return ap_builder_fail(b, "%s (%s %d) was not made by %s_default() (start from %s_default() "
+                         "and set the fields that differ)", type, what, id, type, type);
+}
+
 static int copy_name(ap_builder *b, char *dst, const char *src, const char *what, int id) {
   if (src && strlen(src) >= AP_NAME_MAX)
     return ap_builder_fail(b, "%s %d: name '%.40s...' is longer than %d bytes", what, id,
@@ -146,6 +163,8 @@ static int copy_name(ap_builder *b, char *dst, const char *src, const char *what
 #define ADD(arr, cnt, cap, T, what)                                                       \
   do {                                                                                    \
     if (!b || !def) return AP_ERR_ARG;                                                    \
+    if (def->internal_check != AP_DEF_CHECK)                                              \
+      return not_default(b, "ap_" what "_def", def->name, what, b->cnt);                  \
     T *p_ = grow(b->arr, b->cnt, &b->cap, sizeof(T));                                     \
     if (!p_) return ap_builder_nomem(b, what);                                            \
     b->arr = p_;                                                                          \

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/sizes.h"
 #include "model/builder.h"
 #include "model/tree_model.h"
 
@@ -434,6 +435,9 @@ int ap_builder_compile(ap_builder *b, ap_model **out) {
     rc = ap_tree_attach(*out, b->path, b->msg, sizeof b->msg);
     /* the dense path's columns of each body (its ancestors' speeds: O(N^2) for a chain); the
      * tree path never reads them */
+    if (rc == AP_OK && !(*out)->ops)   /* dense arrays LAPACK can index */
+      rc = ap_core_check_sizes(b->name, (*out)->n, (*out)->k, (*out)->b, 0, b->msg,
+                               sizeof b->msg);
     if (rc == AP_OK && !(*out)->ops) rc = body_columns((ap_bmodel *)(*out)->ev.impl);
     if (rc != AP_OK) ap_model_free(*out), *out = NULL;
   }

@@ -12,6 +12,7 @@
  * k_t - b_t + 6 (six redundant rows per tree). Beyond them the position stage reports
  * AP_ERR_UNSUPPORTED. */
 #include <limits.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -250,12 +251,22 @@ static int shadow_check_q(const ap_model *m, ap_data *d, const double *q, double
   return ap_bm_check_q(&ap_tree_plan(m)->sm, d, q, S);
 }
 
-int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
-  /* APPELL_PATH=tree|dense overrides the automatic choice (for running whole test suites on
-   * one path: tree wherever the model allows it) */
+/* APPELL_PATH=tree|dense overrides the automatic choice (for running whole test suites on
+ * one path: tree wherever the model allows it). The environment is read once per process, at
+ * the first body model compiled (docs/large.md): a later setenv changes nothing, and no
+ * compile reads the environment while another thread may be writing it. */
+static int auto_min_k = AP_TREE_AUTO_K;
+static pthread_once_t auto_once = PTHREAD_ONCE_INIT;
+
+static void read_env_path(void) {
   const char *env = getenv("APPELL_PATH");
-  int min_k = env && strcmp(env, "tree") == 0 ? 0 : env && strcmp(env, "dense") == 0 ? INT_MAX
-              : AP_TREE_AUTO_K;
+  if (env && strcmp(env, "tree") == 0) auto_min_k = 0;
+  else if (env && strcmp(env, "dense") == 0) auto_min_k = INT_MAX;
+}
+
+int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
+  pthread_once(&auto_once, read_env_path);
+  int min_k = auto_min_k;
   if (path == AP_PATH_DENSE || (path == AP_PATH_AUTO && m->k < min_k)) return AP_OK;
   char reason[256] = "";
   ap_tplan *P = NULL;

@@ -129,10 +129,15 @@ static int each_entry(const sc_node *n, entry_fn f, void *user, int *count) {
       const sc_node *v = m->kids[j];
       int seq = v->kind == SC_SEQ, ne = seq ? v->n : 1;
       for (int e = 0; e < ne; e++, ++*count) {
-        char path[512], idx[16] = "";
+        if (!f) continue;
+        char idx[16] = "";
         if (seq) snprintf(idx, sizeof idx, ".%d", e);
-        snprintf(path, sizeof path, "initial.%s.%s%s", n->keys[i]->text, m->keys[j]->text, idx);
-        int rc = f ? f(path, seq ? v->kids[e] : v, user) : AP_OK;
+        size_t len = strlen(n->keys[i]->text) + strlen(m->keys[j]->text) + strlen(idx) + 10;
+        char *path = malloc(len);   /* the size it needs: a long key is never cut */
+        if (!path) return AP_ERR_NOMEM;
+        snprintf(path, len, "initial.%s.%s%s", n->keys[i]->text, m->keys[j]->text, idx);
+        int rc = f(path, seq ? v->kids[e] : v, user);
+        free(path);
         if (rc != AP_OK) return rc;
       }
     }
@@ -142,9 +147,13 @@ static int each_entry(const sc_node *n, entry_fn f, void *user, int *count) {
 
 static int add_set(const char *path, const sc_node *value, void *user) {
   ap_scene_lin *out = user;
-  char buf[1024];
-  snprintf(buf, sizeof buf, "%s=%s", path, value->text);
-  return (out->sets[out->nsets++] = strdup(buf)) ? AP_OK : AP_ERR_NOMEM;
+  const char *text = value->text ? value->text : "(null)";
+  size_t len = strlen(path) + strlen(text) + 2;
+  char *buf = malloc(len);   /* the size it needs: a long value is never cut */
+  if (!buf) return AP_ERR_NOMEM;
+  snprintf(buf, len, "%s=%s", path, text);
+  out->sets[out->nsets++] = buf;
+  return AP_OK;
 }
 
 /* "initial.J.K=V" for every entry of the section's initial: map (overrides of the guess). */

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "core/text.h"
 #include "scene/scene_int.h"
 
 #define SC_MAX_FILE (16L << 20)
@@ -63,10 +64,9 @@ static void stem(const char *file, char *out, size_t len) {
   const char *base = strrchr(file, '/');
   base = base ? base + 1 : file;
   size_t n = strcspn(base, ".");
-  if (n >= len) n = len - 1;
-  memcpy(out, base, n);
-  out[n] = '\0';
-  if (!out[0]) snprintf(out, len, "scene");
+  char whole[4096];   /* a file name has at most 255 bytes: whole always holds the stem */
+  snprintf(whole, sizeof whole, "%.*s", (int)(n < sizeof whole ? n : sizeof whole - 1), base);
+  ap_core_copy_name(out, len, whole[0] ? whole : "scene");   /* "..." when cut */
 }
 
 static int load_parsed(sc_ctx *c, ap_scene *sc) {
@@ -141,21 +141,23 @@ int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene
                   char *msg, size_t msg_len) {
   if (out) *out = NULL;
   FILE *f = path ? fopen(path, "rb") : NULL;
+  char ebuf[128];
   if (!f) {
     if (msg && msg_len) snprintf(msg, msg_len, "%s: cannot open: %s", path ? path : "(null)",
-                                 strerror(errno));
+                                 ap_core_errno_text(errno, ebuf, sizeof ebuf));
     return AP_ERR_ARG;
   }
-  struct stat st;
-  int dir = fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode);
-  size_t hint = !dir && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536, len = 0;
+  struct stat st;   /* read only when fstat succeeds; otherwise read the stream as it comes */
+  int known = fstat(fileno(f), &st) == 0, dir = known && S_ISDIR(st.st_mode);
+  size_t hint = known && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536, len = 0;
   char *buf = NULL;
   int err = dir ? EISDIR : read_all(f, hint, &buf, &len);
   fclose(f);
   if (err) {
     if (msg && msg_len)
       snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
-               : err == EFBIG ? "larger than 16 MiB: not a scene file" : strerror(err));
+               : err == EFBIG ? "larger than 16 MiB: not a scene file"
+               : ap_core_errno_text(err, ebuf, sizeof ebuf));
     return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
   }
   int rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);

@@ -9,7 +9,11 @@
  * appell.Error, and a signal its handler's exception (KeyboardInterrupt), with .partial =
  * (columns, table, q, v) up to the last time reached.
  * Invariant: at most one thread works on a Simulation at a time (busy), and the Simulation
- * holds a reference to its Model, so the scene outlives the simulation. */
+ * holds a reference to its Model, so the scene outlives the simulation.
+ * While it is busy, other threads read state, t, stats and warning from a snapshot (snap), not
+ * from the simulation the worker is changing without the GIL: the snapshot is taken with the
+ * GIL held while the worker is between internal steps (when the run starts and whenever it
+ * takes the GIL back, about every 0.2 s), so t, q and v always belong to one step. */
 #include "_ext.h"
 
 #include <math.h>
@@ -25,6 +29,9 @@ typedef struct apx_sim {
   char method[32];
   PyObject *report;        /* str: corrections of the initial state */
   int busy;
+  double *snap;            /* while busy: t, q (n), v (k) of the last snapshot */
+  ap_sim_stats snap_stats;
+  PyObject *snap_warning;  /* str */
 } apx_sim;
 
 static const char *const mode_names[] = {"minimal", "projected", "dae", "plain", NULL};
@@ -99,6 +106,7 @@ static int start(apx_sim *s, PyObject *q0, PyObject *v0, PyObject *t0) {
     rc = ap_sim_create(m, &s->run.sim, t, q, q + n, &s->sim, msg, sizeof msg);
     if (rc != AP_OK) apx_raise(rc, msg);
     else if (ap_scene_out_create(s->model->sc, &s->out) != AP_OK) PyErr_NoMemory();
+    else if (!(s->snap = PyMem_Calloc((size_t)(n + k) + 1, sizeof *s->snap))) PyErr_NoMemory();
     else s->report = PyUnicode_FromString(report);
   }
   PyMem_Free(q);
@@ -125,13 +133,29 @@ static PyObject *sim_new(PyTypeObject *type, PyObject *args, PyObject *kw) {
 static void sim_dealloc(apx_sim *s) {
   ap_scene_out_free(s->out);
   ap_sim_free(s->sim);
+  PyMem_Free(s->snap);
+  Py_XDECREF(s->snap_warning);
   Py_XDECREF(s->report);
   Py_XDECREF(s->model);
   Py_TYPE(s)->tp_free((PyObject *)s);
 }
 
+/* The snapshot other threads read while s is busy. Called with the GIL held, while the
+ * simulation is between internal steps. */
+static void take_snapshot(apx_sim *s) {
+  const ap_model *m = ap_scene_model(s->model->sc);
+  int n = ap_model_n(m), k = ap_model_k(m);
+  s->snap[0] = ap_sim_time(s->sim);
+  memcpy(s->snap + 1, ap_sim_q(s->sim), sizeof(double) * (size_t)n);
+  memcpy(s->snap + 1 + n, ap_sim_v(s->sim), sizeof(double) * (size_t)k);
+  ap_sim_get_stats(s->sim, &s->snap_stats);
+  PyObject *w = PyUnicode_FromString(ap_sim_warning(s->sim));
+  if (w) Py_XSETREF(s->snap_warning, w);
+  else PyErr_Clear();   /* out of memory: the previous warning stays */
+}
+
 static int claim(apx_sim *s) {
-  if (!s->busy) return s->busy = 1, 0;
+  if (!s->busy) return take_snapshot(s), s->busy = 1, 0;
   PyErr_SetString(PyExc_RuntimeError, "this Simulation is running in another thread");
   return -1;
 }
@@ -177,6 +201,7 @@ static int advance_released(apx_sim *s, double t, double *due, int *interrupted,
     rc = ap_sim_advance(s->sim, t);
     if (rc == AP_ERR_INTERRUPTED || now() > *due) {
       PyEval_RestoreThread(*ts);
+      take_snapshot(s);
       *interrupted = PyErr_CheckSignals() != 0;
       *ts = PyEval_SaveThread();
       *due = now() + 0.2;
@@ -323,22 +348,27 @@ static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
 
 /* ---- state and statistics -------------------------------------------------------------- */
 
+/* Readers: the simulation itself, or the snapshot while another thread integrates it. */
 static PyObject *get_state(apx_sim *s, void *c) {
   (void)c;
   const ap_model *m = ap_scene_model(s->model->sc);
-  return Py_BuildValue("(dNN)", ap_sim_time(s->sim), apx_vector(ap_sim_q(s->sim), ap_model_n(m)),
-                       apx_vector(ap_sim_v(s->sim), ap_model_k(m)));
+  int n = ap_model_n(m), k = ap_model_k(m);
+  if (s->busy)
+    return Py_BuildValue("(dNN)", s->snap[0], apx_vector(s->snap + 1, n),
+                         apx_vector(s->snap + 1 + n, k));
+  return Py_BuildValue("(dNN)", ap_sim_time(s->sim), apx_vector(ap_sim_q(s->sim), n),
+                       apx_vector(ap_sim_v(s->sim), k));
 }
 
 static PyObject *get_time(apx_sim *s, void *c) {
   (void)c;
-  return PyFloat_FromDouble(ap_sim_time(s->sim));
+  return PyFloat_FromDouble(s->busy ? s->snap[0] : ap_sim_time(s->sim));
 }
 
 static PyObject *get_stats(apx_sim *s, void *c) {
   (void)c;
-  ap_sim_stats st;
-  ap_sim_get_stats(s->sim, &st);
+  ap_sim_stats st = s->snap_stats;
+  if (!s->busy) ap_sim_get_stats(s->sim, &st);
   return Py_BuildValue("{s:l,s:l,s:l,s:l,s:l,s:l,s:l,s:d,s:d,s:d,s:d,s:d}", "steps", st.steps,
                        "rhs_evals", st.rhs_evals, "err_fails", st.err_fails, "rhs_fails",
                        st.rhs_fails, "partition_switches", st.partition_switches, "projections",
@@ -349,6 +379,7 @@ static PyObject *get_stats(apx_sim *s, void *c) {
 
 static PyObject *get_warning(apx_sim *s, void *c) {
   (void)c;
+  if (s->busy && s->snap_warning) return Py_NewRef(s->snap_warning);
   return PyUnicode_FromString(ap_sim_warning(s->sim));
 }
 
@@ -372,10 +403,13 @@ static PyObject *get_settings(apx_sim *s, void *c) {
 }
 
 static PyGetSetDef sim_getset[] = {
-    {"state", (getter)get_state, NULL, "(t, q, v) now (copies)", NULL},
-    {"t", (getter)get_time, NULL, "the current time", NULL},
-    {"stats", (getter)get_stats, NULL, "step counts, residuals, conditioning (a dict)", NULL},
-    {"warning", (getter)get_warning, NULL, "the run's first warning, or ''", NULL},
+    {"state", (getter)get_state, NULL, "(t, q, v) now (copies); while another thread runs it, "
+     "those of one step of the last snapshot (about every 0.2 s)", NULL},
+    {"t", (getter)get_time, NULL, "the current time (while running: the snapshot's)", NULL},
+    {"stats", (getter)get_stats, NULL, "step counts, residuals, conditioning (a dict; while "
+     "running: the snapshot's)", NULL},
+    {"warning", (getter)get_warning, NULL, "the run's first warning, or '' (while running: the "
+     "snapshot's)", NULL},
     {"report", (getter)get_report, NULL, "corrections made to the initial state, or ''", NULL},
     {"model", (getter)get_model, NULL, "the Model simulated", NULL},
     {"settings", (getter)get_settings, NULL, "mode, method and tolerances in use", NULL},

@@ -272,3 +272,58 @@ def test_absurd_row_counts_are_refused(disk):
         assert "10^7" in str(info.value) and sim.t == 0.0
     assert len(sim.run(t_end=0.01, dt=1e-3).t) == 11
 
+
+
+FALL = """
+name: fall
+bodies:
+  slider: {mass: 1, inertia: [0.1, 0.1, 0.1]}
+joints:
+  slider: {kind: prismatic, axis: z}
+effects:
+  gravity: {kind: gravity}
+initial:
+  slider: {position: 0.5, rate: 2.0}
+simulation: {t_end: 1, rtol: 1e-10, atol: 1e-12}
+output: {interval: 0.5, channels: [coordinates, speeds]}
+"""
+
+
+def test_state_read_from_another_thread_during_a_run_is_one_step():
+    """While run() integrates (GIL released), another thread reading state, t, stats and
+    warning gets a consistent snapshot: t, q and v of one step. Reference: the closed form of
+    a slider falling under gravity, z = z0 + v0 t - g t^2 / 2 and v = v0 - g t, which dopri5
+    integrates to round-off (a quadratic); a q or v of another step than t would be off by
+    g h_max = 2e-4 or more (h_max = 2e-5). The runs go on for at least 0.6 s of wall time, so
+    that several snapshots (one every 0.2 s) are read on any machine."""
+    z0, v0, g = 0.5, 2.0, 9.81
+    sim = appell.Simulation(appell.loads(FALL), h_max=2e-5)
+    done = threading.Event()
+    reads = []
+
+    def work():
+        start = time.perf_counter()
+        try:
+            while time.perf_counter() - start < 0.6:
+                sim.run(t_end=sim.t + 0.5, dt=0.5)
+        finally:
+            done.set()
+
+    th = threading.Thread(target=work)
+    th.start()
+    while not done.is_set():
+        t, q, v = sim.state
+        reads.append((t, q[0], v[0], sim.t, sim.stats["steps"], sim.warning))
+    th.join()
+    t_end = sim.t
+    assert len(reads) > 100 and len({r[0] for r in reads}) >= 3     # the runs were watched
+    steps = [r[4] for r in reads]
+    assert steps == sorted(steps)                                   # stats move forward
+    for t, z, v, t_alone, _, warning in reads:
+        z_ref = z0 + v0 * t - 0.5 * g * t * t
+        assert abs(z - z_ref) < 1e-9 * max(1.0, abs(z_ref))         # q of the step at t
+        assert abs(v - (v0 - g * t)) < 1e-9 * max(1.0, g * t)       # v of the same step
+        assert 0 <= t <= t_alone <= t_end and warning == ""
+    t, q, v = sim.state                                             # after the runs: live
+    z_ref = z0 + v0 * t_end - 0.5 * g * t_end**2
+    assert t == t_end and abs(q[0] - z_ref) < 1e-9 * max(1.0, abs(z_ref))
