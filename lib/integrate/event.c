@@ -1,0 +1,385 @@
+/* Events of a simulation (include/appell/event.h): the "events" stage of the after-step
+ * pipeline (sim_after.c), root finding on the stepper's dense output, and the records.
+ *
+ * After each accepted step from (t0, y0) to (t1, y1) every event function is evaluated at the
+ * new state (from the step's last evaluation when the data still holds it, else after loading
+ * the state and running the stages the event asks for). An event whose value at t1 has left
+ * the sign it had (sign, the side it was on; a value 0 at t1 counts as a crossing) is located
+ * by Illinois-modified regula falsi on g(t) = e(t, y(t)), y(t) the dense output of the step
+ * (dop853's order-7 interpolant, ARKODE's and CVODE's ap_step_dky, IDA's ap_dae_dky), with a
+ * bisection whenever a step of the iteration fails to halve the bracket, down to a bracket of
+ * 4 ulps of t. The crossing time is the bracket's right end: the state there is already on the
+ * side entered, so the event never fires twice at one crossing.
+ *
+ * Then, in time order: crossings in the direction asked for are recorded (the state at the
+ * crossing from the dense output) up to the first stop or switch event, and all at that same
+ * time (within AP_EV_TIE). A stop or switch cuts the step there: the state becomes the dense
+ * output's at the event, the stepper restarts there (its step size kept; IDA from the Appell
+ * solve), a switch hook first changes (q, v) and the state is put back on the constraints.
+ * Crossings after the cut are not recorded: their events keep their side and are found again
+ * in a later step. Events that did not cross take the sign of their value at the step's end
+ * (a value of exactly 0 keeps the old side, so an event that starts at 0 fires only once it
+ * has left 0 and crossed back). */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "appell/event.h"
+#include "integrate/sim_int.h"
+
+#define AP_EV_TIE (64.0 * DBL_EPSILON)   /* relative: crossings this close are simultaneous */
+#define AP_EV_ITER 200                   /* root-finding iterations (bisection bounds it) */
+
+typedef struct ev_item {
+  ap_event_def def;
+  char *name;
+  int sign;            /* side at the last accepted state: +1, -1, 0 (not left 0 yet) */
+  double last;         /* value there */
+  double end;          /* value at the new state */
+  double troot;        /* located crossing (when crossed) */
+  int crossed;
+} ev_item;
+
+struct ap_sim_events {
+  int count, cap;
+  ev_item *list;
+  int stage;           /* the largest stage any event asks for */
+  double t_last;       /* time of the last accepted state the signs describe */
+  double *yd;          /* (ny) dense-output state */
+  ap_event_record **sw; /* (cap) the switch records of the current cut, by event */
+  ap_event_record *rec;
+  int nrec, caprec;
+};
+
+ap_event_def ap_event_def_default(void) {
+  ap_event_def def;
+  memset(&def, 0, sizeof def);
+  def.name = "event";
+  def.direction = AP_EVENT_EITHER;
+  def.action = AP_EVENT_STOP;
+  def.stage = AP_EVENT_STATE;
+  return def;
+}
+
+/* ---- evaluating ------------------------------------------------------------------------------ */
+
+/* The data at (t, y) (the stepper's or IDA's state) with the stages `stage` asks for; d->q,
+ * d->v then hold the coordinates and speeds. */
+static int load(ap_sim *s, double t, const double *y, int stage) {
+  ap_data *d = s->d;
+  ap_basis basis = d->basis;
+  int rc = AP_OK;
+  if (s->dae) {
+    d->t = t, d->speeds_from_e = 0;
+    memcpy(d->q, y, sizeof(double) * (size_t)s->n);
+    memcpy(d->v, y + s->n, sizeof(double) * (size_t)s->k);
+    d->basis = stage >= AP_EVENT_ACCELERATION ? AP_BASIS_ORTHONORMAL : AP_BASIS_NONE;
+  } else {
+    ap_drv_load_state(s, t, y);
+  }
+  s->ev_stamp = -1;                               /* the data no longer holds the rhs */
+  if (stage >= AP_EVENT_ACCELERATION) {
+    rc = ap_forward(s->m, d);
+  } else if (stage >= AP_EVENT_POSITION || s->def.mode == AP_MODE_MINIMAL) {
+    rc = ap_fwd_position(s->m, d);
+    if (rc == AP_OK && s->def.mode == AP_MODE_MINIMAL) ap_core_speeds(s->m, d);
+  }
+  if (rc == AP_OK && stage >= AP_EVENT_REACTIONS) rc = ap_fwd_reactions(s->m, d);
+  d->basis = basis;
+  if (rc != AP_OK)
+    return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "events at t = %.17g: %s", t, d->msg);
+  return AP_OK;
+}
+
+/* it's value with the data loaded at t. */
+static int value(ap_sim *s, ev_item *it, double t, double *f) {
+  const ap_data *d = s->d;
+  *f = NAN;
+  int rc = it->def.fn(t, d->q, d->v, d, it->def.user, f);
+  if (rc < 0)
+    return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its function returned %d at t = %.17g",
+                       it->name, rc, t);
+  if (!isfinite(*f))
+    return ap_drv_fail(s, AP_ERR_NAN, "event '%s': its function is %g at t = %.17g", it->name,
+                       *f, t);
+  return AP_OK;
+}
+
+/* Every event's value at the accepted state (t, y) into end. */
+static int values_at(ap_sim *s, double t, const double *y) {
+  ap_sim_events *ev = s->ev;
+  int rc = AP_OK;
+  if (s->dae || ev->stage > AP_EVENT_ACCELERATION || !ap_drv_evaluated_at(s, t, y))
+    rc = load(s, t, y, ev->stage);
+  for (int i = 0; rc == AP_OK && i < ev->count; i++)
+    rc = value(s, &ev->list[i], t, &ev->list[i].end);
+  return rc;
+}
+
+/* The dense output of the last step at t into ev->yd. */
+static int dense(ap_sim *s, double t) {
+  int rc = s->dae ? ap_dae_dky(s->dae, t, s->ev->yd) : ap_step_dky(s->st, t, s->ev->yd);
+  if (rc != AP_OK)
+    return ap_drv_fail(s, rc, "events: %s", s->dae ? ap_dae_message(s->dae)
+                                                   : ap_step_message(s->st));
+  return AP_OK;
+}
+
+static int g_at(ap_sim *s, ev_item *it, double t, double *f) {
+  int rc = dense(s, t);
+  if (rc == AP_OK) rc = load(s, t, s->ev->yd, (int)it->def.stage);
+  return rc == AP_OK ? value(s, it, t, f) : rc;
+}
+
+/* ---- locating ---------------------------------------------------------------------------------- */
+
+/* The crossing of it between (ta, it->last) and (tb, it->end): Illinois regula falsi with
+ * bisection when the bracket does not halve; the result is the bracket's right end. */
+static int locate(ap_sim *s, ev_item *it, double ta, double tb) {
+  double ga = it->last, gb = it->end, width = tb - ta;
+  int side = 0, bisect = 0, rc = AP_OK;
+  for (int iter = 0; iter < AP_EV_ITER && gb != 0.0; iter++) {
+    if (tb - ta <= 4.0 * DBL_EPSILON * fmax(fabs(ta), fabs(tb))) break;
+    double tm = bisect || gb == ga ? 0.5 * (ta + tb) : tb - gb * (tb - ta) / (gb - ga);
+    if (!(tm > ta && tm < tb)) tm = ta + 0.5 * (tb - ta);
+    if (!(tm > ta && tm < tb)) break;             /* no float between them */
+    double gm = 0.0;
+    rc = g_at(s, it, tm, &gm);
+    if (rc != AP_OK) return rc;
+    if (gm * it->sign > 0) {                      /* still on the old side */
+      ta = tm, ga = gm;
+      if (side == -1) gb *= 0.5;
+      side = -1;
+    } else {
+      tb = tm, gb = gm;
+      if (side == 1) ga *= 0.5;
+      side = 1;
+    }
+    bisect = tb - ta > 0.5 * width;
+    width = tb - ta;
+  }
+  it->troot = tb;
+  return AP_OK;
+}
+
+/* ---- recording ---------------------------------------------------------------------------------- */
+
+static int record(ap_sim *s, int i, double t, int dir, ap_event_record **out) {
+  ap_sim_events *ev = s->ev;
+  if (ev->nrec == ev->caprec) {
+    int cap = ev->caprec ? 2 * ev->caprec : 8;
+    ap_event_record *r = realloc(ev->rec, sizeof *r * (size_t)cap);
+    if (!r) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+    ev->rec = r, ev->caprec = cap;
+  }
+  double *x = malloc(sizeof(double) * (size_t)(s->n + s->k));
+  if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+  memcpy(x, s->d->q, sizeof(double) * (size_t)s->n);
+  memcpy(x + s->n, s->d->v, sizeof(double) * (size_t)s->k);
+  ap_event_record *r = &ev->rec[ev->nrec++];
+  *r = (ap_event_record){ev->list[i].name, i, t, dir, ev->list[i].def.action, s->n, s->k, x,
+                         x + s->n};
+  *out = r;
+  return AP_OK;
+}
+
+/* Crossing i fires: direction matches. */
+static int fires(const ev_item *it) {
+  int dir = -it->sign;   /* +1: rose through 0 */
+  return it->def.direction == AP_EVENT_EITHER || (int)it->def.direction == dir;
+}
+
+/* The earliest crossing not yet handled at or before tmax, or -1. */
+static int next_crossing(const ap_sim_events *ev, double tmax) {
+  int best = -1;
+  for (int i = 0; i < ev->count; i++)
+    if (ev->list[i].crossed == 1 && ev->list[i].troot <= tmax &&
+        (best < 0 || ev->list[i].troot < ev->list[best].troot))
+      best = i;
+  return best;
+}
+
+/* The time of the first stop or switch crossing (INFINITY when none). */
+static double first_cut(const ap_sim_events *ev) {
+  double tc = INFINITY;
+  for (int i = 0; i < ev->count; i++) {
+    const ev_item *it = &ev->list[i];
+    if (it->crossed && fires(it) && it->def.action != AP_EVENT_LOG) tc = fmin(tc, it->troot);
+  }
+  return tc;
+}
+
+/* Record the crossings up to tcut (and those tied with it) in time order; flip their sides.
+ * *cut: the switch record at the cut (or the last record at it). */
+static int record_crossings(ap_sim *s, double tcut, double t1, int *stop,
+                            ap_event_record **sw) {
+  ap_sim_events *ev = s->ev;
+  double tmax = isfinite(tcut) ? tcut + AP_EV_TIE * fmax(fabs(tcut), t1 - ev->t_last) : t1;
+  for (int i; (i = next_crossing(ev, tmax)) >= 0;) {
+    ev_item *it = &ev->list[i];
+    it->crossed = 2;
+    if (fires(it)) {
+      double t = isfinite(tcut) && it->troot > tcut ? tcut : it->troot;
+      ap_event_record *r = NULL;
+      int rc = dense(s, t);
+      if (rc == AP_OK) rc = load(s, t, ev->yd, AP_EVENT_STATE);
+      if (rc == AP_OK) rc = record(s, i, t, -it->sign, &r);
+      if (rc != AP_OK) return rc;
+      if (it->def.action == AP_EVENT_STOP) *stop = 1;
+      if (it->def.action == AP_EVENT_SWITCH) sw[i] = r;
+    }
+    it->sign = -it->sign;
+  }
+  return AP_OK;
+}
+
+/* The state moved to (t, y): stepper or IDA restarted there; switch hooks first. */
+static int cut_at(ap_sim *s, double t, ap_event_record **sw) {
+  ap_sim_events *ev = s->ev;
+  double *q = ev->yd + s->ny, *v = q + s->n;
+  int rc = dense(s, t), hooked = 0;
+  if (rc == AP_OK) rc = load(s, t, ev->yd, AP_EVENT_STATE);
+  if (rc != AP_OK) return rc;
+  memcpy(q, s->d->q, sizeof(double) * (size_t)s->n);
+  memcpy(v, s->d->v, sizeof(double) * (size_t)s->k);
+  for (int i = 0; i < ev->count; i++) {
+    if (!sw[i]) continue;
+    hooked = 1;
+    if (ev->list[i].def.on_switch(sw[i], q, v, ev->list[i].def.user) < 0)
+      return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed at t = %.17g",
+                         ev->list[i].name, t);
+  }
+  if (s->dae || hooked) return ap_drv_restart_state(s, t, q, v);
+  memcpy(s->y, ev->yd, sizeof(double) * (size_t)s->ny);
+  s->stats.restarts++;
+  int r = ap_step_reset(s->st, t, s->y);
+  return r == AP_OK ? AP_OK : ap_drv_fail(s, r, "%s", ap_step_message(s->st));
+}
+
+/* Signs and values from ev->list[].end at the state the step ends (or was cut) at. */
+static void settle(ap_sim_events *ev, double t) {
+  for (int i = 0; i < ev->count; i++) {
+    ev_item *it = &ev->list[i];
+    if (!it->crossed && it->end != 0.0) it->sign = it->end > 0 ? 1 : -1;
+    it->last = it->end;
+    it->crossed = 0;
+  }
+  ev->t_last = t;
+}
+
+int ap_drv_stage_events(ap_sim *s, double *t) {
+  ap_sim_events *ev = s->ev;
+  double t1 = *t, *y = s->dae ? s->ytry : s->y;
+  int rc = values_at(s, t1, y), any = 0, stop = 0;
+  for (int i = 0; rc == AP_OK && i < ev->count; i++) {
+    ev_item *it = &ev->list[i];
+    it->crossed = it->sign != 0 && (it->end == 0.0 || (it->end > 0) != (it->sign > 0));
+    if (it->crossed) rc = locate(s, it, ev->t_last, t1);
+    any |= it->crossed;
+  }
+  if (rc != AP_OK || !any) {
+    if (rc == AP_OK) settle(ev, t1);
+    return rc;
+  }
+  ap_event_record **sw = ev->sw;
+  memset(sw, 0, sizeof *sw * (size_t)ev->count);
+  double tcut = first_cut(ev);
+  rc = record_crossings(s, tcut, t1, &stop, sw);
+  int hooked = 0;
+  for (int i = 0; i < ev->count; i++) hooked |= sw[i] != NULL;
+  if (rc == AP_OK && isfinite(tcut)) {
+    if (tcut < t1 || hooked) rc = cut_at(s, tcut, sw);
+    *t = fmin(tcut, t1);
+    if (rc == AP_OK) rc = values_at(s, *t, s->dae ? s->ytry : s->y);
+  }
+  for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
+  if (rc == AP_OK) settle(ev, *t);
+  return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
+}
+
+/* ---- the public functions ------------------------------------------------------------------------- */
+
+static int check_event(ap_sim *s, const ap_event_def *def) {
+  if (!def || !def->fn)
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_add_event: %s", def ? "no event function (fn)"
+                                                                  : "NULL definition");
+  const char *name = def->name ? def->name : "event";
+  if (def->direction < AP_EVENT_FALLING || def->direction > AP_EVENT_RISING)
+    return ap_drv_fail(s, AP_ERR_ARG, "event '%s': unknown direction %d", name,
+                       (int)def->direction);
+  if (def->action < AP_EVENT_STOP || def->action > AP_EVENT_SWITCH)
+    return ap_drv_fail(s, AP_ERR_ARG, "event '%s': unknown action %d", name, (int)def->action);
+  if (def->stage < AP_EVENT_STATE || def->stage > AP_EVENT_REACTIONS)
+    return ap_drv_fail(s, AP_ERR_ARG, "event '%s': unknown stage %d", name, (int)def->stage);
+  if (def->action == AP_EVENT_SWITCH && !def->on_switch)
+    return ap_drv_fail(s, AP_ERR_ARG, "event '%s': a switch needs a hook (on_switch)", name);
+  return AP_OK;
+}
+
+static int grow(ap_sim *s) {
+  if (!s->ev) {
+    s->ev = calloc(1, sizeof *s->ev);
+    size_t ny = (size_t)(s->n + s->k + s->b + (s->m->ev.phi ? s->m->nphi : 0));
+    if (s->ev) s->ev->yd = calloc(ny + (size_t)(s->n + s->k), sizeof(double));
+    if (!s->ev || !s->ev->yd) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+    s->ev->t_last = s->t;
+  }
+  ap_sim_events *ev = s->ev;
+  if (ev->count < ev->cap) return AP_OK;
+  int cap = ev->cap ? 2 * ev->cap : 4;
+  ev_item *l = realloc(ev->list, sizeof *l * (size_t)cap);
+  if (l) ev->list = l;
+  ap_event_record **sw = l ? realloc(ev->sw, sizeof *sw * (size_t)cap) : NULL;
+  if (!sw) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+  ev->sw = sw, ev->cap = cap;
+  return AP_OK;
+}
+
+int ap_sim_add_event(ap_sim *s, const ap_event_def *def) {
+  if (!s) return AP_ERR_ARG;
+  int rc = check_event(s, def);
+  if (rc == AP_OK) rc = grow(s);
+  if (rc != AP_OK) return rc;
+  ap_sim_events *ev = s->ev;
+  ev_item *it = &ev->list[ev->count];
+  memset(it, 0, sizeof *it);
+  it->def = *def;
+  const char *name = def->name ? def->name : "event";
+  it->name = malloc(strlen(name) + 1);
+  if (!it->name) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+  strcpy(it->name, name);
+  double *y = s->y;                              /* the current state (IDA's too) */
+  rc = load(s, s->t, y, (int)def->stage);
+  if (rc == AP_OK) rc = value(s, it, s->t, &it->last);
+  if (rc == AP_OK) rc = ap_drv_evaluate_current(s);   /* the data back at the current state */
+  if (rc != AP_OK) return free(it->name), rc;
+  it->sign = it->last > 0 ? 1 : it->last < 0 ? -1 : 0;
+  ev->count++;
+  if ((int)def->stage > ev->stage) ev->stage = (int)def->stage;
+  ev->t_last = s->t;
+  ap_drv_pipeline_build(s);
+  return AP_OK;
+}
+
+int ap_sim_event_count(const ap_sim *s) { return s && s->ev ? s->ev->nrec : 0; }
+
+int ap_sim_event_get(const ap_sim *s, int i, ap_event_record *out) {
+  if (!s || !out || i < 0 || i >= ap_sim_event_count(s)) return AP_ERR_ARG;
+  *out = s->ev->rec[i];
+  return AP_OK;
+}
+
+void ap_drv_events_free(ap_sim *s) {
+  ap_sim_events *ev = s->ev;
+  if (!ev) return;
+  for (int i = 0; i < ev->count; i++) free(ev->list[i].name);
+  for (int i = 0; i < ev->nrec; i++) free((double *)ev->rec[i].q);
+  free(ev->list);
+  free(ev->sw);
+  free(ev->rec);
+  free(ev->yd);
+  free(ev);
+  s->ev = NULL;
+}
