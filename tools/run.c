@@ -214,6 +214,11 @@ static int loop(run_state *rs, cli_out *out) {
     double t = i == nrows ? rs->run.t_end : rs->run.t0 + (double)i * rs->run.interval;
     rc = ap_sim_advance(rs->sim, t);
     if (rc == AP_ERR_INTERRUPTED && cli_interrupted()) break;
+    if (rc == AP_STOPPED) {                      /* a stop event: the last row is there */
+      rc = write_row(rs, out->f);
+      if (cli_out_failed(out)) return write_failed(out);
+      break;
+    }
     if (rc != AP_OK) {
       fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
               ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
@@ -279,6 +284,7 @@ static int start(run_state *rs, const run_opts *o) {
   if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
   ap_scene_get_run(rs->sc, &rs->run);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
+  if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
   if (rc != AP_OK) {
     fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc), msg);
     return cli_exit_code(rc);
@@ -318,6 +324,7 @@ int cmd_run(int argc, char **argv) {
     rs.wall = now() - t_start;
     code = cli_out_close(&out, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
+    if (!o.quiet) cli_print_events(rs.sim);
   }
   free(rs.buf);
   free(rs.lift);
