@@ -218,6 +218,13 @@ int ap_scene_add_events(const ap_scene *sc, ap_sim *sim, char *msg, size_t msg_l
   if (msg && msg_len) msg[0] = '\0';
   if (!sc || !sim) return AP_ERR_ARG;
   const sc_scene *s = sc_scene_parsed(sc);
+  const ap_data *sd = ap_sim_data(sim);   /* the simulation must be of the scene's model */
+  const ap_model *m = ap_scene_model(sc);
+  if (sd->n != ap_model_n(m) || sd->k != ap_model_k(m) || sd->b != ap_model_b(m)) {
+    if (msg && msg_len) snprintf(msg, msg_len, "%s: the simulation is not of this scene's model",
+                                 s->file);
+    return AP_ERR_ARG;
+  }
   for (int i = 0; i < s->nev; i++) {
     const sc_event *e = &s->events[i];
     ap_event_def def = ap_event_def_default();
