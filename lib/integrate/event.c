@@ -47,8 +47,9 @@ struct ap_sim_events {
   ev_item *list;
   int stage;           /* the largest stage any event asks for */
   double t_last;       /* time of the last accepted state the signs describe */
-  double *yd;          /* (ny) dense-output state */
-  ap_event_record **sw; /* (cap) the switch records of the current cut, by event */
+  double *ylast;       /* (ny) that state, as the stepper (or IDA) continued from it */
+  double *yd;          /* (ny + n + k) dense-output state; q and v at a cut */
+  int *sw;             /* (cap) 1 + the switch record of the current cut, by event; 0 none */
   ap_event_record *rec;
   int nrec, caprec;
 };
@@ -201,20 +202,21 @@ static int next_crossing(const ap_sim_events *ev, double tmax) {
   return best;
 }
 
-/* The time of the first stop or switch crossing (INFINITY when none). */
-static double first_cut(const ap_sim_events *ev) {
-  double tc = INFINITY;
+/* The first stop or switch crossing (its time, INFINITY when none, in *tc). */
+static int first_cut(const ap_sim_events *ev, double *tc) {
+  int best = -1;
+  *tc = INFINITY;
   for (int i = 0; i < ev->count; i++) {
     const ev_item *it = &ev->list[i];
-    if (it->crossed && fires(it) && it->def.action != AP_EVENT_LOG) tc = fmin(tc, it->troot);
+    if (it->crossed && fires(it) && it->def.action != AP_EVENT_LOG && it->troot < *tc)
+      *tc = it->troot, best = i;
   }
-  return tc;
+  return best;
 }
 
 /* Record the crossings up to tcut (and those tied with it) in time order; flip their sides.
  * *cut: the switch record at the cut (or the last record at it). */
-static int record_crossings(ap_sim *s, double tcut, double t1, int *stop,
-                            ap_event_record **sw) {
+static int record_crossings(ap_sim *s, double tcut, double t1, int *stop, int *sw) {
   ap_sim_events *ev = s->ev;
   double tmax = isfinite(tcut) ? tcut + AP_EV_TIE * fmax(fabs(tcut), t1 - ev->t_last) : t1;
   for (int i; (i = next_crossing(ev, tmax)) >= 0;) {
@@ -228,45 +230,101 @@ static int record_crossings(ap_sim *s, double tcut, double t1, int *stop,
       if (rc == AP_OK) rc = record(s, i, t, -it->sign, &r);
       if (rc != AP_OK) return rc;
       if (it->def.action == AP_EVENT_STOP) *stop = 1;
-      if (it->def.action == AP_EVENT_SWITCH) sw[i] = r;
+      if (it->def.action == AP_EVENT_SWITCH) sw[i] = ev->nrec;
     }
     it->sign = -it->sign;
   }
   return AP_OK;
 }
 
-/* The state moved to (t, y): stepper or IDA restarted there; switch hooks first. */
-static int cut_at(ap_sim *s, double t, ap_event_record **sw) {
+/* Step again from the last accepted state to tcut, with the stepper itself (or IDA), so that
+ * the state at a cut is the method's own, not the dense output's: the step that crossed may
+ * have straddled a kink, and ARKODE's interpolant is of lower order than its methods. */
+static int restep(ap_sim *s, double tcut) {
   ap_sim_events *ev = s->ev;
-  double *q = ev->yd + s->ny, *v = q + s->n;
-  int rc = dense(s, t), hooked = 0;
-  if (rc == AP_OK) rc = load(s, t, ev->yd, AP_EVENT_STATE);
+  double t = ev->t_last;
+  int rc;
+  s->stats.restarts++;
+  if (s->dae) {
+    rc = ap_drv_restart_state(s, t, ev->ylast, ev->ylast + s->n);
+    while (rc == AP_OK && t < tcut)
+      if ((rc = ap_dae_one(s->dae, tcut, &t, s->ytry)) != AP_OK)
+        rc = ap_drv_fail(s, rc, "events: %s", ap_dae_message(s->dae));
+    return rc;
+  }
+  memcpy(s->y, ev->ylast, sizeof(double) * (size_t)s->ny);
+  rc = ap_step_reset(s->st, t, s->y);
+  while (rc == AP_OK && t < tcut) rc = ap_step_one(s->st, tcut, &t, s->y);
+  if (rc != AP_OK)
+    return ap_drv_fail(s, rc, "events: stepping again to t = %.17g: %s", tcut,
+                       ap_step_message(s->st));
+  return AP_OK;
+}
+
+/* After stepping again to *t, the cut event's value on the method's own state: when it is not
+ * 0 yet, regula falsi steps (each stepping again from the last accepted state) on the bracket
+ * it leaves with the step's start or end, while they move t by more than 4 ulps (at most 3:
+ * the dense output's time is already close, and each step about squares its error). */
+static int refine(ap_sim *s, ev_item *it, double *t, double t1) {
+  double ta = s->ev->t_last, ga = it->last, tb = t1, gb = it->end, tc = *t, gc = 0.0;
+  for (int iter = 0; iter < 3; iter++) {
+    int rc = load(s, tc, s->dae ? s->ytry : s->y, (int)it->def.stage);
+    if (rc == AP_OK) rc = value(s, it, tc, &gc);
+    if (rc != AP_OK || gc == 0.0) return rc;
+    if (gc * it->sign < 0) ta = tc, ga = gc;   /* still on the old side (sign: the new one) */
+    else tb = tc, gb = gc;
+    double tn = tb - gb * (tb - ta) / (gb - ga);
+    if (!(tn > ta && tn < tb) || fabs(tn - tc) <= 4.0 * DBL_EPSILON * fabs(tc)) return AP_OK;
+    if ((rc = restep(s, tn)) != AP_OK) return rc;
+    *t = tc = tn;
+  }
+  return AP_OK;
+}
+
+/* Cut the step at *t < t1 (or at t1 for a switch): the state there (the time refined on it),
+ * the records made at the cut (from first on) moved to it, the switch hooks, and the
+ * restart. */
+static int cut_at(ap_sim *s, double *tp, double t1, const int *sw, int first, ev_item *cut) {
+  ap_sim_events *ev = s->ev;
+  double *q = ev->yd + s->ny, *v = q + s->n, t0 = *tp;
+  int rc = t0 < t1 ? restep(s, t0) : AP_OK, hooked = 0;
+  if (rc == AP_OK && t0 < t1) rc = refine(s, cut, tp, t1);
+  double t = *tp;
+  if (rc == AP_OK) rc = load(s, t, s->dae ? s->ytry : s->y, AP_EVENT_STATE);
   if (rc != AP_OK) return rc;
   memcpy(q, s->d->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->d->v, sizeof(double) * (size_t)s->k);
+  for (int r = first; r < ev->nrec; r++) {
+    if (ev->rec[r].t != t0) continue;
+    ev->rec[r].t = t;
+    memcpy((double *)ev->rec[r].q, q, sizeof(double) * (size_t)s->n);
+    memcpy((double *)ev->rec[r].v, v, sizeof(double) * (size_t)s->k);
+  }
   for (int i = 0; i < ev->count; i++) {
     if (!sw[i]) continue;
     hooked = 1;
-    if (ev->list[i].def.on_switch(sw[i], q, v, ev->list[i].def.user) < 0)
+    if (ev->list[i].def.on_switch(&ev->rec[sw[i] - 1], q, v, ev->list[i].def.user) < 0)
       return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed at t = %.17g",
                          ev->list[i].name, t);
   }
-  if (s->dae || hooked) return ap_drv_restart_state(s, t, q, v);
-  memcpy(s->y, ev->yd, sizeof(double) * (size_t)s->ny);
-  s->stats.restarts++;
-  int r = ap_step_reset(s->st, t, s->y);
-  return r == AP_OK ? AP_OK : ap_drv_fail(s, r, "%s", ap_step_message(s->st));
+  return hooked ? ap_drv_restart_state(s, t, q, v) : AP_OK;
 }
 
 /* Signs and values from ev->list[].end at the state the step ends (or was cut) at. */
-static void settle(ap_sim_events *ev, double t) {
+static void settle(ap_sim_events *ev) {
   for (int i = 0; i < ev->count; i++) {
     ev_item *it = &ev->list[i];
     if (!it->crossed && it->end != 0.0) it->sign = it->end > 0 ? 1 : -1;
     it->last = it->end;
     it->crossed = 0;
   }
-  ev->t_last = t;
+}
+
+/* The last stage: the state the next step starts from (after projections, re-partitions). */
+int ap_drv_stage_event_state(ap_sim *s, double *t) {
+  memcpy(s->ev->ylast, s->dae ? s->ytry : s->y, sizeof(double) * (size_t)s->ny);
+  s->ev->t_last = *t;
+  return AP_OK;
 }
 
 int ap_drv_stage_events(ap_sim *s, double *t) {
@@ -280,22 +338,22 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
     any |= it->crossed;
   }
   if (rc != AP_OK || !any) {
-    if (rc == AP_OK) settle(ev, t1);
+    if (rc == AP_OK) settle(ev);
     return rc;
   }
-  ap_event_record **sw = ev->sw;
+  int *sw = ev->sw, first = ev->nrec, hooked = 0;
   memset(sw, 0, sizeof *sw * (size_t)ev->count);
-  double tcut = first_cut(ev);
+  double tcut;
+  int ic = first_cut(ev, &tcut);
   rc = record_crossings(s, tcut, t1, &stop, sw);
-  int hooked = 0;
-  for (int i = 0; i < ev->count; i++) hooked |= sw[i] != NULL;
+  for (int i = 0; i < ev->count; i++) hooked |= sw[i] != 0;
   if (rc == AP_OK && isfinite(tcut)) {
-    if (tcut < t1 || hooked) rc = cut_at(s, tcut, sw);
+    if (tcut < t1 || hooked) rc = cut_at(s, &tcut, t1, sw, first, &ev->list[ic]);
     *t = fmin(tcut, t1);
     if (rc == AP_OK) rc = values_at(s, *t, s->dae ? s->ytry : s->y);
   }
   for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
-  if (rc == AP_OK) settle(ev, *t);
+  if (rc == AP_OK) settle(ev);
   return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
 }
 
@@ -322,16 +380,18 @@ static int grow(ap_sim *s) {
   if (!s->ev) {
     s->ev = calloc(1, sizeof *s->ev);
     size_t ny = (size_t)(s->n + s->k + s->b + (s->m->ev.phi ? s->m->nphi : 0));
-    if (s->ev) s->ev->yd = calloc(ny + (size_t)(s->n + s->k), sizeof(double));
+    if (s->ev) s->ev->yd = calloc(2 * ny + (size_t)(s->n + s->k), sizeof(double));
     if (!s->ev || !s->ev->yd) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
+    s->ev->ylast = s->ev->yd + ny + s->n + s->k;
     s->ev->t_last = s->t;
+    memcpy(s->ev->ylast, s->y, sizeof(double) * (size_t)s->ny);
   }
   ap_sim_events *ev = s->ev;
   if (ev->count < ev->cap) return AP_OK;
   int cap = ev->cap ? 2 * ev->cap : 4;
   ev_item *l = realloc(ev->list, sizeof *l * (size_t)cap);
   if (l) ev->list = l;
-  ap_event_record **sw = l ? realloc(ev->sw, sizeof *sw * (size_t)cap) : NULL;
+  int *sw = l ? realloc(ev->sw, sizeof *sw * (size_t)cap) : NULL;
   if (!sw) return ap_drv_fail(s, AP_ERR_NOMEM, "events: out of memory");
   ev->sw = sw, ev->cap = cap;
   return AP_OK;
@@ -359,6 +419,7 @@ int ap_sim_add_event(ap_sim *s, const ap_event_def *def) {
   ev->count++;
   if ((int)def->stage > ev->stage) ev->stage = (int)def->stage;
   ev->t_last = s->t;
+  memcpy(ev->ylast, s->y, sizeof(double) * (size_t)s->ny);
   ap_drv_pipeline_build(s);
   return AP_OK;
 }

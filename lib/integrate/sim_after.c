@@ -2,15 +2,17 @@
  * (docs/architecture.md "After a step"). The stages of a simulation are chosen once, by mode,
  * when it is created (ap_drv_pipeline_build) and again when an event is added:
  *
- *   minimal     events, coordinates, partition, redundant rows
- *   projected   events, coordinates, projection, redundant rows
- *   plain       events, coordinates, residual, redundant rows
- *   DAE         events, DAE checks, DAE rows
+ *   minimal     events, coordinates, partition, redundant rows, event state
+ *   projected   events, coordinates, projection, redundant rows, event state
+ *   plain       events, coordinates, residual, redundant rows, event state
+ *   DAE         events, DAE checks, DAE rows, event state
  *
  * events (event.c) runs first, on the step exactly as the stepper made it, so that its dense
  * output still describes the step; when it cuts the step at a stop or switch event it moves
  * the time back to the event and the later stages work there. It is in the list only when the
- * simulation has events: without them nothing of it is evaluated. coordinates puts q back on
+ * simulation has events: without them nothing of it is evaluated; neither is event state,
+ * which keeps the state the next step starts from (a cut steps again from it). coordinates
+ * puts q back on
  * its manifold (body models); partition re-chooses the minimal mode's independent speeds when
  * the frozen basis degraded; projection puts v back on A v + a0 = 0; residual records it
  * (plain mode); redundant rows judges the consistency of dropped rows at the accepted state.
@@ -129,6 +131,7 @@ static const ap_drv_stage stage_residual = {"residual", ap_drv_stage_residual};
 static const ap_drv_stage stage_redundant = {"redundant rows", ap_drv_stage_redundant};
 static const ap_drv_stage stage_dae = {"DAE checks", stage_dae_checks};
 static const ap_drv_stage stage_rows = {"DAE rows", stage_dae_rows};
+static const ap_drv_stage stage_event_state = {"event state", ap_drv_stage_event_state};
 
 void ap_drv_pipeline_build(ap_sim *s) {
   int n = 0;
@@ -154,6 +157,7 @@ void ap_drv_pipeline_build(ap_sim *s) {
       s->stages[n++] = &stage_redundant;
       break;
   }
+  if (s->ev) s->stages[n++] = &stage_event_state;
   s->nstages = n;
 }
 

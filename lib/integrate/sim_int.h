@@ -86,6 +86,7 @@ void ap_drv_pipeline_build(ap_sim *s);
 int ap_drv_after_step(ap_sim *s, double *t);
 /* The stages (sim_step.c; event.c for events). */
 int ap_drv_stage_events(ap_sim *s, double *t);
+int ap_drv_stage_event_state(ap_sim *s, double *t);
 int ap_drv_stage_coordinates(ap_sim *s, double *t);
 int ap_drv_stage_partition(ap_sim *s, double *t);
 int ap_drv_stage_projection(ap_sim *s, double *t);

@@ -43,6 +43,16 @@ typedef struct sc_event {
   const ap_model *m;
 } sc_event;
 
+/* A kink of a scene expression (abs, step, delta): an implicit event on its argument. */
+typedef struct sc_kink {
+  char name[128];                 /* "kink 1 of effects.push.force" */
+  const sc_expr *e;
+  int which;                      /* its place among the program's kinks */
+  int nin;
+  int index[AP_STATE_MAX_INPUTS]; /* global q or v index of each input */
+  int speed[AP_STATE_MAX_INPUTS];
+} sc_kink;
+
 static const char *const kinds[] = {"when", "collide", "lift_off", "joint_range", NULL};
 static const char *const dirs[] = {"either", "rising", "falling", NULL};
 static const char *const actions[] = {"stop", "log", NULL};
@@ -55,7 +65,8 @@ void sc_events_free(sc_scene *s) {
     sc_expr_free(&s->events[i].when);
   }
   free(s->events);
-  s->events = NULL, s->nev = 0;
+  free(s->kinks);
+  s->events = NULL, s->nev = 0, s->kinks = NULL, s->nkink = 0;
 }
 
 /* ---- reading ------------------------------------------------------------------------------ */
@@ -160,8 +171,53 @@ int sc_parse_events(sc_ctx *c, sc_scene *s) {
   return AP_OK;
 }
 
+/* The kinks of e (reading the state inputs in[nin], or none) into s->kinks when k is not
+ * NULL; returns their number. */
+static int add_kinks(sc_scene *s, const ap_model *m, const sc_expr *e, const ap_state_input *in,
+                     int nin, sc_kink *k) {
+  int n = e->timed ? sc_prog_nkinks(e->prog) : 0;
+  for (int i = 0; k && i < n; i++, k++) {
+    snprintf(k->name, sizeof k->name, "kink %d of %.100s", i + 1,
+             e->node && e->node->path ? e->node->path : "an expression");
+    k->e = e, k->which = i, k->nin = nin;
+    for (int j = 0; j < nin; j++)
+      k->index[j] = sc_state_index(s, m, &in[j]), k->speed[j] = in[j].speed;
+  }
+  return n;
+}
+
+/* Every expression of the scene through add_kinks; the count. */
+static int each_kink(sc_scene *s, const ap_model *m, sc_kink *k) {
+  int n = 0;
+#define AP_KINKS(e, in, nin) (n += add_kinks(s, m, (e), (in), (nin), k ? k + n : NULL))
+  for (int j = 0; j < s->nj; j++)
+    for (int i = 0; i < 3; i++) AP_KINKS(&s->joints[j].drive[i], NULL, 0);
+  for (int i = 0; i < 2; i++) AP_KINKS(&s->ground.vel[i], NULL, 0);
+  AP_KINKS(&s->ground.omega, NULL, 0);
+  for (int c = 0; c < s->nc; c++) {
+    AP_KINKS(&s->cons[c].value, NULL, 0);
+    AP_KINKS(&s->cons[c].ground.omega, NULL, 0);
+    for (int i = 0; i < 2; i++) AP_KINKS(&s->cons[c].ground.vel[i], NULL, 0);
+  }
+  for (int e = 0; e < s->ne; e++) {
+    const ap_effect_def *d = &s->effs[e].def;
+    for (int i = 0; i < 3; i++) {
+      AP_KINKS(&s->effs[e].force[i], NULL, 0);
+      AP_KINKS(&s->effs[e].torque[i], NULL, 0);
+    }
+    AP_KINKS(&s->effs[e].value, d->inputs, d->state_fn == sc_state_fn ? d->ninputs : 0);
+  }
+#undef AP_KINKS
+  return n;
+}
+
 int sc_events_bind(sc_ctx *c, sc_scene *s, const ap_model *m) {
-  (void)c;
+  int nk = each_kink(s, m, NULL);
+  if (nk > 0) {
+    s->kinks = calloc((size_t)nk, sizeof *s->kinks);
+    if (!s->kinks) return sc_nomem(c);
+    s->nkink = each_kink(s, m, s->kinks);
+  }
   for (int i = 0; i < s->nev; i++) {
     sc_event *e = &s->events[i];
     e->m = m;
@@ -214,6 +270,34 @@ static int event_fn(double t, const double *q, const double *v, const ap_data *d
   return rc == AP_OK ? 0 : -1;
 }
 
+static int kink_fn(double t, const double *q, const double *v, const ap_data *d, void *user,
+                   double *f) {
+  (void)d;
+  const sc_kink *k = user;
+  double x[AP_STATE_MAX_INPUTS], args[SC_EXPR_MAX];
+  for (int j = 0; j < k->nin; j++) x[j] = k->speed[j] ? v[k->index[j]] : q[k->index[j]];
+  sc_prog_kinks(k->e->prog, t, x, args);
+  *f = args[k->which];
+  return 0;
+}
+
+/* A kink: the stepper restarts there, nothing else changes. */
+static int kink_restart(const ap_event_record *ev, double *q, double *v, void *user) {
+  (void)ev, (void)q, (void)v, (void)user;
+  return 0;
+}
+
+static int add_kink_events(const sc_scene *s, ap_sim *sim) {
+  for (int i = 0; i < s->nkink; i++) {
+    ap_event_def def = ap_event_def_default();
+    def.name = s->kinks[i].name, def.fn = kink_fn, def.user = (void *)&s->kinks[i];
+    def.action = AP_EVENT_SWITCH, def.on_switch = kink_restart;
+    int rc = ap_sim_add_event(sim, &def);
+    if (rc != AP_OK) return rc;
+  }
+  return AP_OK;
+}
+
 int ap_scene_add_events(const ap_scene *sc, ap_sim *sim, char *msg, size_t msg_len) {
   if (msg && msg_len) msg[0] = '\0';
   if (!sc || !sim) return AP_ERR_ARG;
@@ -239,5 +323,8 @@ int ap_scene_add_events(const ap_scene *sc, ap_sim *sim, char *msg, size_t msg_l
       return rc;
     }
   }
-  return AP_OK;
+  int rc = add_kink_events(s, sim);
+  if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s: %s", s->file,
+                                               ap_sim_message(sim));
+  return rc;
 }

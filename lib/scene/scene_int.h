@@ -236,6 +236,8 @@ typedef struct sc_scene {
   int path;                /* simulation.path (ap_path): auto, dense or tree */
   int nev;
   struct sc_event *events; /* the events: section and the bodies' collide: keys (events.c) */
+  int nkink;
+  struct sc_kink *kinks;   /* kinks of its expressions: implicit events (events.c) */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
