@@ -76,6 +76,10 @@ typedef struct ap_event_def {
   ap_event_action action;  /* default AP_EVENT_STOP */
   ap_event_stage stage;    /* default AP_EVENT_STATE */
   ap_event_switch_fn on_switch; /* required with AP_EVENT_SWITCH, else unused */
+  int of_time;             /* 1: fn depends on t alone (q, v and d unused), e.g. a jump of a
+                              function of t: its next crossing is found ahead of the steps and
+                              the stepper lands just before it, so no step straddles it (a
+                              jump makes error-controlled steps across it collapse); default 0 */
 } ap_event_def;
 
 AP_API ap_event_def ap_event_def_default(void);

@@ -225,7 +225,7 @@ static int record_crossings(ap_sim *s, double tcut, double t1, int *stop, int *s
     if (fires(it)) {
       double t = isfinite(tcut) && it->troot > tcut ? tcut : it->troot;
       ap_event_record *r = NULL;
-      int rc = dense(s, t);
+      int rc = dense(s, fmin(t, t1));   /* a crossing found ahead: the state at t1 */
       if (rc == AP_OK) rc = load(s, t, ev->yd, AP_EVENT_STATE);
       if (rc == AP_OK) rc = record(s, i, t, -it->sign, &r);
       if (rc != AP_OK) return rc;
@@ -254,7 +254,10 @@ static int restep(ap_sim *s, double tcut) {
   }
   memcpy(s->y, ev->ylast, sizeof(double) * (size_t)s->ny);
   rc = ap_step_reset(s->st, t, s->y);
-  while (rc == AP_OK && t < tcut) rc = ap_step_one(s->st, tcut, &t, s->y);
+  /* a step may end a few ulps short of tcut, where no step fits: the state is then tcut's */
+  while (rc == AP_OK && tcut - t > 32.0 * DBL_EPSILON * fabs(tcut))
+    rc = ap_step_one(s->st, tcut, &t, s->y);
+  if (rc == AP_OK && t != tcut) rc = ap_step_reset(s->st, tcut, s->y);
   if (rc != AP_OK)
     return ap_drv_fail(s, rc, "events: stepping again to t = %.17g: %s", tcut,
                        ap_step_message(s->st));
@@ -327,9 +330,51 @@ int ap_drv_stage_event_state(ap_sim *s, double *t) {
   return AP_OK;
 }
 
+/* Events of t alone: the crossing of `it` in (t, t + H], H = 10 x the last step (steps
+ * grow by at most 6), by bisection on fn (exact: no state); INFINITY when none. The stepper
+ * stops at the bracket's left end (still on the old side), and the stage then takes the
+ * crossing a few ulps ahead as reached (ahead_now). */
+static double ahead(ap_sim *s, ev_item *it, double t, double h, double *right) {
+  double ta = t, tb = t + 10.0 * h, gb = 0.0;
+  if (!(h > 0) || it->sign == 0 || it->def.fn(tb, s->d->q, s->d->v, s->d, it->def.user, &gb) < 0 ||
+      !(gb * it->sign <= 0))
+    return INFINITY;
+  while (tb - ta > 4.0 * DBL_EPSILON * fabs(tb)) {
+    double tm = 0.5 * (ta + tb), gm = 0.0;
+    if (it->def.fn(tm, s->d->q, s->d->v, s->d, it->def.user, &gm) < 0) return INFINITY;
+    if (gm * it->sign > 0) ta = tm;
+    else tb = tm;
+  }
+  *right = tb;
+  return ta;
+}
+
+/* Events of t alone whose crossing the stepper stopped just before: reached now. */
+static void ahead_now(ap_sim *s, double t1) {
+  ap_sim_events *ev = s->ev;
+  for (int i = 0; i < ev->count; i++) {
+    ev_item *it = &ev->list[i];
+    if (it->def.of_time && !it->crossed && isfinite(it->troot) && it->troot > t1 &&
+        it->troot - t1 <= 64.0 * DBL_EPSILON * fabs(t1))
+      it->crossed = 1;
+  }
+}
+
+/* After the stage: the next crossing ahead of any event of t alone. */
+static void look_ahead(ap_sim *s, double t, double h) {
+  ap_sim_events *ev = s->ev;
+  s->t_ahead = INFINITY;
+  for (int i = 0; i < ev->count; i++) {
+    ev_item *it = &ev->list[i];
+    double right = INFINITY, left = it->def.of_time ? ahead(s, it, t, h, &right) : INFINITY;
+    it->troot = right;
+    s->t_ahead = fmin(s->t_ahead, left);
+  }
+}
+
 int ap_drv_stage_events(ap_sim *s, double *t) {
   ap_sim_events *ev = s->ev;
-  double t1 = *t, *y = s->dae ? s->ytry : s->y;
+  double t1 = *t, *y = s->dae ? s->ytry : s->y, h = t1 - ev->t_last;
   int rc = values_at(s, t1, y), any = 0, stop = 0;
   for (int i = 0; rc == AP_OK && i < ev->count; i++) {
     ev_item *it = &ev->list[i];
@@ -337,8 +382,12 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
     if (it->crossed) rc = locate(s, it, ev->t_last, t1);
     any |= it->crossed;
   }
+  if (rc == AP_OK && s->t_ahead <= t1) {
+    ahead_now(s, t1);
+    for (int i = 0; i < ev->count; i++) any |= ev->list[i].crossed;
+  }
   if (rc != AP_OK || !any) {
-    if (rc == AP_OK) settle(ev);
+    if (rc == AP_OK) settle(ev), look_ahead(s, t1, h);
     return rc;
   }
   int *sw = ev->sw, first = ev->nrec, hooked = 0;
@@ -349,11 +398,11 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
   for (int i = 0; i < ev->count; i++) hooked |= sw[i] != 0;
   if (rc == AP_OK && isfinite(tcut)) {
     if (tcut < t1 || hooked) rc = cut_at(s, &tcut, t1, sw, first, &ev->list[ic]);
-    *t = fmin(tcut, t1);
+    *t = tcut;
     if (rc == AP_OK) rc = values_at(s, *t, s->dae ? s->ytry : s->y);
   }
   for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
-  if (rc == AP_OK) settle(ev);
+  if (rc == AP_OK) settle(ev), look_ahead(s, *t, h);
   return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
 }
 

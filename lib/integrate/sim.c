@@ -311,6 +311,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   s->stats.min_rcond = 1.0;
   s->y = buf, s->ytry = buf + nk, s->yev = buf + 2 * nk, s->ydot = buf + 3 * nk;
   s->q = buf + 4 * nk, s->v = s->q + m->n, s->ev_stamp = -1, s->growth_cap = INFINITY;
+  s->t_ahead = INFINITY;
   s->phi = s->v + m->k;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
@@ -385,7 +386,7 @@ static int advance_one(ap_sim *s, double tout) {
   double t = s->t;
   s->rhs_status = AP_OK;
   if (s->dae) {
-    int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
+    int rc = ap_dae_one(s->dae, fmin(tout, s->t_ahead), &t, s->ytry);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
     rc = ap_drv_after_step(s, &t);
     if (rc != AP_OK && rc != AP_STOPPED) return s->failed = rc;   /* IDA went on; we cannot */
@@ -393,7 +394,7 @@ static int advance_one(ap_sim *s, double tout) {
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
     return rc;
   }
-  int rc = ap_step_one(s->st, tout, &t, s->ytry);
+  int rc = ap_step_one(s->st, fmin(tout, s->t_ahead), &t, s->ytry);
   if (rc != AP_OK) {
     if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
     return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),

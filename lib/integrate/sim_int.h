@@ -59,6 +59,8 @@ struct ap_sim {
   const ap_drv_stage *stages[AP_DRV_MAX_STAGES];   /* the after-step pipeline, in order */
   int nstages;
   ap_sim_events *ev;        /* events and their records (event.c); NULL until one is added */
+  double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
+                               stepper stops at it); INFINITY when none */
 };
 
 /* printf into s->msg; returns status. */

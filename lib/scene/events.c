@@ -292,6 +292,7 @@ static int add_kink_events(const sc_scene *s, ap_sim *sim) {
     ap_event_def def = ap_event_def_default();
     def.name = s->kinks[i].name, def.fn = kink_fn, def.user = (void *)&s->kinks[i];
     def.action = AP_EVENT_SWITCH, def.on_switch = kink_restart;
+    def.of_time = s->kinks[i].nin == 0;
     int rc = ap_sim_add_event(sim, &def);
     if (rc != AP_OK) return rc;
   }
