@@ -313,6 +313,25 @@ static int cut_at(ap_sim *s, double *tp, double t1, const int *sw, int first, ev
   return hooked ? ap_drv_restart_state(s, t, q, v) : AP_OK;
 }
 
+/* After a cut at t: events that changed side at the cut itself (a function that jumps where a
+ * kink of t is, e.g. a motor's saturation at its set-point's jump) are crossings at t too. */
+static int jumped_at_cut(ap_sim *s, double t, int *stop) {
+  ap_sim_events *ev = s->ev;
+  for (int i = 0; i < ev->count; i++) {
+    ev_item *it = &ev->list[i];
+    if (it->crossed || it->sign == 0 || !(it->end * it->sign < 0)) continue;
+    ap_event_record *r = NULL;
+    if (fires(it)) {
+      int rc = load(s, t, s->dae ? s->ytry : s->y, AP_EVENT_STATE);
+      if (rc == AP_OK) rc = record(s, i, t, -it->sign, &r);
+      if (rc != AP_OK) return rc;
+      if (it->def.action == AP_EVENT_STOP) *stop = 1;
+    }
+    it->sign = -it->sign, it->crossed = 1;
+  }
+  return AP_OK;
+}
+
 /* Signs and values from ev->list[].end at the state the step ends (or was cut) at. */
 static void settle(ap_sim_events *ev) {
   for (int i = 0; i < ev->count; i++) {
@@ -402,6 +421,7 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
     if (rc == AP_OK) rc = values_at(s, *t, s->dae ? s->ytry : s->y);
   }
   for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
+  if (rc == AP_OK && isfinite(tcut)) rc = jumped_at_cut(s, *t, &stop);
   if (rc == AP_OK) settle(ev), look_ahead(s, *t, h);
   return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
 }

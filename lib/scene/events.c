@@ -16,6 +16,10 @@
  * u = -R^T e_z); lift_off is the contact's normal force F_n (ap_body_contact_force, after the
  * multipliers); joint_range is min(q - min, max - q) of the joint's first coordinate.
  * Defaults: direction either for when, falling for the others; action stop.
+ * Implicit events: the kinks (abs, step) of every expression of the scene, on their
+ * arguments, and the saturation switching of motors with a limit, u = +-max for the
+ * unsaturated PD law u (set-points constant or of t; lib/model/actuator.c has the law); both
+ * restart the stepper where they cross (a switch with no change of state).
  * Invariant: after sc_events_bind nothing here is written; the functions read the scene and
  * the model only, so one scene's events may run in many simulations at once. */
 #include <math.h>
@@ -53,6 +57,15 @@ typedef struct sc_kink {
   int speed[AP_STATE_MAX_INPUTS];
 } sc_kink;
 
+/* A motor's saturation switching, |u| = max_effort of its unsaturated PD law u: the events
+ * u - max (sign +1) and u + max (sign -1). */
+typedef struct sc_sat {
+  char name[128];
+  const sc_eff *e;
+  int qi, vi;                     /* global indices of its coordinate and speed */
+  double sign;
+} sc_sat;
+
 static const char *const kinds[] = {"when", "collide", "lift_off", "joint_range", NULL};
 static const char *const dirs[] = {"either", "rising", "falling", NULL};
 static const char *const actions[] = {"stop", "log", NULL};
@@ -66,7 +79,8 @@ void sc_events_free(sc_scene *s) {
   }
   free(s->events);
   free(s->kinks);
-  s->events = NULL, s->nev = 0, s->kinks = NULL, s->nkink = 0;
+  free(s->sats);
+  s->events = NULL, s->nev = 0, s->kinks = NULL, s->nkink = 0, s->sats = NULL, s->nsat = 0;
 }
 
 /* ---- reading ------------------------------------------------------------------------------ */
@@ -211,7 +225,34 @@ static int each_kink(sc_scene *s, const ap_model *m, sc_kink *k) {
   return n;
 }
 
+/* Motors with a finite limit and a set-point of t (or constant) into s->sats when sat is not
+ * NULL; their number. */
+static int each_sat(const sc_scene *s, const ap_model *m, sc_sat *sat) {
+  int n = 0;
+  for (int i = 0; i < s->ne; i++) {
+    const ap_effect_def *d = &s->effs[i].def;
+    if (d->kind != AP_EFFECT_MOTOR || !isfinite(d->max_effort) || d->state_fn) continue;
+    for (int j = 0; sat && j < 2; j++) {
+      sc_sat *x = &sat[n + j];
+      ap_state_input vin = {d->joint, 1, d->speed}, qin = {d->joint, 0, d->speed};
+      x->e = &s->effs[i], x->sign = j ? -1.0 : 1.0;
+      x->vi = sc_state_index(s, m, &vin);
+      x->qi = d->motor == AP_MOTOR_ANGLE ? sc_state_index(s, m, &qin) : -1;
+      snprintf(x->name, sizeof x->name, "saturation of %.80s (%cmax)", s->effs[i].name,
+               j ? '-' : '+');
+    }
+    n += 2;
+  }
+  return n;
+}
+
 int sc_events_bind(sc_ctx *c, sc_scene *s, const ap_model *m) {
+  int ns = each_sat(s, m, NULL);
+  if (ns > 0) {
+    s->sats = calloc((size_t)ns, sizeof *s->sats);
+    if (!s->sats) return sc_nomem(c);
+    s->nsat = each_sat(s, m, s->sats);
+  }
   int nk = each_kink(s, m, NULL);
   if (nk > 0) {
     s->kinks = calloc((size_t)nk, sizeof *s->kinks);
@@ -281,6 +322,19 @@ static int kink_fn(double t, const double *q, const double *v, const ap_data *d,
   return 0;
 }
 
+static int sat_fn(double t, const double *q, const double *v, const ap_data *d, void *user,
+                  double *f) {
+  (void)d;
+  const sc_sat *x = user;
+  const ap_effect_def *e = &x->e->def;
+  double s[3] = {e->value, 0.0, 0.0};
+  if (e->value_fn && sc_expr_eval(&x->e->value, t, s) != 0) return -1;
+  double u = x->qi < 0 ? e->kd * (s[0] - v[x->vi])
+                       : e->kp * (s[0] - q[x->qi]) + e->kd * (s[1] - v[x->vi]);
+  *f = u - x->sign * e->max_effort;
+  return 0;
+}
+
 /* A kink: the stepper restarts there, nothing else changes. */
 static int kink_restart(const ap_event_record *ev, double *q, double *v, void *user) {
   (void)ev, (void)q, (void)v, (void)user;
@@ -288,6 +342,13 @@ static int kink_restart(const ap_event_record *ev, double *q, double *v, void *u
 }
 
 static int add_kink_events(const sc_scene *s, ap_sim *sim) {
+  for (int i = 0; i < s->nsat; i++) {
+    ap_event_def def = ap_event_def_default();
+    def.name = s->sats[i].name, def.fn = sat_fn, def.user = (void *)&s->sats[i];
+    def.action = AP_EVENT_SWITCH, def.on_switch = kink_restart;
+    int rc = ap_sim_add_event(sim, &def);
+    if (rc != AP_OK) return rc;
+  }
   for (int i = 0; i < s->nkink; i++) {
     ap_event_def def = ap_event_def_default();
     def.name = s->kinks[i].name, def.fn = kink_fn, def.user = (void *)&s->kinks[i];

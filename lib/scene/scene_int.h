@@ -236,8 +236,9 @@ typedef struct sc_scene {
   int path;                /* simulation.path (ap_path): auto, dense or tree */
   int nev;
   struct sc_event *events; /* the events: section and the bodies' collide: keys (events.c) */
-  int nkink;
+  int nkink, nsat;
   struct sc_kink *kinks;   /* kinks of its expressions: implicit events (events.c) */
+  struct sc_sat *sats;     /* saturation switching of its motors: implicit events too */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);

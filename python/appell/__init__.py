@@ -85,7 +85,9 @@ def constant(text):
 
 class Result:
     """Rows of a run: res.t, res.q (rows x n), res.v (rows x k), res["disk.tilt"] (any output
-    column of the scene, as in appell run's CSV), res.columns, res.table (rows x columns)."""
+    column of the scene, as in appell run's CSV), res.columns, res.table (rows x columns),
+    res.events (the scene's events recorded: dicts with name, t, direction, action, q, v; a
+    stop event's row is the last)."""
 
     def __init__(self, columns, table, q, v, coordinate_names=(), speed_names=()):
         self.columns = tuple(columns)
@@ -95,6 +97,7 @@ class Result:
         self.coordinate_names = tuple(coordinate_names)
         self.speed_names = tuple(speed_names)
         self._index = {name: i for i, name in enumerate(self.columns)}
+        self.events = []
 
     @property
     def t(self):
@@ -143,8 +146,11 @@ class Simulation(_appell.Simulation):
             partial = getattr(e, "partial", None)
             if partial is not None:
                 e.result = Result(*partial, m.coordinate_names, m.speed_names)
+                e.result.events = self.events
             raise
-        return Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+        res = Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+        res.events = self.events   # the scene's events so far (docs/python.md "Events")
+        return res
 
 
 class Linearization:

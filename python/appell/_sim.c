@@ -96,6 +96,7 @@ static int start(apx_sim *s, PyObject *q0, PyObject *v0, PyObject *t0) {
   if (rc == AP_OK && !PyErr_Occurred() && !take_vector(q0, q, n, "q0") &&
       !take_vector(v0, q + n, k, "v0")) {
     rc = ap_sim_create(m, &s->run.sim, t, q, q + n, &s->sim, msg, sizeof msg);
+    if (rc == AP_OK) rc = ap_scene_add_events(s->model->sc, s->sim, msg, sizeof msg);
     if (rc != AP_OK) apx_raise(rc, msg);
     else if (ap_scene_out_create(s->model->sc, &s->out) != AP_OK) PyErr_NoMemory();
     else s->report = PyUnicode_FromString(report);
@@ -197,6 +198,10 @@ static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) 
   for (long i = 1; r->rc == AP_OK && !r->interrupted && i < r->rows; i++) {
     double t = i == r->rows - 1 ? t_end : t0 + (double)i * dt;
     r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
+    if (r->rc == AP_STOPPED) {   /* a stop event: its row is the last */
+      r->rc = record(s, r);
+      break;
+    }
     if (r->rc == AP_OK) r->rc = record(s, r);
   }
   PyEval_RestoreThread(ts);
@@ -302,7 +307,7 @@ static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
   PyEval_RestoreThread(ts);
   s->busy = 0;
   if (interrupted) return NULL;   /* the handler's exception (KeyboardInterrupt) is set */
-  if (rc == AP_OK) Py_RETURN_NONE;
+  if (rc == AP_OK || rc == AP_STOPPED) Py_RETURN_NONE;   /* stopped: see .events */
   char msg[1400];
   snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),
            ap_strerror(rc), ap_sim_message(s->sim));
@@ -340,6 +345,11 @@ static PyObject *get_warning(apx_sim *s, void *c) {
   return PyUnicode_FromString(ap_sim_warning(s->sim));
 }
 
+static PyObject *get_events(apx_sim *s, void *c) {
+  (void)c;
+  return apx_events(s->sim);
+}
+
 static PyObject *get_report(apx_sim *s, void *c) {
   (void)c;
   return Py_NewRef(s->report);
@@ -364,6 +374,7 @@ static PyGetSetDef sim_getset[] = {
     {"t", (getter)get_time, NULL, "the current time", NULL},
     {"stats", (getter)get_stats, NULL, "step counts, residuals, conditioning (a dict)", NULL},
     {"warning", (getter)get_warning, NULL, "the run's first warning, or ''", NULL},
+    {"events", (getter)get_events, NULL, "the events recorded so far (a list of dicts)", NULL},
     {"report", (getter)get_report, NULL, "corrections made to the initial state, or ''", NULL},
     {"model", (getter)get_model, NULL, "the Model simulated", NULL},
     {"settings", (getter)get_settings, NULL, "mode, method and tolerances in use", NULL},
