@@ -196,6 +196,48 @@ static void test_saturation(const char *path, ap_mode mode) {
   ap_scene_free(sc);
 }
 
+/* Built-ins: joint_range on the pendulum (leaves [-0.3, 0.6] at -0.3 rad, the elliptic time),
+ * and lift_off and collide on the rolling disk (F_n = m g and the rim on the ground: they
+ * evaluate at every step and never cross). */
+static void test_builtins(const char *pend, const char *disk) {
+  const char *range[] = {"events={range: {kind: joint_range, joint: hinge, min: -0.3, max: 0.6}}"};
+  ap_scene *sc = NULL;
+  char msg[1024];
+  AP_CHECK(ap_scene_load(pend, range, 1, &sc, msg, sizeof msg) == AP_OK);
+  if (!sc) return (void)fprintf(stderr, "%s\n", msg);
+  double q0[1], v0[1];
+  AP_CHECK(ap_scene_initial_state(sc, q0, v0, NULL, 0, msg, sizeof msg) == AP_OK);
+  ap_scene_run run;
+  ap_scene_get_run(sc, &run);
+  ap_sim *s = NULL;
+  AP_CHECK(ap_sim_create(ap_scene_model(sc), &run.sim, 0.0, q0, v0, &s, msg, sizeof msg) == AP_OK);
+  AP_CHECK(ap_scene_add_events(sc, s, msg, sizeof msg) == AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 5.0), AP_STOPPED);
+  double k = sin(0.25), omega = sqrt(9.81 / 1.001);
+  double t_exit = (ell_f(RS_PI / 2, k) + ell_f(asin(sin(0.15) / k), k)) / omega;
+  printf("joint_range: left at t = %.15f (exact %.15f)\n", ap_sim_time(s), t_exit);
+  AP_CHECK_NEAR(ap_sim_time(s), t_exit, 1e-10 * t_exit);
+  AP_CHECK_NEAR(ap_sim_q(s)[0], -0.3, 1e-10);
+  ap_sim_free(s);
+  ap_scene_free(sc);
+  const char *lift[] = {"events={lift: {kind: lift_off, constraint: roll, action: log}, "
+                        "low: {kind: collide, body: disk, action: log}}",
+                        "simulation.t_end=1"};
+  AP_CHECK(ap_scene_load(disk, lift, 2, &sc, msg, sizeof msg) == AP_OK);
+  if (!sc) return (void)fprintf(stderr, "%s\n", msg);
+  const ap_model *m = ap_scene_model(sc);
+  double *x = calloc((size_t)(ap_model_n(m) + ap_model_k(m)), sizeof *x);
+  AP_CHECK(ap_scene_initial_state(sc, x, x + ap_model_n(m), NULL, 0, msg, sizeof msg) == AP_OK);
+  ap_scene_get_run(sc, &run);
+  AP_CHECK(ap_sim_create(m, &run.sim, 0.0, x, x + ap_model_n(m), &s, msg, sizeof msg) == AP_OK);
+  AP_CHECK(ap_scene_add_events(sc, s, msg, sizeof msg) == AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 1.0), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 0);
+  ap_sim_free(s);
+  free(x);
+  ap_scene_free(sc);
+}
+
 static double last_time(const char *csv) {
   FILE *f = fopen(csv, "r");
   char line[4096];
@@ -237,6 +279,9 @@ int main(void) {
   test_pendulum(path, AP_MODE_PROJECTED);
   test_pendulum(path, AP_MODE_DAE);
   test_cli(path);
+  char disk[1200];
+  ct_source(disk, sizeof disk, "examples/scenes", "rolling_disk.yaml");
+  test_builtins(path, disk);
   ct_source(path, sizeof path, "tests/scenes", "kinks.yaml");
   test_kinks(path, AP_MODE_MINIMAL, 0);
   test_kinks(path, AP_MODE_MINIMAL, 1);

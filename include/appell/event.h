@@ -15,13 +15,13 @@
  * Rules. An event already zero at the state where it is added does not fire there (its sign
  * is taken from the first state where it is not zero). Several crossings in one step: the
  * first one wins (log events before it are recorded, crossings after it are looked for again
- * in the next steps); crossings at the same time (to 1e-13 of the step) are all reported, in
- * the order of the events. A crossing is located to the round-off of the dense output: the
- * event time is the end of the last bracket (the first floating-point time at which e has
- * changed sign, to a bracket of 4 ulps of t), and the state there is the dense output's. How
- * close that is to the exact crossing depends on the dense output (docs/api.md "Events"):
- * dop853's order-7 interpolant and CVODE's and IDA's Nordsieck arrays follow the solution to
- * about the step tolerance; ARKODE's Hermite interpolant somewhat less.
+ * in the next steps); crossings at the same time (within 64 ulps) are all reported, in the
+ * order of the events. A crossing is located on the dense output to a bracket of 4 ulps of t;
+ * the event time is the bracket's right end (the first time at which e has changed sign). A
+ * stop or switch then steps again from the last accepted state to that time with the method
+ * itself and refines the time on those states, so that the event time and the state there are
+ * the method's own (docs/api.md "Events": within 1e-11 relative of the exact time at rtol
+ * 1e-12 with every stepper family); a log event's time and state are the dense output's.
  * A scene without events evaluates nothing of this. */
 #ifndef APPELL_EVENT_H
 #define APPELL_EVENT_H

@@ -13,13 +13,21 @@
  *
  * Then, in time order: crossings in the direction asked for are recorded (the state at the
  * crossing from the dense output) up to the first stop or switch event, and all at that same
- * time (within AP_EV_TIE). A stop or switch cuts the step there: the state becomes the dense
- * output's at the event, the stepper restarts there (its step size kept; IDA from the Appell
- * solve), a switch hook first changes (q, v) and the state is put back on the constraints.
- * Crossings after the cut are not recorded: their events keep their side and are found again
- * in a later step. Events that did not cross take the sign of their value at the step's end
- * (a value of exactly 0 keeps the old side, so an event that starts at 0 fires only once it
- * has left 0 and crossed back). */
+ * time (within AP_EV_TIE). A stop or switch cuts the step there: the stepper (or IDA) steps
+ * again from the state the "event state" stage kept at the step's start to the event time,
+ * with the method itself (the dense output may be of lower order, and the step that crossed
+ * may have straddled a kink), and regula falsi on those re-stepped states refines the time
+ * (refine); the records at the cut get that state, a switch hook may change it (the state is
+ * then put back on the constraints and the stepper restarted), and events that changed side
+ * at the cut itself are reported there too. Crossings after the cut are not recorded: their
+ * events keep their side and are found again in a later step. Events that did not cross take
+ * the sign of their value at the step's end (a value of exactly 0 keeps the old side, so an
+ * event that starts at 0 fires only once it has left 0 and crossed back).
+ *
+ * Events of t alone (of_time): after each step their next crossing within ten step lengths is
+ * found by bisection on the function itself, and the driver's next stop time (s->t_ahead) is
+ * the bracket's left end, so no step straddles it; at that stop the crossing, a few ulps
+ * ahead, is taken as reached (ahead_now) and cut there without a step. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
