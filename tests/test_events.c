@@ -9,7 +9,9 @@
  *    a falling-only event; an event zero at the start that does not fire there (v = -sin t
  *    fires first at pi); two events at one time both reported; the first of two stop events
  *    wins and the other is found on the next advance; a switch hook (an elastic bounce at
- *    x = 0: the motion becomes |cos t|); the argument checks. */
+ *    x = 0: the motion becomes |cos t|); events of t alone (of_time) hit to their 4-ulp
+ *    bracket, a log, a switch (a bounce in time) and a stop; the argument checks. */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -179,6 +181,38 @@ static void test_switch(ap_mode mode, const char *method) {
   osc_free(s);
 }
 
+/* Events of t alone (of_time): e = t - level; the stepper stops just before each. */
+static int ev_time(double t, const double *q, const double *v, const ap_data *d, void *user,
+                   double *f) {
+  (void)q, (void)v, (void)d;
+  *f = t - *(const double *)user;
+  return 0;
+}
+
+static void test_of_time(const char *method, ap_mode mode) {
+  ap_sim *s = osc_sim(mode, method, 1e-12);
+  static const double at[3] = {0.75, 1.5, 2.0};
+  const char *names[3] = {"log", "switch", "stop"};
+  for (int i = 0; i < 3; i++) {
+    ap_event_def ev = ap_event_def_default();
+    ev.name = names[i], ev.fn = ev_time, ev.user = (void *)&at[i], ev.of_time = 1;
+    ev.action = i == 0 ? AP_EVENT_LOG : i == 1 ? AP_EVENT_SWITCH : AP_EVENT_STOP;
+    ev.on_switch = i == 1 ? bounce : NULL;   /* v -> -v at t = 1.5 */
+    AP_CHECK(ap_sim_add_event(s, &ev) == AP_OK);
+  }
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 3.0), AP_STOPPED);
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 3);
+  for (int i = 0; i < 3 && i < ap_sim_event_count(s); i++) {
+    ap_event_record r;
+    AP_CHECK(ap_sim_event_get(s, i, &r) == AP_OK && strcmp(r.name, names[i]) == 0);
+    AP_CHECK_NEAR(r.t, at[i], 4 * DBL_EPSILON * at[i]);   /* the bracket of 4 ulps */
+  }
+  /* after the bounce at 1.5: x = cos(3 - t), the mirror image in time */
+  AP_CHECK_NEAR(ap_sim_time(s), 2.0, 4 * DBL_EPSILON * 2.0);
+  AP_CHECK_NEAR(ap_sim_q(s)[0], cos(1.0), 1e-10);
+  ap_sim_free(s);
+}
+
 static void test_args(void) {
   ap_sim *s = osc_sim(AP_MODE_MINIMAL, "dopri5", 1e-8);
   ap_event_def ev = ap_event_def_default();
@@ -263,6 +297,10 @@ int main(void) {
   test_switch(AP_MODE_MINIMAL, "dop853");
   test_switch(AP_MODE_PROJECTED, "verner6");
   test_switch(AP_MODE_DAE, "ida");
+  test_of_time("dop853", AP_MODE_MINIMAL);
+  test_of_time("dopri5", AP_MODE_PROJECTED);
+  test_of_time("bdf", AP_MODE_MINIMAL);
+  test_of_time("ida", AP_MODE_DAE);
   /* Event-time bounds at rtol 1e-12 (relative): the crossing located on the dense output, then
    * stepped to with the method itself and refined by regula falsi on its own states
    * (event.c), so every family reaches the step tolerance: measured 1.2e-14 .. 9.3e-12. */

@@ -395,7 +395,9 @@ static void look_ahead(ap_sim *s, double t, double h) {
     ev_item *it = &ev->list[i];
     double right = INFINITY, left = it->def.of_time ? ahead(s, it, t, h, &right) : INFINITY;
     it->troot = right;
-    s->t_ahead = fmin(s->t_ahead, left);
+    /* a crossing a few ulps ahead that did not cut (a log event): the next step passes it
+     * and finds it as any other; stopping there again would not move */
+    if (left - t > 64.0 * DBL_EPSILON * fabs(t)) s->t_ahead = fmin(s->t_ahead, left);
   }
 }
 

@@ -386,7 +386,7 @@ static int advance_one(ap_sim *s, double tout) {
   double t = s->t;
   s->rhs_status = AP_OK;
   if (s->dae) {
-    int rc = ap_dae_one(s->dae, fmin(tout, s->t_ahead), &t, s->ytry);
+    int rc = ap_dae_one(s->dae, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
     rc = ap_drv_after_step(s, &t);
     if (rc != AP_OK && rc != AP_STOPPED) return s->failed = rc;   /* IDA went on; we cannot */
@@ -394,7 +394,7 @@ static int advance_one(ap_sim *s, double tout) {
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
     return rc;
   }
-  int rc = ap_step_one(s->st, fmin(tout, s->t_ahead), &t, s->ytry);
+  int rc = ap_step_one(s->st, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
   if (rc != AP_OK) {
     if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
     return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
