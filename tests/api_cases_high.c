@@ -160,6 +160,10 @@ static void cases_scene(void) {
   CASE(ap_scene_get_run, "s NULL: zeroed",
        (memset(&run, 1, sizeof run), ap_scene_get_run(NULL, &run), all_zero(&run, sizeof run)));
   CASE(ap_scene_get_run, "run NULL", (ap_scene_get_run(SC, NULL), 1));
+  CASE(ap_scene_add_events, "s NULL", ap_scene_add_events(NULL, S, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_add_events, "sim NULL", ap_scene_add_events(SC, NULL, msg, 1) == AP_ERR_ARG);
+  CASE(ap_scene_add_events, "sim of another model",
+       ap_scene_add_events(SC, S, NULL, 0) == AP_ERR_ARG);
   CASE(ap_scene_initial_state, "s NULL",
        ap_scene_initial_state(NULL, q, v, msg, sizeof msg, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_initial_state, "q0 NULL",

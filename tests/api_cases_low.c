@@ -279,6 +279,17 @@ static void cases_sim(void) {
   CASE(ap_sim_message, "NULL", is_empty(ap_sim_message(NULL)));
   CASE(ap_sim_warning, "NULL", is_empty(ap_sim_warning(NULL)));
   CASE(ap_sim_free, "NULL", (ap_sim_free(NULL), 1));
+  ap_event_def ev = ap_event_def_default();
+  CASE(ap_event_def_default, "defaults", strcmp(ev.name, "event") == 0 && !ev.fn &&
+       ev.action == AP_EVENT_STOP && ev.direction == AP_EVENT_EITHER);
+  CASE(ap_sim_add_event, "s NULL", ap_sim_add_event(NULL, &ev) == AP_ERR_ARG);
+  CASE(ap_sim_add_event, "def NULL", ap_sim_add_event(S, NULL) == AP_ERR_ARG);
+  CASE(ap_sim_add_event, "fn NULL", ap_sim_add_event(S, &ev) == AP_ERR_ARG);
+  CASE(ap_sim_event_count, "NULL", ap_sim_event_count(NULL) == 0);
+  ap_event_record er;
+  CASE(ap_sim_event_get, "s NULL", ap_sim_event_get(NULL, 0, &er) == AP_ERR_ARG);
+  CASE(ap_sim_event_get, "i out of range", ap_sim_event_get(S, 0, &er) == AP_ERR_ARG);
+  CASE(ap_sim_event_get, "out NULL", ap_sim_event_get(S, 0, NULL) == AP_ERR_ARG);
   bad = simdef();
   CASE(ap_crosscheck, "m NULL",
        ap_crosscheck(NULL, &bad, 0, q, v, 1, 2, &rep, msg, sizeof msg) == AP_ERR_ARG);

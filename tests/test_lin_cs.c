@@ -154,6 +154,8 @@ static void compare(ap_lin *L, const char *label) {
 static const char *const refused[] = {
     "diff_drive_motors.yaml",   /* motors driving the wheels: no steady state in the scene's
                                    state, no section */
+    "bicycle_falling.yaml",     /* released with a roll rate to fall: no steady state in its
+                                   state, no section */
     NULL};
 
 static int in(const char *const *list, const char *name) {

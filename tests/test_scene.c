@@ -66,8 +66,6 @@ static const bad_case bad[] = {
      "'1/t' is not finite at t = 0: 1 / 0 = inf (column 2 of the expression)"},
     {"drive_log.yaml", "drive_log.yaml:11:20: joints.wheel.drive.angle:",
      "is not finite at t = 0: log(-1) = nan (column 5 of the expression)"},
-    {"drive_abs.yaml", "drive_abs.yaml:11:20: joints.wheel.drive.angle:",
-     "'2 + abs(t)' has no finite first time derivative at t = 0"},
     {"force_not_finite.yaml", "force_not_finite.yaml:7:69: effects.push.torque[2]:",
      "'2*sqrt(t)' has no finite first time derivative at t = 0"},
     {"speed_at_t0.yaml", "speed_at_t0.yaml:7:66: constraints.turn.value:",

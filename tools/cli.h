@@ -16,6 +16,9 @@ enum { EXIT_OK = 0, EXIT_INTERNAL = 1, EXIT_INPUT = 2, EXIT_NUMERIC = 3 };
 
 int cmd_run(int argc, char **argv);
 int cmd_check(int argc, char **argv);
+/* The simulation's recorded events, one line each on stderr (events.c). */
+struct ap_sim;
+void cli_print_events(const struct ap_sim *sim);
 int cmd_plot(int argc, char **argv);
 
 /* Exit code for a library status: bad input, numerical failure or internal error. */

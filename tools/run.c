@@ -229,10 +229,9 @@ static int write_failed(run_state *rs, const cli_out *out) {
   return out->err == EPIPE ? EXIT_SIGNAL(SIGPIPE) : EXIT_INTERNAL;
 }
 
-/* An advance that returned before its output time because a stop event fired (its row, at
- * the event time, is written): the run ends there with exit 0, the record saying "event".
- * The events come from cli_run_events (tools/runrecord.c), where the library's are connected;
- * until then no run stops this way. */
+/* An advance that returned AP_STOPPED before its output time because a stop event fired (its
+ * row, at the event time, is written): the run ends there with exit 0, the record saying
+ * "event". The events come from cli_run_events (tools/runrecord.c). */
 static int stopped_by_event(run_state *rs) {
   cli_event ev[64];
   int n = cli_run_events(rs->sim, ev, 64);
@@ -255,6 +254,12 @@ static int loop(run_state *rs, cli_out *out) {
     double t = i == nrows ? rs->run.t_end : rs->run.t0 + (double)i * rs->run.interval;
     rc = ap_sim_advance(rs->sim, t);
     if (rc == AP_ERR_INTERRUPTED && cli_interrupted()) break;
+    if (rc == AP_STOPPED) {                      /* a stop event: the last row is there */
+      rc = write_row(rs, out->f);
+      if (cli_out_failed(out)) return write_failed(rs, out);
+      if (rc == AP_OK && stopped_by_event(rs)) return EXIT_OK;
+      break;
+    }
     if (rc != AP_OK) {
       /* The rows end at the last output time reached: after a failure inside an advance the
        * simulation's time is where the integrator gave up (the record's t) but its q and v
@@ -263,7 +268,6 @@ static int loop(run_state *rs, cli_out *out) {
     }
     rc = write_row(rs, out->f);
     if (cli_out_failed(out)) return write_failed(rs, out);
-    if (rc == AP_OK && ap_sim_time(rs->sim) < t && stopped_by_event(rs)) return EXIT_OK;
     if (rs->progress && (now() - last_draw > 0.1 || i == nrows)) {
       progress(rs, t, 0);
       last_draw = now();
@@ -326,6 +330,7 @@ static int start(run_state *rs, const run_opts *o) {
   if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
   ap_scene_get_run(rs->sc, &rs->run);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
+  if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
   if (rc != AP_OK) {
     fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc), msg);
     return cli_exit_code(rc);
@@ -408,6 +413,7 @@ int cmd_run(int argc, char **argv) {
     rs.wall = now() - t_start;
     code = finish(&rs, &o, &out, &rec, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
+    if (!o.quiet) cli_print_events(rs.sim);
   }
   free(rs.buf);
   free(rs.lift);

@@ -14,10 +14,15 @@
 #include "runrecord.h"
 
 int cli_run_events(const ap_sim *sim, cli_event *out, int max) {
-  /* Connect here: for i < ap_sim_event_count(sim) (at most max), ap_sim_event_get(sim, i, ...)
-   * into out[i]. Until lib/integrate records events, a run has none. */
-  (void)sim, (void)out, (void)max;
-  return 0;
+  static const char *const actions[] = {"stop", "log", "switch"};
+  int n = ap_sim_event_count(sim), kept = 0;
+  for (int i = n > max ? n - max : 0; i < n; i++) {   /* the last max: the stop is last */
+    ap_event_record ev;
+    if (ap_sim_event_get(sim, i, &ev) != AP_OK) continue;
+    out[kept++] = (cli_event){ev.name, ev.t, actions[(unsigned)ev.action % 3],
+                              ev.direction > 0 ? "rising" : "falling", ev.q, ev.v};
+  }
+  return kept;
 }
 
 const char *cli_outcome(int status) {

@@ -17,10 +17,8 @@ typedef struct cli_event {
   const double *q, *v;     /* the state there: n coordinates, k speeds (may be NULL) */
 } cli_event;
 
-/* The events a run recorded, for the run record and the sweep's events column: at most max
- * into out, the count returned. THE ONE PLACE TO CONNECT the library's events
- * (ap_sim_event_count / ap_sim_event_get): until lib/integrate records events this returns 0
- * (an empty list). */
+/* The events a run recorded (ap_sim_event_count / ap_sim_event_get), for the run record: the
+ * last max of them into out (a stop event is the last), the count returned. */
 int cli_run_events(const ap_sim *sim, cli_event *out, int max);
 
 /* Status words of a run record and of a sweep row's outcome column. */

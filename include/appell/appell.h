@@ -7,6 +7,7 @@
 #include "appell/status.h"
 #include "appell/system.h"
 #include "appell/sim.h"
+#include "appell/event.h"
 #include "appell/body.h"
 #include "appell/analyze.h"
 #include "appell/scene.h"

@@ -52,6 +52,14 @@ typedef struct ap_scene_run {
 
 AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
 
+/* Add the scene's events (its events: section and the bodies' collide: keys; docs/scenes.md
+ * "Events") to a simulation of its model (appell/event.h). The event functions read the
+ * scene: it must outlive the simulation. AP_ERR_ARG for a NULL s or sim, or a simulation of
+ * a model of other sizes; otherwise
+ * ap_sim_add_event's status with msg (may be NULL) saying why. A scene without events adds
+ * nothing (and the simulation then evaluates nothing of them). */
+AP_API int ap_scene_add_events(const ap_scene *s, ap_sim *sim, char *msg, size_t msg_len);
+
 /* The initial state (n coordinates, k speeds) made consistent with the constraints: unit
  * quaternions, loop closures assembled, unspecified speeds completed and over-specified ones
  * projected (nearest in the metric g). report (may be NULL) receives a description of every

@@ -16,6 +16,8 @@ extern "C" {
 enum {
   AP_OK = 0,
   AP_RECOVERABLE = 1,         /* a stage asks for a smaller step (positive on purpose) */
+  AP_STOPPED = 2,             /* ap_sim_advance: a stop event fired (appell/event.h); the run
+                                 is at the event time, not failed (positive on purpose) */
   AP_ERR_ARG = -1,            /* invalid argument or definition */
   AP_ERR_NOMEM = -2,          /* allocation failed */
   AP_ERR_CALLBACK = -3,       /* a user callback returned < 0 */

@@ -5,6 +5,7 @@ const char *ap_strerror(int status) {
   switch (status) {
     case AP_OK: return "success";
     case AP_RECOVERABLE: return "recoverable failure: retry with a smaller step";
+    case AP_STOPPED: return "stopped by an event";
     case AP_ERR_ARG: return "invalid argument or definition";
     case AP_ERR_NOMEM: return "out of memory";
     case AP_ERR_CALLBACK: return "a user callback reported failure";

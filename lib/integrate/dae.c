@@ -453,6 +453,19 @@ void ap_dae_stats(const ap_dae *s, ap_step_stats *st) {
 
 const char *ap_dae_message(const ap_dae *s) { return s->msg; }
 
+int ap_dae_dky(ap_dae *s, double t, double *y) {
+  if (!s->dk) s->dk = N_VNew_Serial(s->ny, s->ctx);   /* once, at the first event */
+  if (!s->dk) return AP_ERR_NOMEM;
+  int flag = IDAGetDky(s->mem, t, 0, s->dk);
+  if (flag != IDA_SUCCESS) {
+    snprintf(s->msg, sizeof s->msg, "IDA: no dense output at t = %.17g (flag %d)", t, flag);
+    return flag == IDA_BAD_T ? AP_ERR_ARG : AP_ERR_SOLVER;
+  }
+  memcpy(y, N_VGetArrayPointer(s->dk), sizeof(double) * (size_t)(s->n + s->k));
+  memset(y + s->n + s->k, 0, sizeof(double) * (size_t)(s->b + s->nphi));
+  return AP_OK;
+}
+
 void ap_dae_free(ap_dae *s) {
   if (!s) return;
   if (s->mem) IDAFree(&s->mem);
@@ -461,6 +474,7 @@ void ap_dae_free(ap_dae *s) {
   if (s->yy) N_VDestroy(s->yy);
   if (s->yp) N_VDestroy(s->yp);
   if (s->id) N_VDestroy(s->id);
+  if (s->dk) N_VDestroy(s->dk);
   if (s->ctx) SUNContext_Free(&s->ctx);
   free(s->Phi_q);
   free(s->rows);

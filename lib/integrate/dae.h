@@ -57,6 +57,9 @@ int ap_dae_restart(ap_dae *s, double t, const double *y, const double *qdot, con
 int ap_dae_rows(const ap_dae *s, const int **rows);
 /* The kept rows of phi (ascending); returns their number (<= nphi). */
 int ap_dae_phi_rows(const ap_dae *s, const int **rows);
+/* Dense output of the last step (IDAGetDky): q and v at t into y (n + k + b + nphi; the
+ * multipliers' entries 0). AP_ERR_ARG when t is outside the last step. */
+int ap_dae_dky(ap_dae *s, double t, double *y);
 void ap_dae_stats(const ap_dae *s, ap_step_stats *st);
 const char *ap_dae_message(const ap_dae *s);
 void ap_dae_free(ap_dae *s);

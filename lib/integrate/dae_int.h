@@ -22,6 +22,7 @@ struct ap_dae {
   SUNContext ctx;
   void *mem;
   N_Vector yy, yp, id;
+  N_Vector dk;              /* dense output for events (ap_dae_dky), made at the first use */
   SUNMatrix J;
   SUNLinearSolver LS;
   int n, k, b, bs, nphi, nps, ny;  /* ny = n + k + bs + nps */

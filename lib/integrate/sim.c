@@ -135,8 +135,9 @@ static int consistent_coordinates(ap_sim *s, double t0, const double *q0, double
   return AP_OK;
 }
 
-/* Put v on the constraint set; refuse speeds too far off it. */
-static int consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0) {
+/* Put v on the constraint set; refuse speeds too far off it (when refuse). */
+static int consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0,
+                             int refuse) {
   ap_data *d = s->d;
   d->t = t0;
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
@@ -155,7 +156,7 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
                        "as they drift, the dropped rows' gamma leaves the kept rows' "
                        "combination (use minimal, projected or DAE mode)", s->m->name,
                        d->redundant_manifold, d->redundant_manifold == 1 ? " is" : "s are");
-  if (d->rank < s->m->b) snprintf(s->warning, sizeof s->warning, "%s", d->msg);
+  if (refuse && d->rank < s->m->b) snprintf(s->warning, sizeof s->warning, "%s", d->msg);
   rc = ap_fwd_position(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                       d->msg);
@@ -164,6 +165,7 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   rc = ap_project_speeds(s->m, d, s->v, &change);
   if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   size = fmax(size, sqrt(2 * ap_kinetic_energy(d, s->v)));
+  if (!refuse) return AP_OK;
   s->stats.init_correction = change;
   if (change > s->def.init_tol * size)
     return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial speeds violate the "
@@ -195,6 +197,7 @@ static int setup_dae(ap_sim *s) {
 
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   int rc = check_initial(s, t0, q0, v0);
+  ap_drv_pipeline_build(s);
   if (rc == AP_OK) rc = ap_data_create(s->m, &s->d);
   if (rc != AP_OK) return rc == AP_ERR_NOMEM ? ap_drv_fail(s, rc, "out of memory") : rc;
   s->d->rank_rtol = s->def.rank_rtol;
@@ -204,7 +207,7 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   s->d->manifold_rtol = 100 * (s->def.rtol + 1e-12);
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
   rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
-  if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0);
+  if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0, 1);
   if (rc != AP_OK) return rc;
   q0 = s->q;
   s->t = t0;
@@ -242,6 +245,55 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
                         sizeof s->msg);
 }
 
+/* The state (q, e') or (q, v) of a simulation from coordinates and speeds on the
+ * constraints (the data holds the position stage and the partition there); ny must not
+ * change. */
+static int state_from(ap_sim *s, double t, double *y) {
+  int ny = s->n + (s->def.mode == AP_MODE_MINIMAL ? s->d->l : s->k);
+  if (s->dae) ny = s->ny;
+  if (ny != s->ny)
+    return ap_drv_fail(s, AP_ERR_RANK, "system '%s': the number of free speeds changed from "
+                       "%d to %d at t = %.17g (at an event)", s->m->name, s->ny - s->n,
+                       ny - s->n, t);
+  memcpy(y, s->q, sizeof(double) * (size_t)s->n);
+  if (s->def.mode == AP_MODE_MINIMAL)
+    for (int j = 0; j < s->d->l; j++) y[s->n + j] = s->v[s->d->perm[s->d->rank + j]];
+  else
+    memcpy(y + s->n, s->v, sizeof(double) * (size_t)s->k);
+  return AP_OK;
+}
+
+/* IDA from (t, y): q', v' from the Appell solve there, IDA's multipliers back into y. */
+static int restart_dae(ap_sim *s, double t, double *y) {
+  ap_data *d = s->d;
+  d->basis = AP_BASIS_ORTHONORMAL;
+  ap_drv_load_state(s, t, y);
+  int rc = ap_forward(s->m, d);
+  d->basis = AP_BASIS_NONE;
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+  rc = ap_dae_restart(s->dae, t, y, d->qdot, d->vdot, ap_drv_dae_h0(s, y, d->vdot));
+  if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
+  ap_dae_state(s->dae, y);
+  return AP_OK;
+}
+
+int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v) {
+  double *y = s->dae ? s->ytry : s->y, *qq = s->yev;   /* yev: free until the next rhs */
+  memcpy(qq, q, sizeof(double) * (size_t)s->n);
+  s->ev_stamp = -1;
+  if (s->dae) s->d->basis = AP_BASIS_ORTHONORMAL;
+  int rc = consistent_coordinates(s, t, qq, s->q);
+  if (rc == AP_OK) rc = consistent_speeds(s, t, s->q, v, 0);
+  if (s->dae) s->d->basis = AP_BASIS_NONE;
+  if (rc == AP_OK) rc = state_from(s, t, y);
+  if (rc != AP_OK) return rc;
+  s->stats.restarts++;
+  if (s->dae) return restart_dae(s, t, y);
+  ap_drv_growth_cap(s, s->d->growth);
+  rc = ap_step_reset(s->st, t, y);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", ap_step_message(s->st));
+}
+
 int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
                   const double *v0, ap_sim **out, char *msg, size_t msg_len) {
   if (!out) return AP_ERR_ARG;
@@ -263,6 +315,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   s->stats.min_rcond = 1.0;
   s->y = buf, s->ytry = buf + nk, s->yev = buf + 2 * nk, s->ydot = buf + 3 * nk;
   s->q = buf + 4 * nk, s->v = s->q + m->n, s->ev_stamp = -1, s->growth_cap = INFINITY;
+  s->t_ahead = INFINITY;
   s->phi = s->v + m->k;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
@@ -283,6 +336,7 @@ void ap_sim_free(ap_sim *s) {
   if (!s) return;
   ap_step_free(s->st);
   ap_dae_free(s->dae);
+  ap_drv_events_free(s);
   ap_data_free(s->d);
   free(s->gn);
   free(s->gn_iwork);
@@ -336,15 +390,15 @@ static int advance_one(ap_sim *s, double tout) {
   double t = s->t;
   s->rhs_status = AP_OK;
   if (s->dae) {
-    int rc = ap_dae_one(s->dae, tout, &t, s->ytry);
+    int rc = ap_dae_one(s->dae, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
-    rc = ap_drv_after_step_dae(s, t);
-    if (rc != AP_OK) return s->failed = rc;   /* IDA went on; this run cannot */
+    rc = ap_drv_after_step(s, &t);
+    if (rc != AP_OK && rc != AP_STOPPED) return s->failed = rc;   /* IDA went on; we cannot */
     s->t = t;
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-    return AP_OK;
+    return rc;
   }
-  int rc = ap_step_one(s->st, tout, &t, s->ytry);
+  int rc = ap_step_one(s->st, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
   if (rc != AP_OK) {
     if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
     return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
@@ -353,7 +407,9 @@ static int advance_one(ap_sim *s, double tout) {
   }
   s->t = t;
   memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
-  return ap_drv_after_step(s, t);
+  rc = ap_drv_after_step(s, &t);
+  s->t = t;                                      /* a stop or switch event moved it back */
+  return rc;
 }
 
 int ap_sim_advance(ap_sim *s, double tout) {
@@ -376,9 +432,11 @@ int ap_sim_advance(ap_sim *s, double tout) {
                                        "simulation.max_steps)", s->m->name, s->def.max_steps,
                                        t_start, s->t, tout));
     rc = advance_one(s, tout);
+    if (rc == AP_STOPPED) break;
     if (rc != AP_OK) return rc;
   }
-  return ap_drv_evaluate_current(s);
+  int ev = ap_drv_evaluate_current(s);
+  return ev != AP_OK ? ev : rc;
 }
 
 /* ---- queries ------------------------------------------------------------------------------ */

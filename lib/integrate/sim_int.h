@@ -1,6 +1,7 @@
 /* Simulation drivers (internal): the ap_sim struct shared by sim.c (creation, advancing,
- * queries) and sim_step.c (the right-hand side and the work after each accepted step, per
- * mode). Functions here carry the prefix ap_drv_. */
+ * queries), sim_step.c (the right-hand side and the stages of the work after each accepted
+ * step, per mode), sim_after.c (those stages as one pipeline, and the DAE mode's) and event.c
+ * (events). Functions here carry the prefix ap_drv_. */
 #ifndef AP_INTEGRATE_SIM_INT_H
 #define AP_INTEGRATE_SIM_INT_H
 
@@ -10,6 +11,18 @@
 #include "core/core.h"
 #include "integrate/dae.h"
 #include "integrate/stepper.h"
+
+typedef struct ap_sim_events ap_sim_events;   /* event.c */
+
+/* One stage of the work after an accepted step (sim_after.c). *t is the time of the step's
+ * state (s->y for the steppers, s->ytry for IDA); the events stage may move it back to an
+ * event. Returns AP_OK, AP_STOPPED (a stop event; the later stages still run) or a failure. */
+typedef int (*ap_drv_stage_fn)(ap_sim *s, double *t);
+typedef struct ap_drv_stage {
+  const char *name;
+  ap_drv_stage_fn run;
+} ap_drv_stage;
+#define AP_DRV_MAX_STAGES 8
 
 struct ap_sim {
   const ap_model *m;
@@ -43,6 +56,11 @@ struct ap_sim {
   int *gn_iwork;
   ap_sim_poll_fn poll;      /* called before every internal step (ap_sim_set_poll), or NULL */
   void *poll_user;
+  const ap_drv_stage *stages[AP_DRV_MAX_STAGES];   /* the after-step pipeline, in order */
+  int nstages;
+  ap_sim_events *ev;        /* events and their records (event.c); NULL until one is added */
+  double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
+                               stepper stops at it); INFINITY when none */
 };
 
 /* printf into s->msg; returns status. */
@@ -63,19 +81,31 @@ int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user
  * stage beyond max(AP_DRV_GROWTH_CAP x switch_growth, 2 g) fails recoverably. */
 #define AP_DRV_GROWTH_CAP 4.0
 void ap_drv_growth_cap(ap_sim *s, double g);
-/* After an accepted step of a one-step or multistep method at t (s->y holds the new state):
- * coordinates onto their manifold, then the mode's own work (re-partition, projection,
- * residuals). May restart the stepper. */
-int ap_drv_after_step(ap_sim *s, double t);
+/* The after-step pipeline (sim_after.c): choose the stages for the mode (and events), and run
+ * them after an accepted step at *t (s->y holds the new state; IDA: s->ytry). May restart
+ * the stepper; *t moves back to a stop or switch event. AP_OK, AP_STOPPED or a failure. */
+void ap_drv_pipeline_build(ap_sim *s);
+int ap_drv_after_step(ap_sim *s, double *t);
+/* The stages (sim_step.c; event.c for events). */
+int ap_drv_stage_events(ap_sim *s, double *t);
+int ap_drv_stage_event_state(ap_sim *s, double *t);
+int ap_drv_stage_coordinates(ap_sim *s, double *t);
+int ap_drv_stage_partition(ap_sim *s, double *t);
+int ap_drv_stage_projection(ap_sim *s, double *t);
+int ap_drv_stage_residual(ap_sim *s, double *t);
+int ap_drv_stage_redundant(ap_sim *s, double *t);
+/* 1 when the data still holds the successful evaluation at exactly (t, y) (sim_step.c). */
+int ap_drv_evaluated_at(const ap_sim *s, double t, const double *y);
 /* IDA's first step from (q, v'): IDA's own guess from |y'| is far too small at tight
  * tolerances; the BDF1 local error h^2 |q''| / 2 = rtol |q| + atol at IDA's tolerances
  * (ap_dae_rtol) with q'' ~ N v' from the Appell solve gives it. 0 when v' = 0. */
 double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
-/* After an accepted IDA step (DAE mode; the state in s->ytry): checks and residuals, and with
- * redundant rows a new choice of kept rows when the old one degraded (IDA restarts then, and
- * s->ytry gets its multipliers). */
-int ap_drv_after_step_dae(ap_sim *s, double t);
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 int ap_drv_evaluate_current(ap_sim *s);
+/* Events (event.c): free them with the simulation. */
+void ap_drv_events_free(ap_sim *s);
+/* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
+ * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
+int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);
 
 #endif

@@ -92,7 +92,7 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
  * step, the first-same-as-last stage evaluated at the new state (dop853 always ends its step
  * with it; ARKODE's FSAL tables when that stage equals the returned state bit for bit). Its
  * position stage (g, A, B, growth), v = B e' + b0 and derivatives describe the new state. */
-static int evaluated_at(const ap_sim *s, double t, const double *y) {
+int ap_drv_evaluated_at(const ap_sim *s, double t, const double *y) {
   return s->ev_stamp == stage_count(s->d) && s->ev_t == t &&
          memcmp(s->yev, y, sizeof(double) * (size_t)s->ny) == 0;
 }
@@ -107,7 +107,8 @@ static int evaluated_at(const ap_sim *s, double t, const double *y) {
  * (the loops closed) only once it exceeds 1e3 times the tolerance, since rotations use p / |p|
  * and the motion does not depend on |p| (tests/test_robust.c, rolling disk, rtol 1e-8, 5 s:
  * 20 230 restarts in 24 641 steps with the tenth, 491 steps and no restart now). */
-static int project_coordinates(ap_sim *s, double t) {
+int ap_drv_stage_coordinates(ap_sim *s, double *tp) {
+  double t = *tp;
   if (!s->m->ev.project_q) return AP_OK;
   double change = 0.0, *q = s->ytry;   /* project a copy: it may not be applied */
   ap_data *d = s->d;
@@ -151,7 +152,7 @@ void ap_drv_growth_cap(ap_sim *s, double g) {
 /* Minimal mode, rows redundant only where the loops and wheel contacts close, before a new
  * partition: q fully back on that manifold. The partition decides the rank at the accepted
  * state, and CVODE Adams leaves the loops open by up to a tenth of the step tolerance
- * (project_coordinates), where those rows are independent by as much: at rtol 1e-6 the rank of
+ * (ap_drv_stage_coordinates), where those rows are independent by as much: at rtol 1e-6 the rank of
  * diff_drive_loops.yaml's A rose from 11 to 12 at t = 1.395. The stepper restarts after a new
  * partition anyway. *moved: 1 when q moved. */
 static int close_before_partition(ap_sim *s, double t, int *moved) {
@@ -171,9 +172,10 @@ static int close_before_partition(ap_sim *s, double t, int *moved) {
  * of coordinates on the same trajectory: the stepper continues with its step size, and with
  * the derivative in the new coordinates when it is known (v' is the same whichever speeds are
  * independent, so e''_new = v'[new independent speeds]). */
-static int after_step_minimal(ap_sim *s, double t) {
+int ap_drv_stage_partition(ap_sim *s, double *tp) {
+  double t = *tp;
   ap_data *d = s->d;
-  int n = s->n, fresh = evaluated_at(s, t, s->y), rc;
+  int n = s->n, fresh = ap_drv_evaluated_at(s, t, s->y), rc;
   if (!fresh) {
     ap_drv_load_state(s, t, s->y);
     rc = ap_fwd_position(s->m, d);
@@ -308,7 +310,8 @@ int ap_drv_proj(double t, const double *y, double *corr, double *err, void *user
 }
 
 /* Plain mode: nothing is projected; only the residual is recorded. */
-static int after_step_plain(ap_sim *s, double t) {
+int ap_drv_stage_residual(ap_sim *s, double *tp) {
+  double t = *tp;
   if (s->m->b == 0) return AP_OK;
   ap_drv_load_state(s, t, s->y);
   int rc = ap_fwd_position(s->m, s->d);
@@ -320,7 +323,8 @@ static int after_step_plain(ap_sim *s, double t) {
 /* Projected mode: put v back on the constraint set, nearest in the metric g. One-step methods
  * project after every accepted step and restart (it costs them one evaluation); CVODE
  * projects inside its own step through ap_drv_proj (a restart would drop it to order 1). */
-static int after_step_projected(ap_sim *s, double t) {
+int ap_drv_stage_projection(ap_sim *s, double *tp) {
+  double t = *tp;
   ap_data *d = s->d;
   if (s->m->b == 0) return AP_OK;
   ap_drv_load_state(s, t, s->y);
@@ -342,99 +346,6 @@ static int after_step_projected(ap_sim *s, double t) {
   return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", ap_step_message(s->st));
 }
 
-/* DAE mode: IDA keeps q on phi = 0 itself (GGL rows), so nothing is corrected here and IDA's
- * state is never touched. The body model's checks of project_q run on the accepted q (a disk
- * or torus reaching lying flat stops the run); the velocity-constraint residual (all rows) and
- * |phi| are recorded. With redundant rows (IDA keeps only the independent ones chosen at t0)
- * the orthonormal basis stage judges, as in projected mode, that the rank has not changed and
- * that the dropped rows' a0 and gamma stay consistent (rows redundant only where the loops and
- * wheel contacts close: against manifold_rtol, ap_core_judge_redundant). */
-static int dropped_phi_rows(ap_sim *s, double t, const double *phi);
-static int review_rows(ap_sim *s, double t);
-
-int ap_drv_after_step_dae(ap_sim *s, double t) {
-  ap_data *d = s->d;
-  const ap_model *m = s->m;
-  int nphi = m->ev.phi ? m->nphi : 0, rc = AP_OK;
-  int redundant = m->b > 0 && ap_dae_rows(s->dae, NULL) < m->b;
-  ap_drv_load_state(s, t, s->ytry);
-  if (m->ev.check_q) rc = m->ev.check_q(m, d, s->ytry, ((ap_scratch *)d->internal)->ev);
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
-  if (m->b == 0 && nphi == 0) return AP_OK;
-  d->basis = redundant ? AP_BASIS_ORTHONORMAL : AP_BASIS_NONE;
-  rc = ap_fwd_position(m, d);
-  if (rc == AP_OK && redundant && d->rank != ap_dae_rows(s->dae, NULL))
-    return ap_drv_fail(s, AP_ERR_RANK, "system '%s': the rank of A changed from %d to %d at "
-                       "t = %.17g (DAE mode keeps the independent rows chosen at the start)",
-                       m->name, ap_dae_rows(s->dae, NULL), d->rank, t);
-  if (rc == AP_OK && redundant) rc = ap_fwd_velocity(m, d);
-  if (rc == AP_OK && redundant) rc = ap_core_judge_redundant(m, d);   /* of the manifold */
-  d->basis = AP_BASIS_NONE;
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  if (m->b > 0)
-    s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, d->v));
-  if (nphi == 0) return AP_OK;
-  double *phi = s->phi;
-  rc = m->ev.phi(m, d, ((ap_scratch *)d->internal)->ev, phi, NULL);
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  for (int i = 0; i < nphi; i++) s->stats.max_phi = fmax(s->stats.max_phi, fabs(phi[i]));
-  rc = dropped_phi_rows(s, t, phi);
-  return rc == AP_OK ? review_rows(s, t) : rc;
-}
-
-/* ---- DAE mode: redundant rows --------------------------------------------------------------- */
-
-/* Dropped rows of phi must stay closed (within init_tol). */
-static int dropped_phi_rows(ap_sim *s, double t, const double *phi) {
-  const ap_model *m = s->m;
-  int nphi = m->ev.phi ? m->nphi : 0;
-  const int *kept = NULL;
-  int nk = ap_dae_phi_rows(s->dae, &kept);
-  for (int i = 0, c = 0; i < nphi && nk < nphi; i++) {   /* dropped rows of phi: consistent? */
-    if (c < nk && kept[c] == i) {
-      c++;
-      continue;
-    }
-    if (fabs(phi[i]) > s->def.init_tol)
-      return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': an implicit holonomic row dropped "
-                         "as redundant at the start (row %d of phi) is open by %.3g at t = %.17g, "
-                         "more than init_tol %.3g: the loop closures became inconsistent",
-                         m->name, i, phi[i], t, s->def.init_tol);
-  }
-  return AP_OK;
-}
-
-double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot) {
-  double qmax = 0.0, amax = 0.0, rt = ap_dae_rtol(s->def.rtol);
-  double at = s->def.atol * rt / s->def.rtol;
-  for (int i = 0; i < s->n; i++) qmax = fmax(qmax, fabs(q[i]));
-  for (int i = 0; i < s->k; i++) amax = fmax(amax, fabs(vdot[i]));
-  return amax > 0 ? sqrt(2.0 * (rt * fmax(1.0, qmax) + at) / amax) : 0.0;
-}
-
-/* With redundant rows: when the kept ones degraded (ap_dae_review_rows), restart IDA at the
- * accepted state (s->ytry) from the Appell solve there, with the new choice. */
-static int review_rows(ap_sim *s, double t) {
-  const ap_model *m = s->m;
-  ap_data *d = s->d;
-  int nphi = m->ev.phi ? m->nphi : 0;
-  if (ap_dae_rows(s->dae, NULL) == m->b && ap_dae_phi_rows(s->dae, NULL) == nphi) return AP_OK;
-  ap_drv_load_state(s, t, s->ytry);
-  d->basis = AP_BASIS_NONE;
-  int rc = ap_fwd_position(m, d);
-  if (rc == AP_OK) rc = ap_dae_review_rows(s->dae, s->def.rank_rtol);
-  if (rc <= 0) return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", d->msg);
-  d->basis = AP_BASIS_ORTHONORMAL;   /* the Appell solve gives q', v' */
-  rc = ap_forward(m, d);
-  d->basis = AP_BASIS_NONE;
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-  rc = ap_dae_restart(s->dae, t, s->ytry, d->qdot, d->vdot, ap_drv_dae_h0(s, s->ytry, d->vdot));
-  if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
-  ap_dae_state(s->dae, s->ytry);
-  s->stats.restarts++;
-  return AP_OK;
-}
-
 /* Rows redundant only on the holonomic manifold are not judged at trial states (they lie off
  * it); here, at the accepted and projected state, their residuals must be within
  * manifold_rtol. With CVODE no redundant row is judged at trial states (judge_at_accepted):
@@ -449,9 +360,11 @@ static int review_rows(ap_sim *s, double t) {
  * rtol 1e-8: gamma off by 2.4e-8 at t = 32.8). (Rows redundant only on the manifold are
  * refused in plain mode at the start, sim.c: the dropped row is not enforced off it, and
  * diff_drive_loops.yaml failed with every method even judged this way.) */
-static int judge_redundant(ap_sim *s, double t) {
+int ap_drv_stage_redundant(ap_sim *s, double *tp) {
+  double t = *tp;
   ap_data *d = s->d;
   ap_scratch *sc = d->internal;
+  if (!d->redundant_manifold && !(d->redundant > 0 && sc->judge_at_accepted)) return AP_OK;
   int later = sc->judge_at_accepted;
   sc->judge_at_accepted = 0;
   ap_drv_load_state(s, t, s->y);
@@ -463,20 +376,6 @@ static int judge_redundant(ap_sim *s, double t) {
   if (rc == AP_OK) rc = ap_core_judge_redundant(s->m, d);
   sc->judge_at_accepted = later;
   return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
-}
-
-int ap_drv_after_step(ap_sim *s, double t) {
-  int rc = project_coordinates(s, t);
-  if (rc != AP_OK) return rc;
-  switch (s->def.mode) {
-    case AP_MODE_MINIMAL: rc = after_step_minimal(s, t); break;
-    case AP_MODE_PLAIN: rc = after_step_plain(s, t); break;
-    default: rc = after_step_projected(s, t); break;
-  }
-  const ap_data *d = s->d;
-  int judge = d->redundant_manifold ||
-              (d->redundant > 0 && ((const ap_scratch *)d->internal)->judge_at_accepted);
-  return rc == AP_OK && judge ? judge_redundant(s, t) : rc;
 }
 
 /* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the

@@ -20,8 +20,12 @@
  *
  * Kinks: abs, step and delta are smooth except where their argument is exactly 0. There the
  * value is abs(0) = 0, step(0) = 1 (libmatheval's convention), delta(0) = +inf (not finite);
- * the derivatives are 0 when the argument's jet is constant (its c[1] and c[2] are 0) and NaN
- * otherwise, so `abs(t)` at t = 0 is reported as not differentiable. */
+ * the derivatives are those of the side the argument's jet enters (the sign of its first
+ * non-zero coefficient c[1], else c[2]: along the motion, the side after the kink), 0 when
+ * the jet is constant: abs(t - 1) at t = 1 has time derivative +1, abs(1 - t) too (the
+ * argument enters u < 0, where abs' = -1, times u' = -1); step has derivative 0 on both
+ * sides. The simulation stops exactly at such kinks (scene events, docs/scenes.md "Kinks"),
+ * so the one-sided derivative is the one of the piece integrated next. */
 #ifndef AP_SCENE_EXPR_H
 #define AP_SCENE_EXPR_H
 
@@ -68,6 +72,10 @@ int sc_prog_nx(const sc_prog *p);             /* 1 + the largest slot used (0 wh
 /* 1 and *value when the program uses neither t nor a variable (it folded to a number). */
 int sc_prog_constant(const sc_prog *p, double *value);
 
+/* The kinks (abs, step, delta) of a program, in the order of its code, and their arguments
+ * at (t, x) into args (sc_prog_nkinks entries); returns their number. */
+int sc_prog_nkinks(const sc_prog *p);
+int sc_prog_kinks(const sc_prog *p, double t, const double *x, double *args);
 /* The value at (t, x); x may be NULL when the program uses no variable. */
 int sc_prog_value(const sc_prog *p, double t, const double *x, double *f);
 /* The jet of the expression from the jets of t and of x (x: sc_prog_nx entries, NULL when

@@ -160,6 +160,27 @@ int sc_prog_value(const sc_prog *p, double t, const double *x, double *f) {
   return isfinite(st[1]) ? 0 : -1;
 }
 
+static int is_kink(const sc_ins *in) {
+  return in->op == SC_OP_FN && (in->fn == SC_FN_ABS || in->fn == SC_FN_STEP ||
+                                in->fn == SC_FN_DELTA);
+}
+
+int sc_prog_nkinks(const sc_prog *p) {
+  int n = 0;
+  for (int i = 0; p && i < p->nins; i++) n += is_kink(&p->ins[i]);
+  return n;
+}
+
+int sc_prog_kinks(const sc_prog *p, double t, const double *x, double *args) {
+  double st[SC_PROG_STACK + 1], *top = st;
+  int n = 0;
+  for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
+    if (is_kink(in)) args[n++] = *top;
+    top = step_value(in, p->k, t, x, top);
+  }
+  return n;
+}
+
 int sc_prog_jet(const sc_prog *p, const sc_jet *t, const sc_jet *x, sc_jet *f) {
   sc_jet st[SC_PROG_STACK + 1], *top = st;
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++)
@@ -209,10 +230,7 @@ static void describe(const sc_prog *p, const sc_ins *in, const sc_jet *b, const 
     case SC_OP_K: snprintf(what, sizeof what, "a constant part is %s", z); break;
     case SC_OP_NEG: snprintf(what, sizeof what, "-(%s) = %s", y, z); break;
     case SC_OP_FN:
-      if (bad && (in->fn == SC_FN_ABS || in->fn == SC_FN_STEP) && a->c[0] == 0.0)
-        snprintf(what, sizeof what, "%s(0) has no derivative: its argument moves through the %s "
-                 "at 0", sc_fn_names[in->fn], in->fn == SC_FN_ABS ? "kink" : "jump");
-      else if (bad)
+      if (bad)
         snprintf(what, sizeof what, "%s(%s) has no finite %s derivative", sc_fn_names[in->fn], y,
                  order[bad]);
       else

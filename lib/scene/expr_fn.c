@@ -13,7 +13,8 @@
  * coth = 1/tanh, sech = 1/cosh, csch = 1/sinh, acoth(u) = atanh(1/u), asech(u) = acosh(1/u),
  * acsch(u) = asinh(1/u); step(u) = 0 for u < 0 and 1 for u >= 0; delta(u) = 0 for u != 0 and
  * +inf at 0. The derivative of acoth is 1/(1 - u^2) (libmatheval had the sign wrong). At the
- * kinks (abs, step, delta at u = 0) phi' and phi'' are NaN: expr.h, "Kinks". NaN arguments
+ * kinks of abs and step (u = 0) phi' and phi'' are those of the side the argument's jet
+ * enters, delta's are NaN: expr.h, "Kinks". NaN arguments
  * give NaN (libmatheval's step(NaN) was 1). */
 #include <math.h>
 
@@ -138,7 +139,12 @@ void sc_fn_jet(int fn, const sc_jet *a, sc_jet *r) {
     r->c[0] = y, r->c[1] = 0.0, r->c[2] = 0.0;
     return;
   }
-  derivs(fn, u, y, &d1, &d2);
+  if (u == 0.0 && (fn == SC_FN_ABS || fn == SC_FN_STEP)) {   /* the side being entered */
+    double side = a1 != 0.0 ? a1 : a2;
+    d1 = fn == SC_FN_STEP ? 0.0 : side > 0 ? 1.0 : -1.0, d2 = 0.0;
+  } else {
+    derivs(fn, u, y, &d1, &d2);
+  }
   r->c[0] = y;
   r->c[1] = d1 * a1;
   r->c[2] = d1 * a2 + 0.5 * d2 * a1 * a1;

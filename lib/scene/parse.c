@@ -15,8 +15,8 @@
 
 static const char *const top_keys[] = {"name", "description", "bodies", "joints", "constraints",
                                        "effects", "ground", "initial", "simulation", "output",
-                                       "linearize", NULL};
-static const char *const body_keys[] = {"mass", "com", "inertia", "shape", NULL};
+                                       "linearize", "events", NULL};
+static const char *const body_keys[] = {"mass", "com", "inertia", "shape", "collide", NULL};
 static const char *const shape_keys[] = {"kind", "radius", "tube", "semi_axes", "flat_tol",
                                          NULL};
 static const char *const shape_kinds[] = {"none", "point", "sphere", "ellipsoid", "disk", "torus",
@@ -382,5 +382,6 @@ int sc_parse_scene(sc_ctx *c, sc_scene *s) {
   if (d && sc_expect(c, d, SC_SCALAR)) return AP_ERR_ARG;
   if (parse_bodies(c, s) || parse_joints(c, s) || sc_parse_con_eff(c, s)) return AP_ERR_ARG;
   if (sc_parse_run(c, s)) return AP_ERR_ARG;
-  return sc_parse_linearize(c, s);
+  if (sc_parse_linearize(c, s)) return AP_ERR_ARG;
+  return sc_parse_events(c, s);
 }

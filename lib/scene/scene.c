@@ -41,6 +41,7 @@ void sc_scene_clear(sc_scene *s) {
   }
   sc_expr_free(&s->ground.omega);
   for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
+  sc_events_free(s);
   free(s->bodies);
   free(s->joints);
   free(s->cons);
@@ -73,6 +74,7 @@ static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (sc_parse_scene(c, &sc->s) != AP_OK) return c->status;
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
+  if (sc_events_bind(c, &sc->s, sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
     return sc_nomem(c);
   return AP_OK;

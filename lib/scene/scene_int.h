@@ -234,9 +234,19 @@ typedef struct sc_scene {
   unsigned channels;
   double init_tol;         /* relative speed correction above which the state is refused */
   int path;                /* simulation.path (ap_path): auto, dense or tree */
+  int nev;
+  struct sc_event *events; /* the events: section and the bodies' collide: keys (events.c) */
+  int nkink, nsat;
+  struct sc_kink *kinks;   /* kinks of its expressions: implicit events (events.c) */
+  struct sc_sat *sats;     /* saturation switching of its motors: implicit events too */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
+/* Events (events.c): the events: section and collide: keys of bodies, read after the rest;
+ * bound to the model once it is built; freed with the scene. */
+int sc_parse_events(sc_ctx *c, sc_scene *s);
+int sc_events_bind(sc_ctx *c, sc_scene *s, const ap_model *m);
+void sc_events_free(sc_scene *s);
 int sc_parse_con_eff(sc_ctx *c, sc_scene *s);
 /* Joint effects (parse_act.c): the scene kinds joint_torque, joint_force, motor. */
 enum { SC_EFF_TORQUE = 0, SC_EFF_FORCE = 1, SC_EFF_MOTOR = 2 };
@@ -255,6 +265,13 @@ typedef struct sc_state_names {
 } sc_state_names;
 int sc_state_names_build(const sc_scene *s, sc_state_names *t);
 void sc_state_names_free(sc_state_names *t);
+/* Bind e, compiled against the whole table t, to the names it reads: driven names refused
+ * (a located message at v), then recompiled against just those, in the order of inputs
+ * (at most AP_STATE_MAX_INPUTS). */
+int sc_bind_state(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e,
+                  ap_state_input *inputs, int *ninputs);
+/* Global index in q (or v, for a speed) of a state input (never a driven one). */
+int sc_state_index(const sc_scene *s, const ap_model *m, const ap_state_input *in);
 /* The ap_state_fn of a scene expression of the state (user = its sc_expr). */
 int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
 /* Every expression of the state finite at (t, q, v); else a message at its node. */

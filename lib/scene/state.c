@@ -153,8 +153,8 @@ static int compact(sc_ctx *c, const sc_node *v, const sc_state_names *t, const i
   return rc;
 }
 
-static int bind(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e,
-                ap_effect_def *d) {
+int sc_bind_state(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e,
+                  ap_state_input *inputs, int *ninputs) {
   int count = sc_prog_nvars(e->prog);
   const int *vars = sc_prog_vars(e->prog);
   for (int i = 0; i < count; i++)
@@ -164,11 +164,16 @@ static int bind(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e
   if (count > AP_STATE_MAX_INPUTS)
     return sc_err(c, v, "'%s' reads %d names of the state; at most %d are allowed", e->text,
                   count, AP_STATE_MAX_INPUTS);
-  d->ninputs = count;
-  for (int i = 0; i < count; i++) d->inputs[i] = t->refs[vars[i]];
+  *ninputs = count;
+  for (int i = 0; i < count; i++) inputs[i] = t->refs[vars[i]];
   int used[AP_STATE_MAX_INPUTS];
   memcpy(used, vars, (size_t)count * sizeof *used);
-  if (compact(c, v, t, used, count, e)) return AP_ERR_ARG;
+  return compact(c, v, t, used, count, e) ? AP_ERR_ARG : AP_OK;
+}
+
+static int bind(sc_ctx *c, const sc_node *v, const sc_state_names *t, sc_expr *e,
+                ap_effect_def *d) {
+  if (sc_bind_state(c, v, t, e, d->inputs, &d->ninputs)) return AP_ERR_ARG;
   d->state_fn = sc_state_fn;
   return AP_OK;
 }
@@ -196,8 +201,7 @@ int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effec
 
 /* ---- checked at the initial state ------------------------------------------------------------ */
 
-/* Global index in q or v of a state input (never driven: sc_read_value refuses those). */
-static int global_index(const sc_scene *s, const ap_model *m, const ap_state_input *in) {
+int sc_state_index(const sc_scene *s, const ap_model *m, const ap_state_input *in) {
   int first = in->speed ? ap_joint_speed_index(m, in->joint) : ap_joint_coord_index(m, in->joint);
   for (int i = 0; i < in->index && i < 3; i++) first -= s->joints[in->joint].def.drive[i] != NULL;
   return first + in->index;
@@ -210,7 +214,7 @@ int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double
     if (d->state_fn != sc_state_fn) continue;
     sc_jet tj = {{t, 0.0, 0.0}}, x[AP_STATE_MAX_INPUTS];
     for (int i = 0; i < d->ninputs; i++) {
-      int g = global_index(s, m, &d->inputs[i]);
+      int g = sc_state_index(s, m, &d->inputs[i]);
       x[i] = (sc_jet){{d->inputs[i].speed ? v[g] : q[g], 0.0, 0.0}};
     }
     if (sc_expr_check_jet(c, &s->effs[k].value, &tj, x, 0) != AP_OK) return AP_ERR_ARG;

@@ -143,9 +143,9 @@ class Result:
 
 
 def _run_events(sim):
-    """The events a Simulation recorded, as dicts (name, t, action, direction, state): the one
-    place to connect them once Simulation records events; until then a run has none."""
-    return []
+    """The events a Simulation recorded (docs/python.md "Events"): dicts with name, t,
+    direction, action, q and v."""
+    return list(sim.events)
 
 
 def read_run(path):

@@ -51,6 +51,8 @@ const char **apx_strings(PyObject *tuple, Py_ssize_t *n);
 PyObject *apx_str_tuple(PyObject *obj, const char *what);
 /* A new 1-D float64 array copied from x (n). */
 PyObject *apx_vector(const double *x, int n);
+/* The simulation's event records as a list of dicts (_events.c). */
+PyObject *apx_events(const ap_sim *sim);
 
 PyObject *apx_load(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_loads(PyObject *self, PyObject *args, PyObject *kw);

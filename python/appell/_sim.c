@@ -32,6 +32,7 @@ typedef struct apx_sim {
   double *snap;            /* while busy: t, q (n), v (k) of the last snapshot */
   ap_sim_stats snap_stats;
   PyObject *snap_warning;  /* str */
+  PyObject *snap_events;   /* list of the events recorded by the snapshot */
 } apx_sim;
 
 static const char *const mode_names[] = {"minimal", "projected", "dae", "plain", NULL};
@@ -104,6 +105,7 @@ static int start(apx_sim *s, PyObject *q0, PyObject *v0, PyObject *t0) {
   if (rc == AP_OK && !PyErr_Occurred() && !take_vector(q0, q, n, "q0") &&
       !take_vector(v0, q + n, k, "v0")) {
     rc = ap_sim_create(m, &s->run.sim, t, q, q + n, &s->sim, msg, sizeof msg);
+    if (rc == AP_OK) rc = ap_scene_add_events(s->model->sc, s->sim, msg, sizeof msg);
     if (rc != AP_OK) apx_raise(rc, msg);
     else if (ap_scene_out_create(s->model->sc, &s->out) != AP_OK) PyErr_NoMemory();
     else if (!(s->snap = PyMem_Calloc((size_t)(n + k) + 1, sizeof *s->snap))) PyErr_NoMemory();
@@ -135,6 +137,7 @@ static void sim_dealloc(apx_sim *s) {
   ap_sim_free(s->sim);
   PyMem_Free(s->snap);
   Py_XDECREF(s->snap_warning);
+  Py_XDECREF(s->snap_events);
   Py_XDECREF(s->report);
   Py_XDECREF(s->model);
   Py_TYPE(s)->tp_free((PyObject *)s);
@@ -152,6 +155,9 @@ static void take_snapshot(apx_sim *s) {
   PyObject *w = PyUnicode_FromString(ap_sim_warning(s->sim));
   if (w) Py_XSETREF(s->snap_warning, w);
   else PyErr_Clear();   /* out of memory: the previous warning stays */
+  PyObject *ev = apx_events(s->sim);
+  if (ev) Py_XSETREF(s->snap_events, ev);
+  else PyErr_Clear();   /* out of memory: the previous list stays */
 }
 
 static int claim(apx_sim *s) {
@@ -223,6 +229,10 @@ static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) 
   for (long i = 1; r->rc == AP_OK && !r->interrupted && i < r->rows; i++) {
     double t = i == r->rows - 1 ? t_end : t0 + (double)i * dt;
     r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
+    if (r->rc == AP_STOPPED) {   /* a stop event: its row is the last */
+      r->rc = record(s, r);
+      break;
+    }
     if (r->rc == AP_OK) r->rc = record(s, r);
   }
   /* Stopped by a signal: a last row where it stopped, as appell run writes (an interrupted
@@ -339,7 +349,7 @@ static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
   PyEval_RestoreThread(ts);
   s->busy = 0;
   if (interrupted) return NULL;   /* the handler's exception (KeyboardInterrupt) is set */
-  if (rc == AP_OK) Py_RETURN_NONE;
+  if (rc == AP_OK || rc == AP_STOPPED) Py_RETURN_NONE;   /* stopped: see .events */
   char msg[1400];
   snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),
            ap_strerror(rc), ap_sim_message(s->sim));
@@ -383,6 +393,12 @@ static PyObject *get_warning(apx_sim *s, void *c) {
   return PyUnicode_FromString(ap_sim_warning(s->sim));
 }
 
+static PyObject *get_events(apx_sim *s, void *c) {
+  (void)c;
+  if (s->busy && s->snap_events) return Py_NewRef(s->snap_events);
+  return apx_events(s->sim);
+}
+
 static PyObject *get_report(apx_sim *s, void *c) {
   (void)c;
   return Py_NewRef(s->report);
@@ -410,6 +426,8 @@ static PyGetSetDef sim_getset[] = {
      "running: the snapshot's)", NULL},
     {"warning", (getter)get_warning, NULL, "the run's first warning, or '' (while running: the "
      "snapshot's)", NULL},
+    {"events", (getter)get_events, NULL, "the events recorded so far (a list of dicts; while "
+     "running: the snapshot's)", NULL},
     {"report", (getter)get_report, NULL, "corrections made to the initial state, or ''", NULL},
     {"model", (getter)get_model, NULL, "the Model simulated", NULL},
     {"settings", (getter)get_settings, NULL, "mode, method and tolerances in use", NULL},
