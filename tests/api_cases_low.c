@@ -56,6 +56,14 @@ static int accepted(int nk, ap_bias_source src) {
   ap_model_free(om), om = NULL;
   return ok;
 }
+/* An event function valid in every state: t - 1. */
+static int time_event(double t, const double *q, const double *v, const ap_data *d, void *user,
+                      double *value) {
+  (void)q, (void)v, (void)d, (void)user;
+  *value = t - 1.0;
+  return 0;
+}
+
 static ap_system_def unchecked_sys(void) {   /* every field valid but internal_check */
   ap_system_def d = sysdef(3, 3, 1);
   d.internal_check = 0;
@@ -285,6 +293,10 @@ static void cases_sim(void) {
   CASE(ap_sim_add_event, "s NULL", ap_sim_add_event(NULL, &ev) == AP_ERR_ARG);
   CASE(ap_sim_add_event, "def NULL", ap_sim_add_event(S, NULL) == AP_ERR_ARG);
   CASE(ap_sim_add_event, "fn NULL", ap_sim_add_event(S, &ev) == AP_ERR_ARG);
+  ap_event_def evz = {.name = "zeroed", .fn = time_event};
+  CASE(ap_sim_add_event, "def not from ap_event_def_default",
+       ap_sim_add_event(S, &evz) == AP_ERR_ARG &&
+           not_default_msg(ap_sim_message(S), "ap_event_def", "zeroed"));
   CASE(ap_sim_event_count, "NULL", ap_sim_event_count(NULL) == 0);
   ap_event_record er;
   CASE(ap_sim_event_get, "s NULL", ap_sim_event_get(NULL, 0, &er) == AP_ERR_ARG);

@@ -30,7 +30,7 @@
 #include "check.h"
 #include "clitest.h"
 
-static char drive[1200], disk[1200], bicycle[1200];
+static char drive[1200], disk[1200], bicycle[1200], pendulum[1200];
 
 #define NAN_DRIVE "t*t + 0/step(1.005 - t)"   /* t^2 until t = 1.005, then NaN (0/0) */
 
@@ -107,7 +107,7 @@ static void test_failure_keeps_rows(void) {
   AP_CHECK(ct_record_has(fail_csv, "\"status\": \"failed\"") &&
            ct_record_has(fail_csv, "\"exit_code\": 3,") &&
            ct_record_has(fail_csv, "\"error\": \"a user callback reported failure\"") &&
-           ct_record_has(fail_csv, "drive_abs.yaml:11:20: joints.wheel.drive.angle") &&
+           ct_record_has(fail_csv, "drive_abs.yaml:13:20: joints.wheel.drive.angle") &&
            ct_record_has(fail_csv, "\"events\": [],"));
   AP_CHECK_EQ_INT((int)record_number(fail_csv, "rows"), na - 1);
   AP_CHECK(ct_record_has(ok_csv, "\"status\": \"ok\"") &&
@@ -217,15 +217,38 @@ static void test_atomic(void) {
   rmdir(rec);
 }
 
+/* A stop event (tests/scenes/pendulum_events.yaml: 'down' logged, 'back' stops the run): exit
+ * 0, status "event", both events in the record, and the last row at the stop's time. */
+static void test_stop_event(void) {
+  char csv[1300];
+  snprintf(csv, sizeof csv, "%s/pendulum.csv", ct_tmp);
+  const char *argv[] = {ct_bin, "run", pendulum, "--quiet", "--out", csv, NULL};
+  AP_CHECK_EQ_INT(ct_run(argv), 0);
+  AP_CHECK(ct_record_has(csv, "\"status\": \"event\"") && ct_record_has(csv, "\"exit_code\": 0,"));
+  AP_CHECK(ct_record_has(csv, "{\"name\": \"down\", \"t\": ") &&
+           ct_record_has(csv, "\"action\": \"log\", \"direction\": \"falling\""));
+  AP_CHECK(ct_record_has(csv, "{\"name\": \"back\", \"t\": ") &&
+           ct_record_has(csv, "\"action\": \"stop\", \"direction\": \"falling\""));
+  char **rows = NULL;
+  int n = read_lines(csv, &rows);
+  double t_last = n > 1 ? strtod(rows[n - 1], NULL) : NAN, t_rec = record_number(csv, "t");
+  AP_CHECK(n > 2 && t_rec > 0.5 && t_rec < 5.0);     /* before t_end = 5 */
+  AP_CHECK_NEAR(t_last, t_rec, 1e-14 * t_rec);        /* the CSV prints %.15g */
+  free_lines(rows, n);
+  ct_remove_run(csv);
+}
+
 int main(void) {
   if (ct_init("test_run_record") != 0) return 1;
   ct_source(drive, sizeof drive, "tests/scenes", "drive_abs.yaml");
   ct_source(disk, sizeof disk, "examples/scenes", "rolling_disk.yaml");
   ct_source(bicycle, sizeof bicycle, "examples/scenes", "bicycle.yaml");
+  ct_source(pendulum, sizeof pendulum, "tests/scenes", "pendulum_events.yaml");
   test_failure_keeps_rows();
   test_bicycle_lying_flat();
   test_sigint_keeps_rows();
   test_atomic();
+  test_stop_event();
   ct_finish();
   return ap_check_finish("test_run_record");
 }

@@ -80,6 +80,8 @@ typedef struct ap_event_def {
                               function of t: its next crossing is found ahead of the steps and
                               the stepper lands just before it, so no step straddles it (a
                               jump makes error-controlled steps across it collapse); default 0 */
+  int internal_check;      /* set by ap_event_def_default(), never by hand: a definition that
+                              function did not make is refused with AP_ERR_ARG */
 } ap_event_def;
 
 AP_API ap_event_def ap_event_def_default(void);

@@ -35,6 +35,7 @@
 #include <string.h>
 
 #include "appell/event.h"
+#include "core/defcheck.h"
 #include "integrate/sim_int.h"
 
 #define AP_EV_TIE (64.0 * DBL_EPSILON)   /* relative: crossings this close are simultaneous */
@@ -69,6 +70,7 @@ ap_event_def ap_event_def_default(void) {
   def.direction = AP_EVENT_EITHER;
   def.action = AP_EVENT_STOP;
   def.stage = AP_EVENT_STATE;
+  def.internal_check = AP_DEF_CHECK;
   return def;
 }
 
@@ -443,6 +445,9 @@ static int check_event(ap_sim *s, const ap_event_def *def) {
     return ap_drv_fail(s, AP_ERR_ARG, "ap_sim_add_event: %s", def ? "no event function (fn)"
                                                                   : "NULL definition");
   const char *name = def->name ? def->name : "event";
+  if (def->internal_check != AP_DEF_CHECK)
+    return ap_drv_fail(s, AP_ERR_ARG, "ap_event_def '%s' " AP_DEF_NOT_DEFAULT("ap_event_def"),
+                       name);
   if (def->direction < AP_EVENT_FALLING || def->direction > AP_EVENT_RISING)
     return ap_drv_fail(s, AP_ERR_ARG, "event '%s': unknown direction %d", name,
                        (int)def->direction);
