@@ -295,8 +295,10 @@ static void summary(const run_state *rs, const run_opts *o) {
   ap_sim_get_stats(rs->sim, &st);
   const ap_sim_def *d = &rs->run.sim;
   static const char *const modes[] = {"minimal", "projected", "dae", "plain"};
-  fprintf(stderr, "appell: %s: t = %g .. %g, %ld rows%s%s\n", ap_scene_name(rs->sc), rs->run.t0,
-          rs->run.t_end, rs->rows, o->out ? " -> " : "", o->out ? o->out : "");
+  /* The time reached: t_end, or where a stop event ended the run. */
+  double t_last = fmin(ap_sim_time(rs->sim), rs->run.t_end);
+  fprintf(stderr, "appell: %s: t = %g .. %.10g, %ld rows%s%s\n", ap_scene_name(rs->sc),
+          rs->run.t0, t_last, rs->rows, o->out ? " -> " : "", o->out ? o->out : "");
   fprintf(stderr, "  mode %s, method %s, rtol %.3g, atol %.3g\n", modes[d->mode % 4],
           d->mode == AP_MODE_DAE ? "ida" : d->method, d->rtol, d->atol);
   fprintf(stderr, "  steps %ld (rejected %ld), evaluations %ld, partition switches %ld, "
