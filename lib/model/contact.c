@@ -27,9 +27,11 @@
  * gamma = -((w x n) . (vP - Vg) + n . (aP - Ag)). For a sphere w x R c_b' cancels
  * w x (w x rc) exactly (rc' = 0).
  * Generic in the scalar (model/model.h; contact_cs.c); contact forces are double build only. */
+#include <stdio.h>
 #include <string.h>
 
-#include "model/model.h"
+#include "model/builder.h"
+#include "model/con_kind.h"
 
 static const ap_sc EZ[3] = {0, 0, 1};
 
@@ -73,7 +75,7 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S) {
 
 /* ---- the contact row (holonomic) ----------------------------------------------------------- */
 
-ap_sc ap_contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row) {
+static ap_sc contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row) {
   ap_sc *JP = S + M->off_tmp, x[3];
   kwheel W = ap_contact_geom(M, S, c);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
@@ -91,8 +93,8 @@ static void put_row3(const ap_bmodel *M, ap_sc *A, ap_sc *a0, int r, const ap_sc
   a0[r] = v3_dot(c3, JP + 3 * k) - minus;
 }
 
-void ap_con_contact_rows(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
-                         ap_sc *a0) {
+static void contact_rows_g(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
+                           ap_sc *a0) {
   static const ap_sc ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
@@ -154,10 +156,83 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   if (c->nhol) gamma[c->row + c->hrow] = -aP[2];
 }
 
-/* ---- forces on a subtree (contact forces) ----------------------------------------------------- */
-#ifndef AP_SC_COMPLEX
+/* ---- this build's evaluation table -------------------------------------------------------- */
 
-void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
+static int contact_rows(const ap_model *m, ap_data *d, int ci, double t, const ap_sc *q,
+                        ap_sc *S, ap_sc *A, ap_sc *a0) {
+  const ap_bmodel *M = ap_bm(m);
+  (void)d, (void)t, (void)q;
+  contact_rows_g(M, S, ci, ap_con_scratch(M, S, ci), A, a0);
+  return AP_OK;
+}
+
+static int contact_gamma(const ap_model *m, ap_data *d, int ci, double t, const ap_sc *q,
+                         const ap_sc *v, ap_sc *S, ap_sc *gamma) {
+  const ap_bmodel *M = ap_bm(m);
+  (void)d, (void)t, (void)q, (void)v;
+  ap_con_contact_gamma(M, S, ci, ap_con_scratch(M, S, ci), 1, gamma);
+  return AP_OK;
+}
+
+static ap_sc contact_hol(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int r, ap_sc *row) {
+  (void)r;
+  return contact_hol_row(M, S, c, row);
+}
+
+const AP_SC(ap_con_eval) AP_SC(ap_con_contact_eval) = {NULL, contact_rows, contact_gamma,
+                                                       contact_hol};
+
+/* ---- double build: compile, names, forces, the tree path; the kind tables ----------------- */
+#ifndef AP_SC_COMPLEX
+extern const struct ap_con_eval_cs ap_con_contact_eval_cs;
+
+#define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
+
+/* Rolling, or a wheel's knife edge: the shape's lowest point touches the ground. On a
+ * plane-contact joint the joint holds it there; on any other joint the constraint adds the
+ * contact row .z (last row, holonomic) and a geometry block of its own. */
+static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon *c) {
+  const ap_constraint_def *d = &c->def;
+  int rc = ap_cc_body_ref(b, nm, "body", d->body, 0);
+  if (rc == AP_OK) rc = ap_cc_ground(b, nm, &d->ground);
+  if (rc != AP_OK) return rc;
+  c->timed = d->ground.kind != AP_GROUND_FIXED;
+  const ap_mbody *B = &M->bodies[d->body];
+  const ap_mjoint *J = &M->joints[B->joint];
+  ap_shape_kind sk = B->shape.kind;
+  int knife = d->kind == AP_CON_KNIFE_EDGE;
+  if (knife && sk != AP_SHAPE_DISK && sk != AP_SHAPE_TORUS)
+    FAIL("constraint '%s': a wheel knife edge needs body '%s' to be a disk or a torus (its "
+         "shape kind is %d): the wheel plane is its body xy plane", nm, B->name, (int)sk);
+  if (sk == AP_SHAPE_NONE)
+    FAIL("constraint '%s': rolling needs body '%s' to have a shape (sphere, ellipsoid, disk, "
+         "torus or point) touching the ground plane", nm, B->name);
+  if (!knife && d->wheel)
+    FAIL("constraint '%s': wheel = %d belongs to a knife edge (rolling always uses the shape's "
+         "contact point)", nm, d->wheel);
+  c->nrows = knife ? 1 : d->no_spin ? 3 : 2;
+  c->wheel = -1;
+  if (J->kind == AP_JOINT_PLANE_CONTACT) return AP_OK;
+  c->wheel = M->nwheel++;
+  c->hrow = c->nrows++;
+  c->nhol = 1;
+  return AP_OK;
+}
+
+static const char *rolling_suffix(const ap_mcon *c, int r, char *buf) {
+  static const char *const xyz[] = {".x", ".y", ".z"};
+  (void)buf;
+  return r < 2 ? xyz[r] : r == c->hrow && c->nhol ? ".z" : ".spin";
+}
+
+static const char *wheel_knife_suffix(const ap_mcon *c, int r, char *buf) {
+  (void)c, (void)buf;
+  return r == 0 ? ".side" : ".z";
+}
+
+/* The force of the rows on the body at the contact point: rolling (lambda_x, lambda_y, 0)
+ * (no-spin: a torque lambda e_z), the wheel's knife edge lambda n; the contact row lambda e_z. */
+static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
                           double *F) {
   if (c->def.kind == AP_CON_ROLLING) {
     F[0] += lam[0], F[1] += lam[1];
@@ -168,4 +243,49 @@ void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
   }
   if (c->nhol) F[2] += lam[c->hrow];
 }
+
+static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
+                          int root, const double *o, double *F, double *T) {
+  if (!ap_bm_in_subtree(M, c->def.body, root)) return AP_OK;
+  double f[3] = {0, 0, 0}, x[3];
+  kwheel W = ap_contact_geom(M, S, c);
+  kbody C = ap_kin_body(M, S, c->def.body);
+  contact_force(M, S, c, lam, f);
+  for (int i = 0; i < 3; i++) x[i] = C.o[i] + W.rc[i];
+  ap_con_add_force(f, x, o, F, T);
+  if (T && c->def.kind == AP_CON_ROLLING && c->def.no_spin) T[2] += lam[2];
+  return AP_OK;
+}
+
+static int contact_tree_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c,
+                             char *why, size_t len) {
+  (void)M;
+  if (c->nhol == 0 && c->wheel < 0) return c->def.body;
+  snprintf(why, len, "model '%s': constraint '%s' is a wheel contact (an implicit holonomic "
+           "row)", m->name, c->name);
+  return -1;
+}
+
+static void contact_tree_row(const ap_bmodel *Ms, double *S, const ap_mcon *c, int rr,
+                             const double *G, const double *rho, double *cv, double *a0) {
+  kbody C = ap_kin_body(Ms, S, c->def.body);
+  kwheel Wg = ap_contact_geom(Ms, S, c);
+  double n[3];
+  if (c->def.kind == AP_CON_ROLLING && rr == 2) {   /* no spin: e_z . w - Omega */
+    cv[2] = 1.0;
+    *a0 = rho[2] - G[AP_G_OM];
+    return;
+  }
+  if (c->def.kind == AP_CON_KNIFE_EDGE) m3_mul_v(C.R, EZ, n);
+  else n[0] = rr == 0, n[1] = rr == 1, n[2] = 0.0;
+  ap_con_tree_point_row(c, G, C.o, Wg.rc, n, rho, cv, a0);
+}
+
+const ap_con_kind ap_con_rolling = {"rolling", contact_compile, rolling_suffix, contact_wrench,
+                                    contact_tree_body, contact_tree_row, NULL, 1,
+                                    &ap_con_contact_eval, &ap_con_contact_eval_cs};
+const ap_con_kind ap_con_wheel_knife = {"knife_edge (wheel)", contact_compile,
+                                        wheel_knife_suffix, contact_wrench, contact_tree_body,
+                                        contact_tree_row, NULL, 0, &ap_con_contact_eval,
+                                        &ap_con_contact_eval_cs};
 #endif

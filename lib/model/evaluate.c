@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "linalg/linalg.h"
-#include "model/model.h"
+#include "model/con_kind.h"
 #include "model/tree_model.h"   /* the tree path's layout and queries (m->ops) */
 
 /* ---- hooks ------------------------------------------------------------------------------- */
@@ -23,9 +23,8 @@
 int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++)
-    if (M->cons[ci].def.kind == AP_CON_USER) {
-      snprintf(msg, len, "constraint '%s' is a user constraint (C callbacks of doubles)",
-               M->cons[ci].name);
+    if (M->cons[ci].kind->no_cs) {
+      snprintf(msg, len, "constraint '%s' is %s", M->cons[ci].name, M->cons[ci].kind->no_cs);
       return -1;
     }
   for (int i = 0; i < M->ne; i++)
@@ -478,7 +477,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
                           int constraint, ap_contact_force *out) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out) return AP_ERR_ARG;
   const ap_bmodel *M = ap_tree_layout(m);
-  if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
+  if (constraint < 0 || constraint >= M->nc || !M->cons[constraint].kind->contact)
     return AP_ERR_ARG;
   const ap_mcon *c = &M->cons[constraint];
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;

@@ -71,8 +71,6 @@
 #define ap_con_ground_accel ap_con_ground_accel_cs
 #define ap_contact_geom ap_contact_geom_cs
 #define ap_contact_position ap_contact_position_cs
-#define ap_contact_hol_row ap_contact_hol_row_cs
-#define ap_con_contact_rows ap_con_contact_rows_cs
 #define ap_con_contact_gamma ap_con_contact_gamma_cs
 #define ap_eff_forces ap_eff_forces_cs
 #define ap_act_force ap_act_force_cs
@@ -118,6 +116,7 @@ typedef struct ap_mjoint {
 
 typedef struct ap_mcon {
   char name[64];
+  const struct ap_con_kind *kind;   /* its table of operations (con_kind.h) */
   ap_constraint_def def;      /* copy; def.name is not used */
   int row, nrows;             /* first row in A and row count */
   double dir[3];              /* unit direction (knife edge, line) or normal (plane) */
@@ -369,12 +368,8 @@ kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c);
 /* Support points of the wheel contacts (after the bodies' position stage); AP_RECOVERABLE with
  * a message naming the body when a disk or torus lies flat. */
 int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S);
-/* The contact row .z: returns the height phi of the contact point, row = its K1 coefficients. */
-ap_sc ap_contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row);
-/* Rows of A, a0 and gamma of a rolling or wheel knife-edge constraint (G: its time scratch);
- * surface = 0 drops the term of the contact point moving over the body surface (tests). */
-void ap_con_contact_rows(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
-                         ap_sc *a0);
+/* gamma of a rolling or wheel knife-edge constraint (G: its time scratch); surface = 0 drops
+ * the term of the contact point moving over the body surface (tests). */
 void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
                           ap_sc *gamma);
 
@@ -424,9 +419,6 @@ int ap_bm_phi_cs(const ap_model *m, ap_data_cs *d, double _Complex *S, double _C
 int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
 /* Potential energy of the gravity and spring effects, after ap_kin_position. */
 double ap_eff_potential(const ap_bmodel *M, double *S);
-/* F += the force (world) of the constraint's rows with multipliers lam on its body. */
-void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
-                          double *F);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
  * effects (effect.c), and of the constraint rows other than skip with multipliers lambda
  * (constraint.c). AP_ERR_UNSUPPORTED when a user effect or user constraint is present (its
@@ -435,6 +427,9 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
                          double *F);
 int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
                          int skip, double *F);
+/* The same with the moment T about the world point o (T may be NULL). */
+int ap_con_subtree_wrench(const ap_bmodel *M, double *S, const double *lambda, int root,
+                          int skip, const double *o, double *F, double *T);
 void ap_bm_destroy(void *impl);
 #endif
 
