@@ -30,7 +30,8 @@ int ap_cc_body_ref(ap_builder *b, const char *nm, const char *what, int body, in
 int ap_cc_ground(ap_builder *b, const char *nm, const ap_ground_motion *g) {
   if ((int)g->kind < 0 || (int)g->kind > 2)
     FAIL("constraint '%s': unknown ground kind %d", nm, (int)g->kind);
-  if (!ap_cc_finite(g->center, 2) || !isfinite(g->omega) || !ap_cc_finite(g->velocity, 2))
+  if (!ap_cc_finite(g->center, 2) || !isfinite(g->omega) || !ap_cc_finite(g->velocity, 2) ||
+      !ap_cc_finite(g->normal, 3) || !isfinite(g->offset))
     FAIL("constraint '%s': the ground motion has a non-finite parameter", nm);
   return AP_OK;
 }

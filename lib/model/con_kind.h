@@ -110,8 +110,6 @@ int ap_cc_finite(const double *x, int n);
  * (world) from the body origin o (constraint.c). */
 void ap_con_tree_point_row(const ap_mcon *c, const double *G, const double *o, const double *r,
                            const double *n, const double *rho, double *cv, double *a0);
-/* F += f, T += (x - o) x f: a force f at the world point x. */
-void ap_con_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 #endif
 
 #endif

@@ -78,7 +78,7 @@ static int knife_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const d
   m3_mul_v(ap_kin_body(M, S, c->def.body).R, c->dir, n);
   for (int i = 0; i < 3; i++) n[i] *= lam[0];
   ap_kin_point(M, S, c->def.body, c->def.point, x, NULL, NULL);
-  ap_con_add_force(n, x, o, F, T);
+  ap_bm_add_force(n, x, o, F, T);
   return AP_OK;
 }
 

@@ -166,7 +166,7 @@ static int loop_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const do
     double n[3];
     loop_normal(M, S, c, r, n);
     for (int i = 0; i < 3; i++) n[i] *= ina ? lam[r] : -lam[r];
-    ap_con_add_force(n, x, o, F, T);
+    ap_bm_add_force(n, x, o, F, T);
   }
   return AP_OK;
 }

@@ -88,7 +88,7 @@ static int speed_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const d
     return AP_OK;
   }
   for (int i = 0; i < 3; i++) x[i] = C.o[i] + (pc ? K.rc[i] : 0.0), e[i] *= lam[0];
-  ap_con_add_force(e, x, o, F, T);
+  ap_bm_add_force(e, x, o, F, T);
   return AP_OK;
 }
 

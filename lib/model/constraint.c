@@ -151,7 +151,7 @@ const ap_con_kind *const ap_con_kinds[AP_CON_NKINDS] = {
     [AP_CON_COINCIDENT] = &ap_con_coincident,   [AP_CON_POINT_ON_LINE] = &ap_con_on_line,
     [AP_CON_POINT_ON_PLANE] = &ap_con_on_plane};
 
-void ap_con_add_force(const double *f, const double *x, const double *o, double *F, double *T) {
+void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T) {
   v3_axpy(1.0, f, F);
   if (!T) return;
   double r[3] = {x[0] - o[0], x[1] - o[1], x[2] - o[2]};

@@ -33,7 +33,17 @@
 #include "model/builder.h"
 #include "model/con_kind.h"
 
-static const ap_sc EZ[3] = {0, 0, 1};
+static const ap_sc EX[3] = {1, 0, 0}, EY[3] = {0, 1, 0}, EZ[3] = {0, 0, 1};
+
+/* The ground plane's normal n and tangents t1, t2 (t1 x t2 = n) in this build's scalar: the
+ * constants e_z, e_x, e_y for the plane z = 0, else copies of the constraint's into gf (9). */
+static void ground_frame(const ap_mcon *c, ap_sc *gf, const ap_sc **n, const ap_sc **t1,
+                         const ap_sc **t2) {
+  *n = EZ, *t1 = EX, *t2 = EY;
+  if (!c->plane) return;
+  v3_copy_d(c->gn, gf), v3_copy_d(c->gt1, gf + 3), v3_copy_d(c->gt2, gf + 6);
+  *n = gf, *t1 = gf + 3, *t2 = gf + 6;
+}
 
 kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c) {
   if (c->wheel >= 0) {
@@ -58,7 +68,10 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S) {
     kwheel W = ap_contact_geom(M, S, c);
     ap_sc sigma;
     double flat;
-    W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
+    if (c->plane)   /* u = -R^T n */
+      for (int i = 0; i < 3; i++) W.u[i] = -v3_dot_d(C.R + 3 * i, c->gn);
+    else
+      W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
     if (ap_shape_support(&B->shape, W.u, &sigma, W.cb, W.H, &flat) != 0) {
       AP_BM_MSG(d, "model '%s': body '%s': the %s of constraint '%s' lies flat on the ground "
                 "plane at t = %.17g (its axis, the body z axis, is %.3g degrees from the "
@@ -79,6 +92,10 @@ static ap_sc contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_
   ap_sc *JP = S + M->off_tmp, x[3];
   kwheel W = ap_contact_geom(M, S, c);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
+  if (c->plane) {   /* the gap n . x - offset */
+    for (int col = 0; col < M->K1; col++) row[col] = v3_dot_d(JP + 3 * col, c->gn);
+    return v3_dot_d(x, c->gn) - c->goff;
+  }
   for (int col = 0; col < M->K1; col++) row[col] = JP[2 + 3 * col];
   return x[2];
 }
@@ -95,22 +112,23 @@ static void put_row3(const ap_bmodel *M, ap_sc *A, ap_sc *a0, int r, const ap_sc
 
 static void contact_rows_g(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
                            ap_sc *a0) {
-  static const ap_sc ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0};
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
-  ap_sc *JP = S + M->off_tmp, x[3], Vg[3], n[3];
+  ap_sc *JP = S + M->off_tmp, x[3], Vg[3], n[3], gf[9];
+  const ap_sc *gn, *t1, *t2;
+  ground_frame(c, gf, &gn, &t1, &t2);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   ap_con_ground_velocity(c, G, x, Vg);
   if (c->def.kind == AP_CON_ROLLING) {
-    put_row3(M, A, a0, c->row, ex, JP, Vg[0]);
-    put_row3(M, A, a0, c->row + 1, ey, JP, Vg[1]);
-    if (c->def.no_spin) put_row3(M, A, a0, c->row + 2, EZ, C.Jw, G[0]);
+    put_row3(M, A, a0, c->row, t1, JP, Vg[0]);
+    put_row3(M, A, a0, c->row + 1, t2, JP, Vg[1]);
+    if (c->def.no_spin) put_row3(M, A, a0, c->row + 2, gn, C.Jw, G[0]);
   } else {
     m3_mul_v(C.R, EZ, n);
     put_row3(M, A, a0, c->row, n, JP, v3_dot(n, Vg));
   }
-  if (c->nhol) put_row3(M, A, a0, c->row + c->hrow, EZ, JP, 0.0);
+  if (c->nhol) put_row3(M, A, a0, c->row + c->hrow, gn, JP, 0.0);
 }
 
 /* ---- gamma ----------------------------------------------------------------------------------- */
@@ -124,9 +142,11 @@ static void contact_motion(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int s
   ap_sc Rcd[3] = {0, 0, 0};
   ap_kin_point_motion(M, S, c->def.body, W.rc, vP, aP);   /* ao + al x rc + w x (w x rc) */
   if (surface) {
-    ap_sc wxe[3], ud[3], cd[3];
-    v3_cross(C.w, EZ, wxe);
-    m3t_mul_v(C.R, wxe, ud);                               /* u' = R^T (w x e_z) */
+    ap_sc wxe[3], ud[3], cd[3], gf[9];
+    const ap_sc *gn, *t1, *t2;
+    ground_frame(c, gf, &gn, &t1, &t2);
+    v3_cross(C.w, gn, wxe);
+    m3t_mul_v(C.R, wxe, ud);                               /* u' = R^T (w x n) */
     m3_mul_v(W.H, ud, cd);                                 /* c_b' = H u' */
     m3_mul_v(C.R, cd, Rcd);
     v3_cross_add(C.w, Rcd, aP);                            /* + w x R c_b' */
@@ -141,6 +161,18 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   ap_sc vP[3], aP[3], x[3], xd[3], Ag[3];
   contact_motion(M, S, c, surface, vP, aP, x, xd);
   ap_con_ground_accel(c, G, x, xd, Ag);
+  if (c->plane) {   /* a fixed plane: n, t1, t2 constant, no ground motion */
+    ap_sc gf[9];
+    const ap_sc *gn, *t1, *t2;
+    ground_frame(c, gf, &gn, &t1, &t2);
+    if (c->def.kind == AP_CON_ROLLING) {
+      gamma[c->row] = -v3_dot(t1, aP);
+      gamma[c->row + 1] = -v3_dot(t2, aP);
+      if (c->def.no_spin) gamma[c->row + 2] = -v3_dot(gn, C.al);
+    }
+    if (c->nhol) gamma[c->row + c->hrow] = -v3_dot(gn, aP);
+    if (c->def.kind == AP_CON_ROLLING) return;
+  }
   if (c->def.kind == AP_CON_ROLLING) {
     gamma[c->row] = -(aP[0] - Ag[0]);
     gamma[c->row + 1] = -(aP[1] - Ag[1]);
@@ -153,7 +185,7 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
     for (int i = 0; i < 3; i++) g += wn[i] * (vP[i] - Vg[i]) + n[i] * (aP[i] - Ag[i]);
     gamma[c->row] = -g;
   }
-  if (c->nhol) gamma[c->row + c->hrow] = -aP[2];
+  if (c->nhol && !c->plane) gamma[c->row + c->hrow] = -aP[2];
 }
 
 /* ---- this build's evaluation table -------------------------------------------------------- */
@@ -188,6 +220,33 @@ extern const struct ap_con_eval_cs ap_con_contact_eval_cs;
 
 #define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
 
+/* The ground plane n . p = offset: c->plane, gn, gt1 = e_y x n / |.| (e_x for n = e_z; from
+ * e_x when n is along e_y), gt2 = n x gt1. A tilted plane cannot move. */
+static int ground_plane(ap_builder *b, const char *nm, ap_mcon *c) {
+  const ap_ground_motion *g = &c->def.ground;
+  double nn = v3_norm(g->normal), ey[3] = {0, 1, 0}, ex[3] = {1, 0, 0};
+  if (nn == 0.0 && g->offset == 0.0) return AP_OK;
+  if (nn == 0.0) c->gn[0] = c->gn[1] = 0.0, c->gn[2] = 1.0;
+  else for (int i = 0; i < 3; i++) c->gn[i] = g->normal[i] / nn;
+  if (c->gn[0] == 0.0 && c->gn[1] == 0.0 && c->gn[2] > 0.0 && g->offset == 0.0) return AP_OK;
+  if (g->kind != AP_GROUND_FIXED)
+    FAIL("constraint '%s': a moving ground (turntable or translating) must be the plane z = 0, "
+         "not (%g, %g, %g) . p = %g", nm, c->gn[0], c->gn[1], c->gn[2], g->offset);
+  c->plane = 1, c->goff = g->offset;
+  v3_cross(ey, c->gn, c->gt1);
+  if (v3_norm(c->gt1) < 0.1) {
+    v3_cross(c->gn, ex, c->gt2);
+    double t = v3_norm(c->gt2);
+    for (int i = 0; i < 3; i++) c->gt2[i] /= t;
+    v3_cross(c->gt2, c->gn, c->gt1);
+    return AP_OK;
+  }
+  double t = v3_norm(c->gt1);
+  for (int i = 0; i < 3; i++) c->gt1[i] /= t;
+  v3_cross(c->gn, c->gt1, c->gt2);
+  return AP_OK;
+}
+
 /* Rolling, or a wheel's knife edge: the shape's lowest point touches the ground. On a
  * plane-contact joint the joint holds it there; on any other joint the constraint adds the
  * contact row .z (last row, holonomic) and a geometry block of its own. */
@@ -212,6 +271,11 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
          "contact point)", nm, d->wheel);
   c->nrows = knife ? 1 : d->no_spin ? 3 : 2;
   c->wheel = -1;
+  if (ground_plane(b, nm, c) != AP_OK) return AP_ERR_ARG;
+  if (c->plane && J->kind == AP_JOINT_PLANE_CONTACT)
+    FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0; for "
+         "the ground plane (%g, %g, %g) . p = %g put the body on a free joint (or a wheel on "
+         "its axle)", nm, B->name, c->gn[0], c->gn[1], c->gn[2], c->goff);
   if (J->kind == AP_JOINT_PLANE_CONTACT) return AP_OK;
   c->wheel = M->nwheel++;
   c->hrow = c->nrows++;
@@ -234,14 +298,17 @@ static const char *wheel_knife_suffix(const ap_mcon *c, int r, char *buf) {
  * (no-spin: a torque lambda e_z), the wheel's knife edge lambda n; the contact row lambda e_z. */
 static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
                           double *F) {
+  double gf[9];
+  const double *gn, *t1, *t2;
+  ground_frame(c, gf, &gn, &t1, &t2);
   if (c->def.kind == AP_CON_ROLLING) {
-    F[0] += lam[0], F[1] += lam[1];
+    v3_axpy(lam[0], t1, F), v3_axpy(lam[1], t2, F);
   } else {
     double n[3];
     m3_mul_v(ap_kin_body(M, S, c->def.body).R, EZ, n);
     v3_axpy(lam[0], n, F);
   }
-  if (c->nhol) F[2] += lam[c->hrow];
+  if (c->nhol) v3_axpy(lam[c->hrow], gn, F);
 }
 
 static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
@@ -252,7 +319,7 @@ static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const
   kbody C = ap_kin_body(M, S, c->def.body);
   contact_force(M, S, c, lam, f);
   for (int i = 0; i < 3; i++) x[i] = C.o[i] + W.rc[i];
-  ap_con_add_force(f, x, o, F, T);
+  ap_bm_add_force(f, x, o, F, T);
   if (T && c->def.kind == AP_CON_ROLLING && c->def.no_spin) T[2] += lam[2];
   return AP_OK;
 }

@@ -163,14 +163,20 @@ static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n
 }
 
 /* One disk or torus with rotation R (body to world, column-major) and tracking block trk:
- * c (3), whether it is set (1), its time (1). */
+ * c (3), whether it is set (1), its time (1). g: the ground plane's normal (NULL: e_z). */
 static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const double *R,
-                     double *trk, int track) {
+                     double *trk, int track, const double *g) {
   const double *a = R + 6;                   /* the axis in world axes, R e_z */
   double n = hypot(a[0], a[1]);              /* = |e_z - a_z a| = |u_perp| */
+  double c[3] = {0, 0, 0};
+  if (g) {                                   /* a tilted plane: |g - (a . g) a| */
+    double ag = v3_dot(a, g), p[3] = {g[0] - ag * a[0], g[1] - ag * a[1], g[2] - ag * a[2]};
+    n = v3_norm(p);
+    if (n > 0) c[0] = -p[0] / n, c[1] = -p[1] / n, c[2] = -p[2] / n;
+  }
   if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
   if (!(n > 0)) return AP_OK;   /* exactly flat while assembling: the position stage reports it */
-  double c[3] = {a[2] * a[0] / n, a[2] * a[1] / n, -n};
+  if (!g) c[0] = a[2] * a[0] / n, c[1] = a[2] * a[1] / n, c[2] = -n;
   double cos_turn = c[0] * trk[0] + c[1] * trk[1] + c[2] * trk[2];
   if (track && trk[3] != 0.0 && cos_turn < 0.0)
     return flat_error(m, d, B, n, acos(fmax(-1.0, cos_turn)) * 57.29577951308232, trk[4]);
@@ -194,7 +200,7 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     if (J->kind != AP_JOINT_PLANE_CONTACT || !is_wheel_shape(B)) continue;
     double R[9];
     ap_quat_normalized_matrix(q + J->qidx[J->quat], R);
-    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track);
+    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track, NULL);
   }
   if (rc != AP_OK || !M->nwheel) return rc;
   if (!fresh) rc = ap_kin_position(m, d, d->t, q, S);
@@ -203,7 +209,7 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     const ap_mbody *B = c->wheel >= 0 ? &M->bodies[c->def.body] : NULL;
     if (!B || !is_wheel_shape(B)) continue;
     rc = track_one(m, d, B, ap_kin_body(M, S, c->def.body).R, ap_contact_geom(M, S, c).track,
-                   track);
+                   track, c->plane ? c->gn : NULL);
   }
   return rc;
 }
@@ -452,17 +458,25 @@ static void finish_force(const ap_mcon *c, const double *lam, ap_contact_force *
   out->lift_off = out->normal < 0;
 }
 
-/* A wheel contact carries its normal force as the multiplier of its contact row .z. */
-static int wheel_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
-                       ap_contact_force *out) {
+/* A wheel contact: its share of its chassis' load (loads.c). */
+static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, int ci,
+                       const double *lam, ap_contact_force *out) {
+  const ap_bmodel *M = ap_bm(m);
+  double *S = ap_bm_scratch(d);
   kwheel W = ap_contact_geom(M, S, c);
   kbody C = ap_kin_body(M, S, c->def.body);
   memset(out, 0, sizeof *out);
   for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + W.rc[i];
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
-  out->force[2] = out->normal = lam[c->row + c->hrow];
+  int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
+  out->force[2] = out->normal;
   finish_force(c, lam, out);
-  return AP_OK;
+  if (c->plane) {   /* a tilted plane: tangents gt1, gt2 and the normal gn, to world axes */
+    double t0 = out->force[0], t1 = out->force[1];
+    for (int i = 0; i < 3; i++)
+      out->force[i] = t0 * c->gt1[i] + t1 * c->gt2[i] + out->normal * c->gn[i];
+  }
+  return rc;
 }
 
 /* The force of the ground on a rolling body (docs/bodies.md "Contact forces"). Tangential: the
@@ -482,7 +496,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   const ap_mcon *c = &M->cons[constraint];
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
-  if (c->wheel >= 0) return wheel_force(M, S, c, lam, out);
+  if (c->wheel >= 0) return wheel_force(m, d, c, constraint, lam, out);
   int root = c->def.body, k = M->k;
   if (m->ops) ap_tree_com_accel(ap_tree_ws_of(d), vd, -1, NULL);   /* twists of v' */
   for (int b = 0; b < M->nb; b++) {
@@ -511,6 +525,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   out->point[2] = 0.0;
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   out->force[2] = out->normal = ma[2] - Fe[2] - Fc[2];
+  out->ncontacts = 1;
   finish_force(c, lam, out);
   return AP_OK;
 }

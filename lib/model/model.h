@@ -125,6 +125,9 @@ typedef struct ap_mcon {
   int timed;                  /* needs time functions evaluated (ground motion, speed fn) */
   int nhol, hrow;             /* implicit holonomic rows: rows hrow..hrow+nhol-1 of the
                                  constraint (loop closures: all; wheel contacts: the last) */
+  int plane;                  /* contacts: 1 when the ground plane is not z = 0 (an incline:
+                                 gn . x = goff, tangents gt1, gt2 with gt1 x gt2 = gn) */
+  double gn[3], gt1[3], gt2[3], goff;
   int wheel;                  /* contact at the shape's lowest point (rolling, knife edge with
                                  def.wheel): index of its geometry block when the body is not on
                                  a plane-contact joint, -1 when the joint carries the geometry;
@@ -419,6 +422,8 @@ int ap_bm_phi_cs(const ap_model *m, ap_data_cs *d, double _Complex *S, double _C
 int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
 /* Potential energy of the gravity and spring effects, after ap_kin_position. */
 double ap_eff_potential(const ap_bmodel *M, double *S);
+/* F += f and (T != NULL) T += (x - o) x f: a force f at the world point x (constraint.c). */
+void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
  * effects (effect.c), and of the constraint rows other than skip with multipliers lambda
  * (constraint.c). AP_ERR_UNSUPPORTED when a user effect or user constraint is present (its
@@ -427,9 +432,16 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
                          double *F);
 int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
                          int skip, double *F);
+int ap_eff_subtree_wrench(const ap_bmodel *M, double *S, double t, const double *v, int root,
+                          const double *o, double *F, double *T);
 /* The same with the moment T about the world point o (T may be NULL). */
 int ap_con_subtree_wrench(const ap_bmodel *M, double *S, const double *lambda, int root,
                           int skip, const double *o, double *F, double *T);
+/* The normal load of wheel contact `constraint` (c->wheel >= 0) with multipliers lam, after
+ * the pipeline at the data's state (v'): its share of what holds its chassis (loads.c), how it
+ * is known, and how many contacts share it. */
+int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
+                     double *normal, ap_load_kind *kind, int *count);
 void ap_bm_destroy(void *impl);
 #endif
 
