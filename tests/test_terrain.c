@@ -12,6 +12,8 @@
  *    F_n = m g cos(a) and friction 2/7 m g sin(a) up the slope;
  *  the gamma of the tilted contact against central differences of A v + a0 along the motion
  *    (a disk leaning and turning on the incline), with and without the surface term;
+ *  the touchdown impact (ap_impact): a spinning sphere dropped on the plane, v+ against the
+ *    closed form of a sticking plastic impact and Carnot's energy loss;
  *  refusals: a tilted plane under a plane-contact joint or with a moving ground. */
 #include <math.h>
 #include <stdio.h>
@@ -239,6 +241,51 @@ static void test_fd_incline(void) {
     }
 }
 
+/* A spinning sphere dropped onto the plane, sticking plastic impact (ap_impact): with I = 2/5 m
+ * r^2, the angular momentum about the contact point is kept, so vx+ = (5 vx- + 2 r wy-) / 7,
+ * vy+ = (5 vy- - 2 r wx-) / 7, vz+ = 0, w+ = (-vy+, vx+, .) / r, wz kept; Carnot: the energy
+ * lost equals 1/2 (v+ - v-)^T g (v+ - v-) and T(v-) - T(v+). On z = 0 and on the incline (the
+ * same impact turned by Q). */
+static void test_impact(void) {
+  double Q[9], n[3], g[3] = {0, 0, -G}, I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  rot_x(ALPHA, Q);
+  mulv(Q, (double[3]){0, 0, 1}, n);
+  for (int tilted = 0; tilted < 2; tilted++) {
+    char msg[512] = "";
+    const double *T = tilted ? Q : I3;
+    ap_model *m = ball(AP_SHAPE_SPHERE, tilted ? n : NULL, tilted ? OFFSET : 0.0, g, msg);
+    AP_CHECK(m != NULL);
+    if (!m) continue;
+    double ql[7] = {0.2, -0.1, RADIUS, 1, 0, 0, 0}, vl[6] = {1.3, -0.6, -2.5, 4.0, 7.0, 11.0};
+    double q[7], vm[6], vp[6], ex[6], loss = -1.0;
+    ex[0] = (5 * vl[0] + 2 * RADIUS * vl[4]) / 7, ex[1] = (5 * vl[1] - 2 * RADIUS * vl[3]) / 7;
+    ex[2] = 0.0, ex[3] = -ex[1] / RADIUS, ex[4] = ex[0] / RADIUS, ex[5] = vl[5];
+    if (tilted) {
+      double e2[6];
+      map_state(Q, OFFSET, ql, vl, q, vm);
+      mulv(T, ex, e2), mulv(T, ex + 3, e2 + 3);
+      memcpy(ex, e2, sizeof e2);
+    } else {
+      memcpy(q, ql, sizeof q), memcpy(vm, vl, sizeof vm);
+    }
+    ap_data *d = NULL;
+    AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
+    memcpy(d->q, q, sizeof q);
+    d->basis = AP_BASIS_ORTHONORMAL;
+    AP_CHECK_EQ_INT(ap_impact(m, d, vm, vp, &loss), AP_OK);
+    double err = 0.0, Tm = ap_kinetic_energy(d, vm), Tp = ap_kinetic_energy(d, vp);
+    for (int i = 0; i < 6; i++) err = fmax(err, fabs(vp[i] - ex[i]) * (i < 3 ? 1.0 : RADIUS));
+    printf("  sticking impact of a spinning sphere%s: v+ %.2e m/s from the closed form, "
+           "Carnot loss %.12g J, T- - T+ = %.12g J\n", tilted ? " on the incline" : "", err, loss,
+           Tm - Tp);
+    AP_CHECK_LE(err, 1e-13);
+    AP_CHECK_NEAR(loss, Tm - Tp, 1e-12 * Tm);
+    AP_CHECK_LE(ap_constraint_residual(d, vp), 1e-14);
+    ap_data_free(d);
+    ap_model_free(m);
+  }
+}
+
 /* A tilted plane needs a body that is not on a plane-contact joint, and a fixed ground. */
 static void test_refusals(void) {
   double n[3] = {0, -0.5, 1};
@@ -272,6 +319,7 @@ int main(void) {
   test_turned_gravity();
   test_incline_closed_form();
   test_fd_incline();
+  test_impact();
   test_refusals();
   return ap_check_finish("test_terrain");
 }

@@ -1,4 +1,6 @@
-/* Constraint kinds: rows of A v + a0 = 0 and gamma = -(A' v + a0') (docs/design.md §1).
+/* Constraints: rows of A v + a0 = 0 and gamma = -(A' v + a0') (docs/design.md §1), each kind
+ * through its table of operations (con_kind.h); here the ground motion shared by the contacts,
+ * the loops over the constraints, the kind registry and the subtree forces.
  *
  * With a point's Jacobian JP (3 x K1, column k = rheonomic part) a row c . (JP [v; 1]) gives
  * A = c^T JP[:, 0..k-1] and a0 = c . JP[:, k] minus the ground surface's velocity. The ground
@@ -6,13 +8,10 @@
  * its rate is Ag = V' + Omega' e_z x (p - center) + Omega e_z x p'.
  *
  *  rolling   and the wheel's knife edge: rows at the shape's contact point (contact.c).
- *  knife     n = R dir; row n . (vP - Vg(x)) at the body point x;
- *            gamma = -((w x n) . (vP - Vg) + n . (aP - Ag)), aP = ao + al x r + w x (w x r).
- *  speed     row v_j - f(t); gamma = f'(t).
- *  user      the callbacks' rows.
- *  loops     phi = n . (xA - xB), n a world axis (coincident) or fixed on body B (line, plane):
- *            phi' = n . (vA - vB) + (n x d) . wB, d = xA - xB;
- *            gamma = -((alB x n + wB x (wB x n)) . d + 2 (wB x n) . (vA - vB) + n . (aA - aB)).
+ *  knife     n = R dir; row n . (vP - Vg(x)) at the body point x (con_knife.c).
+ *  speed     row v_j - f(t); gamma = f'(t) (con_speed.c).
+ *  user      the callbacks' rows (con_user.c).
+ *  loops     phi = n . (xA - xB), n a world axis or fixed on body B (con_loop.c).
  *
  * Per-constraint scratch (CON_STRIDE): Omega, Omega', Vx, Vy, Vx', Vy', f, f' at t.
  * Generic in the scalar (model/model.h; constraint_cs.c): time functions give real values;

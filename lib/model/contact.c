@@ -115,18 +115,35 @@ static void contact_rows_g(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G,
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
-  ap_sc *JP = S + M->off_tmp, x[3], Vg[3], n[3], gf[9];
-  const ap_sc *gn, *t1, *t2;
-  ground_frame(c, gf, &gn, &t1, &t2);
+  ap_sc *JP = S + M->off_tmp, x[3], Vg[3], n[3];
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   ap_con_ground_velocity(c, G, x, Vg);
   if (c->def.kind == AP_CON_ROLLING) {
-    put_row3(M, A, a0, c->row, t1, JP, Vg[0]);
-    put_row3(M, A, a0, c->row + 1, t2, JP, Vg[1]);
-    if (c->def.no_spin) put_row3(M, A, a0, c->row + 2, gn, C.Jw, G[0]);
+    put_row3(M, A, a0, c->row, EX, JP, Vg[0]);
+    put_row3(M, A, a0, c->row + 1, EY, JP, Vg[1]);
+    if (c->def.no_spin) put_row3(M, A, a0, c->row + 2, EZ, C.Jw, G[0]);
   } else {
     m3_mul_v(C.R, EZ, n);
     put_row3(M, A, a0, c->row, n, JP, v3_dot(n, Vg));
+  }
+  if (c->nhol) put_row3(M, A, a0, c->row + c->hrow, EZ, JP, 0.0);
+}
+
+/* The same on a tilted plane (fixed): the tangents t1, t2, the normal n for no-spin and .z. */
+static void plane_rows(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *A, ap_sc *a0) {
+  kbody C = ap_kin_body(M, S, c->def.body);
+  kwheel W = ap_contact_geom(M, S, c);
+  ap_sc *JP = S + M->off_tmp, x[3], n[3], gf[9];
+  const ap_sc *gn, *t1, *t2;
+  ground_frame(c, gf, &gn, &t1, &t2);
+  ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
+  if (c->def.kind == AP_CON_ROLLING) {
+    put_row3(M, A, a0, c->row, t1, JP, 0.0);
+    put_row3(M, A, a0, c->row + 1, t2, JP, 0.0);
+    if (c->def.no_spin) put_row3(M, A, a0, c->row + 2, gn, C.Jw, 0.0);
+  } else {
+    m3_mul_v(C.R, EZ, n);
+    put_row3(M, A, a0, c->row, n, JP, 0.0);
   }
   if (c->nhol) put_row3(M, A, a0, c->row + c->hrow, gn, JP, 0.0);
 }
@@ -134,17 +151,15 @@ static void contact_rows_g(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G,
 /* ---- gamma ----------------------------------------------------------------------------------- */
 
 /* Velocity vP and rate aP of the material contact point (with the surface term when surface),
- * geometric contact point x and its velocity xd. */
+ * geometric contact point x and its velocity xd; gn the ground's normal. */
 static void contact_motion(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int surface,
-                           ap_sc *vP, ap_sc *aP, ap_sc *x, ap_sc *xd) {
+                           const ap_sc *gn, ap_sc *vP, ap_sc *aP, ap_sc *x, ap_sc *xd) {
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
   ap_sc Rcd[3] = {0, 0, 0};
   ap_kin_point_motion(M, S, c->def.body, W.rc, vP, aP);   /* ao + al x rc + w x (w x rc) */
   if (surface) {
-    ap_sc wxe[3], ud[3], cd[3], gf[9];
-    const ap_sc *gn, *t1, *t2;
-    ground_frame(c, gf, &gn, &t1, &t2);
+    ap_sc wxe[3], ud[3], cd[3];
     v3_cross(C.w, gn, wxe);
     m3t_mul_v(C.R, wxe, ud);                               /* u' = R^T (w x n) */
     m3_mul_v(W.H, ud, cd);                                 /* c_b' = H u' */
@@ -154,25 +169,33 @@ static void contact_motion(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int s
   for (int i = 0; i < 3; i++) x[i] = C.o[i] + W.rc[i], xd[i] = vP[i] + Rcd[i];
 }
 
+/* gamma on a tilted plane (fixed: n, t1, t2 constant, no ground motion), from the material
+ * point's velocity vP and rate aP. */
+static void plane_gamma(const ap_mcon *c, const kbody *C, const ap_sc *gn, const ap_sc *t1,
+                        const ap_sc *t2, const ap_sc *vP, const ap_sc *aP, ap_sc *gamma) {
+  if (c->def.kind == AP_CON_ROLLING) {
+    gamma[c->row] = -v3_dot(t1, aP);
+    gamma[c->row + 1] = -v3_dot(t2, aP);
+    if (c->def.no_spin) gamma[c->row + 2] = -v3_dot(gn, C->al);
+  } else {
+    ap_sc n[3], wn[3];
+    m3_mul_v(C->R, EZ, n);
+    v3_cross(C->w, n, wn);
+    gamma[c->row] = -(v3_dot(wn, vP) + v3_dot(n, aP));
+  }
+  if (c->nhol) gamma[c->row + c->hrow] = -v3_dot(gn, aP);
+}
+
 void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
                           ap_sc *gamma) {
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
-  ap_sc vP[3], aP[3], x[3], xd[3], Ag[3];
-  contact_motion(M, S, c, surface, vP, aP, x, xd);
+  ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9];
+  const ap_sc *gn, *t1, *t2;
+  ground_frame(c, gf, &gn, &t1, &t2);
+  contact_motion(M, S, c, surface, gn, vP, aP, x, xd);
+  if (c->plane) return plane_gamma(c, &C, gn, t1, t2, vP, aP, gamma);
   ap_con_ground_accel(c, G, x, xd, Ag);
-  if (c->plane) {   /* a fixed plane: n, t1, t2 constant, no ground motion */
-    ap_sc gf[9];
-    const ap_sc *gn, *t1, *t2;
-    ground_frame(c, gf, &gn, &t1, &t2);
-    if (c->def.kind == AP_CON_ROLLING) {
-      gamma[c->row] = -v3_dot(t1, aP);
-      gamma[c->row + 1] = -v3_dot(t2, aP);
-      if (c->def.no_spin) gamma[c->row + 2] = -v3_dot(gn, C.al);
-    }
-    if (c->nhol) gamma[c->row + c->hrow] = -v3_dot(gn, aP);
-    if (c->def.kind == AP_CON_ROLLING) return;
-  }
   if (c->def.kind == AP_CON_ROLLING) {
     gamma[c->row] = -(aP[0] - Ag[0]);
     gamma[c->row + 1] = -(aP[1] - Ag[1]);
@@ -185,7 +208,7 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
     for (int i = 0; i < 3; i++) g += wn[i] * (vP[i] - Vg[i]) + n[i] * (aP[i] - Ag[i]);
     gamma[c->row] = -g;
   }
-  if (c->nhol && !c->plane) gamma[c->row + c->hrow] = -aP[2];
+  if (c->nhol) gamma[c->row + c->hrow] = -aP[2];
 }
 
 /* ---- this build's evaluation table -------------------------------------------------------- */
@@ -194,7 +217,8 @@ static int contact_rows(const ap_model *m, ap_data *d, int ci, double t, const a
                         ap_sc *S, ap_sc *A, ap_sc *a0) {
   const ap_bmodel *M = ap_bm(m);
   (void)d, (void)t, (void)q;
-  contact_rows_g(M, S, ci, ap_con_scratch(M, S, ci), A, a0);
+  if (M->cons[ci].plane) plane_rows(M, S, &M->cons[ci], A, a0);
+  else contact_rows_g(M, S, ci, ap_con_scratch(M, S, ci), A, a0);
   return AP_OK;
 }
 
