@@ -120,6 +120,18 @@ static void test_two_wheels(const char *file, const char *const *sets) {
   stop(&r);
 }
 
+/* The loads at rest of a scene in one chassis form (1: free), with n contacts of kind. */
+static loads rest_loads(const char *file, int form, int n, ap_load_kind kind) {
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, file, form ? rest_free : rest_sets, 2 + form), AP_OK);
+  loads L = get_loads(&r);
+  AP_CHECK_EQ_INT(L.rc, AP_OK);
+  AP_CHECK_EQ_INT(L.n, n);
+  AP_CHECK_EQ_INT((int)L.kind, kind);
+  stop(&r);
+  return L;
+}
+
 /* Three contacts: the caster at x = -0.34 m behind the axle (fork straight), the drive wheels
  * at y = +-0.25 m: the lever rule N_c = W (-x_com) / 0.34, N_l = N_r = (W - N_c) / 2. */
 static void test_caster_rest(void) {
@@ -127,13 +139,7 @@ static void test_caster_rest(void) {
   double xcom = (10.0 * -0.08 + 0.2 * -0.32 + 0.1 * -0.34) / m;
   double Nc = W * -xcom / 0.34, Nw = (W - Nc) / 2;
   for (int form = 0; form < 2; form++) {
-    runner r;
-    AP_CHECK_EQ_INT(start(&r, "diff_drive_caster.yaml", form ? rest_free : rest_sets, 2 + form),
-                    AP_OK);
-    loads L = get_loads(&r);
-    AP_CHECK_EQ_INT(L.rc, AP_OK);
-    AP_CHECK_EQ_INT(L.n, 3);
-    AP_CHECK_EQ_INT((int)L.kind, AP_LOAD_UNIQUE);
+    loads L = rest_loads("diff_drive_caster.yaml", form, 3, AP_LOAD_UNIQUE);
     printf("  caster robot, %s chassis: %.12g %.12g %.12g N (lever rule %.12g %.12g %.12g)\n",
            form ? "free" : "planar", L.N[0], L.N[1], L.N[2], Nw, Nw, Nc);
     AP_CHECK_NEAR(L.N[0], Nw, 1e-12 * W);
@@ -141,7 +147,6 @@ static void test_caster_rest(void) {
     AP_CHECK_NEAR(L.N[2], Nc, 1e-12 * W);
     check_statics(form ? "diff_drive_caster (free)" : "diff_drive_caster (planar)", &L, W, xcom,
                   0.0, 1e-12);
-    stop(&r);
   }
 }
 
@@ -150,16 +155,9 @@ static void test_car_rest(void) {
   double m = 24.6, W = m * G;
   double xcom = (20.0 * 0.6 + 0.6 * 1.2 + 2.0 * 1.2) / m;
   for (int form = 0; form < 2; form++) {
-    runner r;
-    AP_CHECK_EQ_INT(start(&r, "car_ackermann.yaml", form ? rest_free : rest_sets, 2 + form),
-                    AP_OK);
-    loads L = get_loads(&r);
-    AP_CHECK_EQ_INT(L.rc, AP_OK);
-    AP_CHECK_EQ_INT(L.n, 4);
-    AP_CHECK_EQ_INT((int)L.kind, AP_LOAD_MIN_NORM);
+    loads L = rest_loads("car_ackermann.yaml", form, 4, AP_LOAD_MIN_NORM);
     check_statics(form ? "car_ackermann (free)" : "car_ackermann (planar)", &L, W, xcom, 0.0,
                   1e-12);
-    stop(&r);
   }
 }
 

@@ -241,6 +241,98 @@ static void test_fd_incline(void) {
     }
 }
 
+/* A ball (r = 0.1 m) on a free joint rolling on a fixed sphere (radius 1 m, centre (0, 0, 1)):
+ * inside (a bowl) or outside (a dome); random com and inertia for the finite differences. */
+static ap_model *ball_on_sphere(int inside, int random_body) {
+  ap_builder *b = NULL;
+  ap_model *m = NULL;
+  if (ap_builder_create(inside ? "ball in a bowl" : "ball on a dome", &b) != AP_OK) return NULL;
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "ball", bd.shape.kind = AP_SHAPE_SPHERE, bd.shape.radius = RADIUS;
+  int rc = ap_body_def_uniform(&bd, MASS);
+  if (random_body) rand_vec(bd.com, 3, 0.03), rand_inertia(bd.inertia, 0.01);
+  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_FREE, j.child = 0;
+  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "roll", c.body = 0, c.no_spin = random_body;
+  c.ground.sphere_radius = 1.0, c.ground.sphere_center[2] = 1.0, c.ground.inside = inside;
+  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &c, NULL);
+  ap_effect_def e = ap_effect_def_default();
+  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
+  if (rc == AP_OK) rc = ap_builder_compile(b, &m);
+  if (rc != AP_OK) printf("  %s\n", ap_builder_message(b));
+  ap_builder_free(b);
+  return m;
+}
+
+/* gamma on the sphere against central differences of A v + a0 along the motion. */
+static void test_fd_sphere(void) {
+  for (int inside = 0; inside < 2; inside++) {
+    ap_model *m = ball_on_sphere(inside, 1);
+    AP_CHECK(m != NULL);
+    if (!m) continue;
+    ap_data *d = NULL;
+    AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
+    double worst = 0.0;
+    for (int s = 0; s < 6; s++) {
+      static meas a, der;
+      double q[MAXK], v[MAXK], t, mg[MAXR];
+      fd_result r;
+      do rand_state(m, q, v, &t);
+      while (measure(m, d, t, q, v, &a) != AP_OK);
+      AP_CHECK_EQ_INT(fd_check(m, d, t, q, v, 1e-3, &r, &a, &der), AP_OK);
+      for (int i = 0; i < m->b; i++) mg[i] = -a.gamma[i];
+      worst = fmax(worst, err_rel(mg, der.c, m->b));
+    }
+    printf("  ball %s a sphere (rolling, no-spin, contact row): gamma against finite "
+           "differences %.1e\n", inside ? "inside" : "outside", worst);
+    AP_CHECK_LE(worst, FD_TOL);
+    ap_data_free(d);
+    ap_model_free(m);
+  }
+}
+
+/* A ball rolling in a spherical bowl, released at rest theta0 = 0.01 rad from the bottom:
+ * (7/5)(R - r) theta'' = -g sin(theta), a pendulum of length 7 (R - r) / 5, period
+ * T = 2 pi sqrt(7 (R - r) / (5 g)) (1 + theta0^2 / 16 + O(theta0^4)); the energy is kept. */
+static void test_bowl(void) {
+  ap_model *m = ball_on_sphere(1, 0);
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double th0 = 0.01, L = 1.0 - RADIUS, T0 = 2 * PI * sqrt(7 * L / (5 * G));
+  double Tref = T0 * (1 + th0 * th0 / 16), q[7] = {L * sin(th0), 0, 1 - L * cos(th0), 1, 0, 0, 0};
+  double v[6] = {0, 0, 0, 0, 0, 0};
+  ap_sim_def def = ap_sim_def_default();
+  def.rtol = 1e-12, def.atol = 1e-14;
+  ap_sim *s = start(m, &def, q, v);
+  ap_data *de = NULL;
+  AP_CHECK_EQ_INT(ap_data_create(m, &de), AP_OK);
+  double dt = T0 / 400, prev_x = q[0], cross[8], E0 = 0, dE = 0;
+  int nc = 0;
+  for (int k = 1; k <= 1300 && s && nc < 8; k++) {
+    AP_CHECK_EQ_INT(ap_sim_advance(s, k * dt), AP_OK);
+    const double *x = ap_sim_q(s), *w = ap_sim_v(s);
+    double T = 0, V = 0;
+    memcpy(de->q, x, 7 * sizeof *x), memcpy(de->v, w, 6 * sizeof *w);
+    AP_CHECK_EQ_INT(ap_body_energy(m, de, &T, &V), AP_OK);
+    if (k == 1) E0 = T + V;
+    dE = fmax(dE, fabs(T + V - E0));
+    if ((prev_x < 0) != (x[0] < 0)) cross[nc++] = k * dt - x[0] / w[0];   /* Newton step */
+    prev_x = x[0];
+  }
+  AP_CHECK(nc >= 5);
+  double Tm = (cross[nc - 1] - cross[0]) / ((nc - 1) / 2.0);
+  printf("  ball in a bowl (R = 1, r = 0.1, theta0 = 0.01): period %.12g s, closed form %.12g s "
+         "(relative %.1e); energy kept to %.1e J\n", Tm, Tref, fabs(Tm / Tref - 1), dE);
+  AP_CHECK_NEAR(Tm, Tref, 1e-8 * Tref);
+  AP_CHECK_LE(dE, 1e-12);
+  ap_data_free(de);
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 /* A spinning sphere dropped onto the plane, sticking plastic impact (ap_impact): with I = 2/5 m
  * r^2, the angular momentum about the contact point is kept, so vx+ = (5 vx- + 2 r wy-) / 7,
  * vy+ = (5 vy- - 2 r wx-) / 7, vz+ = 0, w+ = (-vy+, vx+, .) / r, wz kept; Carnot: the energy
@@ -320,6 +412,8 @@ int main(void) {
   test_incline_closed_form();
   test_fd_incline();
   test_impact();
+  test_fd_sphere();
+  test_bowl();
   test_refusals();
   return ap_check_finish("test_terrain");
 }

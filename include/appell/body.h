@@ -224,6 +224,12 @@ typedef struct ap_ground_motion {
                               A plane other than z = 0 (an incline) needs a fixed ground and a
                               body that is not on a plane-contact joint (a free body, a wheel) */
   double offset;           /* the plane normal . p = offset (m); default 0 */
+  double sphere_radius;    /* > 0: the ground is instead the fixed sphere of this radius (m)
+                              about sphere_center, rolled on from outside (a dome) or, with
+                              inside = 1, from inside (a bowl); a sphere-shaped body that is not
+                              on a plane-contact joint, rolling; default 0 (a plane) */
+  double sphere_center[3]; /* (m, world); default 0 */
+  int inside;              /* 1: roll inside the sphere; default 0 */
 } ap_ground_motion;
 
 typedef struct ap_constraint_def {

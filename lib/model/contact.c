@@ -35,14 +35,31 @@
 
 static const ap_sc EX[3] = {1, 0, 0}, EY[3] = {0, 1, 0}, EZ[3] = {0, 0, 1};
 
-/* The ground plane's normal n and tangents t1, t2 (t1 x t2 = n) in this build's scalar: the
- * constants e_z, e_x, e_y for the plane z = 0, else copies of the constraint's into gf (9). */
-static void ground_frame(const ap_mcon *c, ap_sc *gf, const ap_sc **n, const ap_sc **t1,
-                         const ap_sc **t2) {
+/* Tangents of the unit normal n: t1 = e_y x n / |e_y x n|, t2 = n x t1; returns |e_y x n|. */
+static ap_sc tangents(const ap_sc *n, ap_sc *t1, ap_sc *t2) {
+  ap_sc a = SC_SQRT(n[0] * n[0] + n[2] * n[2]);   /* e_y x n = (n_z, 0, -n_x) */
+  t1[0] = n[2] / a, t1[1] = 0.0, t1[2] = -n[0] / a;
+  v3_cross(n, t1, t2);
+  return a;
+}
+
+/* The ground's normal n and tangents t1, t2 (t1 x t2 = n) in this build's scalar at the body
+ * origin o: the constants e_z, e_x, e_y for the plane z = 0, copies of the constraint's for a
+ * tilted plane, n = gside (o - gc) / |o - gc| on a sphere (*D = |o - gc|); into gf (9). */
+static void ground_frame(const ap_mcon *c, const ap_sc *o, ap_sc *gf, const ap_sc **n,
+                         const ap_sc **t1, const ap_sc **t2, ap_sc *D) {
   *n = EZ, *t1 = EX, *t2 = EY;
   if (!c->plane) return;
-  v3_copy_d(c->gn, gf), v3_copy_d(c->gt1, gf + 3), v3_copy_d(c->gt2, gf + 6);
   *n = gf, *t1 = gf + 3, *t2 = gf + 6;
+  if (c->plane == 1) {
+    v3_copy_d(c->gn, gf), v3_copy_d(c->gt1, gf + 3), v3_copy_d(c->gt2, gf + 6);
+    return;
+  }
+  for (int i = 0; i < 3; i++) gf[i] = o[i] - c->gc[i];
+  ap_sc d = v3_norm(gf);
+  for (int i = 0; i < 3; i++) gf[i] = c->gside * gf[i] / d;
+  tangents(gf, gf + 3, gf + 6);
+  if (D) *D = d;
 }
 
 kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c) {
@@ -68,9 +85,12 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S) {
     kwheel W = ap_contact_geom(M, S, c);
     ap_sc sigma;
     double flat;
-    if (c->plane)   /* u = -R^T n */
-      for (int i = 0; i < 3; i++) W.u[i] = -v3_dot_d(C.R + 3 * i, c->gn);
-    else
+    if (c->plane) {   /* u = -R^T n */
+      ap_sc gf[9];
+      const ap_sc *gn, *t1, *t2;
+      ground_frame(c, C.o, gf, &gn, &t1, &t2, NULL);
+      for (int i = 0; i < 3; i++) W.u[i] = -v3_dot(C.R + 3 * i, gn);
+    } else
       W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
     if (ap_shape_support(&B->shape, W.u, &sigma, W.cb, W.H, &flat) != 0) {
       AP_BM_MSG(d, "model '%s': body '%s': the %s of constraint '%s' lies flat on the ground "
@@ -92,9 +112,15 @@ static ap_sc contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_
   ap_sc *JP = S + M->off_tmp, x[3];
   kwheel W = ap_contact_geom(M, S, c);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
-  if (c->plane) {   /* the gap n . x - offset */
-    for (int col = 0; col < M->K1; col++) row[col] = v3_dot_d(JP + 3 * col, c->gn);
-    return v3_dot_d(x, c->gn) - c->goff;
+  if (c->plane) {   /* the gap n . x - offset; on a sphere n . (x - gc) - gside grad */
+    ap_sc gf[9];
+    const ap_sc *gn, *t1, *t2;
+    ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &t1, &t2, NULL);
+    for (int col = 0; col < M->K1; col++) row[col] = v3_dot(JP + 3 * col, gn);
+    if (c->plane == 1) return v3_dot_d(x, c->gn) - c->goff;
+    ap_sc g = -c->gside * c->grad;
+    for (int i = 0; i < 3; i++) g += gn[i] * (x[i] - c->gc[i]);
+    return g;
   }
   for (int col = 0; col < M->K1; col++) row[col] = JP[2 + 3 * col];
   return x[2];
@@ -135,7 +161,7 @@ static void plane_rows(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *A,
   kwheel W = ap_contact_geom(M, S, c);
   ap_sc *JP = S + M->off_tmp, x[3], n[3], gf[9];
   const ap_sc *gn, *t1, *t2;
-  ground_frame(c, gf, &gn, &t1, &t2);
+  ground_frame(c, C.o, gf, &gn, &t1, &t2, NULL);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   if (c->def.kind == AP_CON_ROLLING) {
     put_row3(M, A, a0, c->row, t1, JP, 0.0);
@@ -186,13 +212,42 @@ static void plane_gamma(const ap_mcon *c, const kbody *C, const ap_sc *gn, const
   if (c->nhol) gamma[c->row + c->hrow] = -v3_dot(gn, aP);
 }
 
+/* gamma on a fixed sphere (a sphere-shaped body; rolling): n = s (o - gc) / D turns as the
+ * centre moves, n' = s (vo - n (n . vo)) / D, and the tangents with it (t1 = a / |a|, a = e_y x
+ * n: t1' = (a' - t1 (t1 . a')) / |a|, t2' = n' x t1 + n x t1'); the material point rc = -r n
+ * has (vP)' = ao + al x rc - r w x n'. Each row c . vP (c = t1, t2, n; no-spin n . w) has
+ * gamma = -(c' . vP + c . (vP)'). */
+static void sphere_gamma(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, const kbody *C,
+                         const ap_sc *n, const ap_sc *t1, const ap_sc *t2, ap_sc D,
+                         ap_sc *gamma) {
+  kwheel W = ap_contact_geom(M, S, c);
+  ap_sc vP[3], aP[3], nd[3], ad[3], t1d[3], t2d[3], tmp[3], wwr[3], r = -v3_dot(W.rc, n);
+  ap_sc nv = v3_dot(n, C->vo), ey[3] = {0, 1, 0};
+  ap_kin_point_motion(M, S, c->def.body, W.rc, vP, aP);   /* ao + al x rc + w x (w x rc) */
+  v3_cross(C->w, W.rc, tmp);
+  v3_cross(C->w, tmp, wwr);
+  for (int i = 0; i < 3; i++) nd[i] = c->gside * (C->vo[i] - n[i] * nv) / D;
+  v3_cross(C->w, nd, tmp);
+  for (int i = 0; i < 3; i++) aP[i] += -wwr[i] - r * tmp[i];
+  v3_cross(ey, nd, ad);
+  ap_sc a = SC_SQRT(n[0] * n[0] + n[2] * n[2]), ta = v3_dot(t1, ad);
+  for (int i = 0; i < 3; i++) t1d[i] = (ad[i] - t1[i] * ta) / a;
+  v3_cross(nd, t1, t2d);
+  v3_cross_add(n, t1d, t2d);
+  gamma[c->row] = -(v3_dot(t1d, vP) + v3_dot(t1, aP));
+  gamma[c->row + 1] = -(v3_dot(t2d, vP) + v3_dot(t2, aP));
+  if (c->def.no_spin) gamma[c->row + 2] = -(v3_dot(nd, C->w) + v3_dot(n, C->al));
+  if (c->nhol) gamma[c->row + c->hrow] = -(v3_dot(nd, vP) + v3_dot(n, aP));
+}
+
 void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
                           ap_sc *gamma) {
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
-  ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9];
+  ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9], D = 1.0;
   const ap_sc *gn, *t1, *t2;
-  ground_frame(c, gf, &gn, &t1, &t2);
+  ground_frame(c, C.o, gf, &gn, &t1, &t2, &D);
+  if (c->plane == 2) return sphere_gamma(M, S, c, &C, gn, t1, t2, D, gamma);
   contact_motion(M, S, c, surface, gn, vP, aP, x, xd);
   if (c->plane) return plane_gamma(c, &C, gn, t1, t2, vP, aP, gamma);
   ap_con_ground_accel(c, G, x, xd, Ag);
@@ -244,10 +299,31 @@ extern const struct ap_con_eval_cs ap_con_contact_eval_cs;
 
 #define FAIL(...) return ap_builder_fail(b, __VA_ARGS__)
 
+/* A fixed sphere (c->plane = 2): rolling of a sphere-shaped body, from outside or inside. */
+static int ground_sphere(ap_builder *b, const char *nm, ap_mcon *c) {
+  const ap_ground_motion *g = &c->def.ground;
+  const ap_shape *sh = &b->bodies[c->def.body].def.shape;
+  if (!(g->sphere_radius > 0) || !isfinite(g->sphere_radius) || !ap_cc_finite(g->sphere_center, 3))
+    FAIL("constraint '%s': the ground sphere's radius %g must be positive and its centre "
+         "finite", nm, g->sphere_radius);
+  if (c->def.kind != AP_CON_ROLLING || sh->kind != AP_SHAPE_SPHERE)
+    FAIL("constraint '%s': a ground sphere takes rolling of a sphere-shaped body (its shape "
+         "kind is %d)", nm, (int)sh->kind);
+  if (g->kind != AP_GROUND_FIXED)
+    FAIL("constraint '%s': a ground sphere cannot move (a moving ground is the plane z = 0)", nm);
+  if (g->inside && !(g->sphere_radius > sh->radius))
+    FAIL("constraint '%s': a ball of radius %g does not fit inside a ground sphere of radius %g",
+         nm, sh->radius, g->sphere_radius);
+  c->plane = 2, c->grad = g->sphere_radius, c->gside = g->inside ? -1 : 1;
+  v3_copy(g->sphere_center, c->gc);
+  return AP_OK;
+}
+
 /* The ground plane n . p = offset: c->plane, gn, gt1 = e_y x n / |.| (e_x for n = e_z; from
  * e_x when n is along e_y), gt2 = n x gt1. A tilted plane cannot move. */
 static int ground_plane(ap_builder *b, const char *nm, ap_mcon *c) {
   const ap_ground_motion *g = &c->def.ground;
+  if (g->sphere_radius != 0.0) return ground_sphere(b, nm, c);
   double nn = v3_norm(g->normal), ey[3] = {0, 1, 0}, ex[3] = {1, 0, 0};
   if (nn == 0.0 && g->offset == 0.0) return AP_OK;
   if (nn == 0.0) c->gn[0] = c->gn[1] = 0.0, c->gn[2] = 1.0;
@@ -297,9 +373,9 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
   c->wheel = -1;
   if (ground_plane(b, nm, c) != AP_OK) return AP_ERR_ARG;
   if (c->plane && J->kind == AP_JOINT_PLANE_CONTACT)
-    FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0; for "
-         "the ground plane (%g, %g, %g) . p = %g put the body on a free joint (or a wheel on "
-         "its axle)", nm, B->name, c->gn[0], c->gn[1], c->gn[2], c->goff);
+    FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0 only; "
+         "for this ground (%s) put the body on a free joint (or a wheel on its axle)", nm,
+         B->name, c->plane == 2 ? "a sphere" : "a tilted or raised plane");
   if (J->kind == AP_JOINT_PLANE_CONTACT) return AP_OK;
   c->wheel = M->nwheel++;
   c->hrow = c->nrows++;
@@ -324,7 +400,7 @@ static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
                           double *F) {
   double gf[9];
   const double *gn, *t1, *t2;
-  ground_frame(c, gf, &gn, &t1, &t2);
+  ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &t1, &t2, NULL);
   if (c->def.kind == AP_CON_ROLLING) {
     v3_axpy(lam[0], t1, F), v3_axpy(lam[1], t2, F);
   } else {
@@ -379,4 +455,12 @@ const ap_con_kind ap_con_wheel_knife = {"knife_edge (wheel)", contact_compile,
                                         wheel_knife_suffix, contact_wrench, contact_tree_body,
                                         contact_tree_row, NULL, 0, &ap_con_contact_eval,
                                         &ap_con_contact_eval_cs};
+/* The ground's normal and tangents at the contact of c (world). */
+void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n, double *t1,
+                      double *t2) {
+  double gf[9];
+  const double *gn, *a, *b;
+  ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &a, &b, NULL);
+  v3_copy(gn, n), v3_copy(a, t1), v3_copy(b, t2);
+}
 #endif

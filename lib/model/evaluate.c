@@ -471,10 +471,10 @@ static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, in
   int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
   out->force[2] = out->normal;
   finish_force(c, lam, out);
-  if (c->plane) {   /* a tilted plane: tangents gt1, gt2 and the normal gn, to world axes */
-    double t0 = out->force[0], t1 = out->force[1];
-    for (int i = 0; i < 3; i++)
-      out->force[i] = t0 * c->gt1[i] + t1 * c->gt2[i] + out->normal * c->gn[i];
+  if (c->plane) {   /* a tilted plane or a sphere: tangents and normal to world axes */
+    double t0 = out->force[0], t1 = out->force[1], n[3], e1[3], e2[3];
+    ap_contact_frame(M, S, c, n, e1, e2);
+    for (int i = 0; i < 3; i++) out->force[i] = t0 * e1[i] + t1 * e2[i] + out->normal * n[i];
   }
   return rc;
 }

@@ -126,8 +126,11 @@ typedef struct ap_mcon {
   int nhol, hrow;             /* implicit holonomic rows: rows hrow..hrow+nhol-1 of the
                                  constraint (loop closures: all; wheel contacts: the last) */
   int plane;                  /* contacts: 1 when the ground plane is not z = 0 (an incline:
-                                 gn . x = goff, tangents gt1, gt2 with gt1 x gt2 = gn) */
-  double gn[3], gt1[3], gt2[3], goff;
+                                 gn . x = goff, tangents gt1, gt2 with gt1 x gt2 = gn); 2 on a
+                                 fixed sphere (centre gc, radius grad, gside +1 outside, -1
+                                 inside: the normal gside (o - gc) / |o - gc|) */
+  double gn[3], gt1[3], gt2[3], goff, gc[3], grad;
+  int gside;
   int wheel;                  /* contact at the shape's lowest point (rolling, knife edge with
                                  def.wheel): index of its geometry block when the body is not on
                                  a plane-contact joint, -1 when the joint carries the geometry;
@@ -422,6 +425,9 @@ int ap_bm_phi_cs(const ap_model *m, ap_data_cs *d, double _Complex *S, double _C
 int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
 /* Potential energy of the gravity and spring effects, after ap_kin_position. */
 double ap_eff_potential(const ap_bmodel *M, double *S);
+/* The ground's unit normal n and tangents t1, t2 at the contact of c (contact.c). */
+void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n, double *t1,
+                      double *t2);
 /* F += f and (T != NULL) T += (x - o) x f: a force f at the world point x (constraint.c). */
 void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
