@@ -155,6 +155,7 @@ static const char *const refused[] = {
     "diff_drive_motors.yaml",   /* motors driving the wheels: no steady state in the scene's
                                    state, no section */
     "ball_incline.yaml",        /* a ball accelerating down an incline: no steady state */
+    "ball_bowl.yaml",           /* released off the bottom of the bowl: not at rest there */
     NULL};
 
 static int in(const char *const *list, const char *name) {
