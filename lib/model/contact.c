@@ -1,4 +1,7 @@
-/* Contacts of a body's shape with the ground plane z = 0: rolling and the wheel's knife edge
+/* Contacts of a body's shape with the ground: rolling and the wheel's knife edge, on the plane
+ * z = 0 (below), on a tilted plane n . x = offset (plane_rows, plane_gamma: e_z, e_x, e_y
+ * replaced by n and its tangents t1, t2) or a fixed sphere (a ball; sphere_gamma: n turns with
+ * the ball's centre) for bodies not on a plane-contact joint; each kind's table at the end
  * (docs/design.md §1 "Constraint kinds"; docs/bodies.md "Wheel contacts").
  *
  * The contact point is the shape's support point in the direction u = -R^T e_z (body axes):
@@ -245,8 +248,8 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   const ap_mcon *c = &M->cons[ci];
   kbody C = ap_kin_body(M, S, c->def.body);
   ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9], D = 1.0;
-  const ap_sc *gn, *t1, *t2;
-  ground_frame(c, C.o, gf, &gn, &t1, &t2, &D);
+  const ap_sc *gn = EZ, *t1 = EX, *t2 = EY;
+  if (c->plane) ground_frame(c, C.o, gf, &gn, &t1, &t2, &D);
   if (c->plane == 2) return sphere_gamma(M, S, c, &C, gn, t1, t2, D, gamma);
   contact_motion(M, S, c, surface, gn, vP, aP, x, xd);
   if (c->plane) return plane_gamma(c, &C, gn, t1, t2, vP, aP, gamma);
