@@ -163,20 +163,14 @@ static int flat_error(const ap_model *m, ap_data *d, const ap_mbody *B, double n
 }
 
 /* One disk or torus with rotation R (body to world, column-major) and tracking block trk:
- * c (3), whether it is set (1), its time (1). g: the ground plane's normal (NULL: e_z). */
+ * c (3), whether it is set (1), its time (1). */
 static int track_one(const ap_model *m, ap_data *d, const ap_mbody *B, const double *R,
-                     double *trk, int track, const double *g) {
+                     double *trk, int track) {
   const double *a = R + 6;                   /* the axis in world axes, R e_z */
   double n = hypot(a[0], a[1]);              /* = |e_z - a_z a| = |u_perp| */
-  double c[3] = {0, 0, 0};
-  if (g) {                                   /* a tilted plane: |g - (a . g) a| */
-    double ag = v3_dot(a, g), p[3] = {g[0] - ag * a[0], g[1] - ag * a[1], g[2] - ag * a[2]};
-    n = v3_norm(p);
-    if (n > 0) c[0] = -p[0] / n, c[1] = -p[1] / n, c[2] = -p[2] / n;
-  }
   if (track && n < 2 * B->shape.flat_tol) return flat_error(m, d, B, n, 0.0, 0.0);
   if (!(n > 0)) return AP_OK;   /* exactly flat while assembling: the position stage reports it */
-  if (!g) c[0] = a[2] * a[0] / n, c[1] = a[2] * a[1] / n, c[2] = -n;
+  double c[3] = {a[2] * a[0] / n, a[2] * a[1] / n, -n};
   double cos_turn = c[0] * trk[0] + c[1] * trk[1] + c[2] * trk[2];
   if (track && trk[3] != 0.0 && cos_turn < 0.0)
     return flat_error(m, d, B, n, acos(fmax(-1.0, cos_turn)) * 57.29577951308232, trk[4]);
@@ -200,7 +194,7 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     if (J->kind != AP_JOINT_PLANE_CONTACT || !is_wheel_shape(B)) continue;
     double R[9];
     ap_quat_normalized_matrix(q + J->qidx[J->quat], R);
-    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track, NULL);
+    rc = track_one(m, d, B, R, ap_kin_joint(M, S, j).track, track);
   }
   if (rc != AP_OK || !M->nwheel) return rc;
   if (!fresh) rc = ap_kin_position(m, d, d->t, q, S);
@@ -209,7 +203,7 @@ static int track_flat(const ap_model *m, ap_data *d, const double *q, double *S,
     const ap_mbody *B = c->wheel >= 0 ? &M->bodies[c->def.body] : NULL;
     if (!B || !is_wheel_shape(B)) continue;
     rc = track_one(m, d, B, ap_kin_body(M, S, c->def.body).R, ap_contact_geom(M, S, c).track,
-                   track, c->plane ? c->gn : NULL);
+                   track);
   }
   return rc;
 }
