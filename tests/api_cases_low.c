@@ -223,6 +223,12 @@ static void cases_core(void) {
   CASE(ap_project_speeds, "v NULL", ap_project_speeds(SM, SD, NULL, &T) == AP_ERR_ARG);
   CASE(ap_project_speeds, "d of another model", ap_project_speeds(SM, TD, v, &T) == AP_ERR_ARG);
   CASE(ap_project_speeds, "change NULL (optional)", ap_project_speeds(SM, SD, v, NULL) == AP_OK);
+  CASE(ap_impact, "m NULL", ap_impact(NULL, SD, v, v, &T) == AP_ERR_ARG);
+  CASE(ap_impact, "d NULL", ap_impact(SM, NULL, v, v, &T) == AP_ERR_ARG);
+  CASE(ap_impact, "v_minus NULL", ap_impact(SM, SD, NULL, v, &T) == AP_ERR_ARG);
+  CASE(ap_impact, "v_plus NULL", ap_impact(SM, SD, v, NULL, &T) == AP_ERR_ARG);
+  CASE(ap_impact, "d of another model", ap_impact(SM, TD, v, v, &T) == AP_ERR_ARG);
+  CASE(ap_impact, "loss NULL (optional)", ap_impact(SM, SD, v, v, NULL) == AP_OK);
   CASE(ap_constraint_residual, "d NULL", is_nan(ap_constraint_residual(NULL, v)));
   CASE(ap_constraint_residual, "v NULL", is_nan(ap_constraint_residual(SD, NULL)));
   CASE(ap_kinetic_energy, "d NULL", is_nan(ap_kinetic_energy(NULL, v)));

@@ -42,8 +42,38 @@ static void list_section(const ap_scene *sc, ap_scene_section sec, const char *t
   printf("\n");
 }
 
+/* The normal load of every rolling contact at the initial state, and whether it is unique
+ * (ap_contact_force.load). */
+static void loads(const ap_scene *sc, ap_data *d) {
+  const ap_model *m = ap_scene_model(sc);
+  int nc = ap_scene_count(sc, AP_SCENE_CONSTRAINTS), shown = 0, worst = AP_LOAD_UNIQUE, count = 0;
+  d->speeds_from_e = 0;
+  d->want_reactions = 1;
+  if (!ap_model_is_body_model(m) || ap_forward(m, d) != AP_OK) return;
+  for (int i = 0; i < nc; i++) {
+    ap_contact_force f;
+    if (strcmp(ap_scene_element_kind(sc, AP_SCENE_CONSTRAINTS, i), "rolling") != 0 ||
+        ap_body_contact_force(m, d, NULL, i, &f) != AP_OK)
+      continue;
+    printf("%s %s %.6g N", shown++ ? "," : "loads       ",
+           ap_scene_element_name(sc, AP_SCENE_CONSTRAINTS, i), f.normal);
+    if ((int)f.load > worst) worst = (int)f.load, count = f.ncontacts;
+  }
+  if (!shown) return;
+  if (worst == AP_LOAD_MIN_NORM)
+    printf("\n             statically indeterminate: %d rigid contacts under one chassis share its "
+           "weight in many ways; these are the minimum-norm loads (a suspension, a prismatic "
+           "joint with a spring per wheel, makes them unique: docs/vehicles.md)\n", count);
+  else if (worst == AP_LOAD_JOINT)
+    printf("\n             %d contacts on a line under a planar chassis: the chassis joint keeps "
+           "the tilting moment about their line (a real robot needs a third contact)\n", count);
+  else
+    printf(" (unique)\n");
+}
+
 /* Rank, free speeds and redundant rows at the initial state. */
-static int structure(const ap_model *m, const double *q0, const ap_scene_run *run) {
+static int structure(const ap_scene *sc, const double *q0, const ap_scene_run *run) {
+  const ap_model *m = ap_scene_model(sc);
   ap_data *d = NULL;
   if (ap_data_create(m, &d) != AP_OK) return fprintf(stderr, "appell check: out of memory\n"), 1;
   d->t = run->t0;
@@ -60,6 +90,8 @@ static int structure(const ap_model *m, const double *q0, const ap_scene_run *ru
   printf("rank of A    %d (at t0 = %g)\n", d->rank, run->t0);
   printf("free speeds  l = %d\n", d->l);
   printf("redundant    %s\n", d->rank < ap_model_b(m) ? d->msg : "none");
+  memcpy(d->v, q0 + ap_model_n(m), sizeof(double) * (size_t)ap_model_k(m));
+  loads(sc, d);
   ap_data_free(d);
   return EXIT_OK;
 }
@@ -98,7 +130,7 @@ static int report(ap_scene *sc, const char *file) {
   printf("k = %-8d ", k), list_names("speeds", k, ap_model_speed_name, m);
   printf("b = %-8d ", b), list_names("constraint rows", b, ap_model_constraint_name, m);
   list_section(sc, AP_SCENE_CONSTRAINTS, "constraints");
-  int code = structure(m, q0, &run);
+  int code = structure(sc, q0, &run);
   list_section(sc, AP_SCENE_EFFECTS, "effects");
   settings(sc, &run);
   printf("initial      %s", rep[0] ? rep : "consistent as given\n");

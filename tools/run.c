@@ -165,14 +165,14 @@ static void progress(const run_state *rs, double t, int done) {
 }
 
 /* A negative contact normal force: the ground would have to pull, the body would lift off
- * (the plane-contact joint keeps it on the plane regardless). Once per contact. */
+ * (the contact holds regardless: a plane-contact joint or a wheel's contact row). Once per
+ * contact. */
 static void warn_lift_off(run_state *rs, int nc) {
   for (int i = 0; rs->lift && i < nc; i++) {
     if (rs->lift[i] != 1 || !(rs->row[i] < 0)) continue;
     rs->lift[i] = 2;
     fprintf(stderr, "%sappell run: warning: %s = %.6g N < 0 at t = %.10g: the ground would have "
-            "to pull; a real body would lift off here (the plane-contact joint keeps it on the "
-            "plane)\n", rs->progress ? "\r\033[K" : "", ap_scene_output_name(rs->sc, i),
+            "to pull; a real body would lift off here (the model keeps the contact closed)\n", rs->progress ? "\r\033[K" : "", ap_scene_output_name(rs->sc, i),
             rs->row[i], ap_sim_time(rs->sim));
   }
 }

@@ -207,8 +207,9 @@ typedef enum ap_constraint_kind {
                                 body2 with normal `direction` (body2 axes) (1 row) */
 } ap_constraint_kind;
 
-/* How the ground surface moves (rolling and knife edge only). The surface velocity at the
- * world point p is  V(t) + Omega(t) e_z x (p - center). */
+/* The ground surface and how it moves (rolling and knife edge only). The surface is the plane
+ * normal . p = offset (z = 0 by default); a moving ground is horizontal, with the surface
+ * velocity at the world point p  V(t) + Omega(t) e_z x (p - center). */
 typedef enum ap_ground_kind {
   AP_GROUND_FIXED = 0,     /* default */
   AP_GROUND_TURNTABLE = 1, /* rotates about the vertical through (center, 0) at Omega(t) */
@@ -223,6 +224,17 @@ typedef struct ap_ground_motion {
   double velocity[2];      /* plane velocity (m/s) when velocity_fn is NULL; default 0 */
   ap_time_fn velocity_fn[2]; /* V_x(t), V_y(t): f[0] velocity, f[1] acceleration */
   void *user;              /* passed to omega_fn and velocity_fn */
+  double normal[3];        /* the ground plane's unit normal (world; normalized at compile),
+                              pointing out of the ground; default (0, 0, 0), meaning (0, 0, 1).
+                              A plane other than z = 0 (an incline) needs a fixed ground and a
+                              body that is not on a plane-contact joint (a free body, a wheel) */
+  double offset;           /* the plane normal . p = offset (m); default 0 */
+  double sphere_radius;    /* > 0: the ground is instead the fixed sphere of this radius (m)
+                              about sphere_center, rolled on from outside (a dome) or, with
+                              inside = 1, from inside (a bowl); a sphere-shaped body that is not
+                              on a plane-contact joint, rolling; default 0 (a plane) */
+  double sphere_center[3]; /* (m, world); default 0 */
+  int inside;              /* 1: roll inside the sphere; default 0 */
 } ap_ground_motion;
 
 typedef struct ap_constraint_def {
@@ -415,16 +427,38 @@ AP_API int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max)
 AP_API int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q,
                                    const int *given, double *v);
 
+/* How a contact's normal force is known (ap_contact_force.load). */
+typedef enum ap_load_kind {
+  AP_LOAD_UNIQUE = 0,     /* determined by the motion: a plane-contact body's Newton's law, or a
+                             wheel's share of its chassis' vertical reaction and tilting moments
+                             with at most three non-collinear contacts under the chassis */
+  AP_LOAD_MIN_NORM = 1,   /* statically indeterminate (four or more rigid contacts under one
+                             chassis, or three on a line...): the minimum-norm distribution, one
+                             of many that hold the chassis; a suspension makes it unique */
+  AP_LOAD_JOINT = 2       /* under a planar chassis joint with fewer than three non-collinear
+                             contacts: the wheels carry the vertical force and the moment they
+                             can; the joint keeps the tilting moment about their line (a
+                             two-wheeled robot without a caster would tip over) */
+} ap_load_kind;
+
 /* The contact force of a rolling constraint (AP_CON_ROLLING): the force of the ground on the
  * body at the contact point, world axes. The tangential part is the friction the rolling rows
- * need (their multipliers); the normal part is carried by the plane-contact joint, which has
- * no multiplier for it, and comes from Newton's law for the vertical over the body and its
- * descendants: F_n = sum m_b a_b,z minus the effects' and the other constraints' vertical
- * forces on them. */
+ * need (their multipliers). The normal part: a body on a plane-contact joint carries it
+ * through the joint, which has no multiplier for it, so it comes from Newton's law for the
+ * vertical over the body and its descendants (F_n = sum m_b a_b,z minus the effects' and the
+ * other constraints' vertical forces on them). A wheel (a rolling body on any other joint)
+ * shares with the other wheels under the same chassis (the nearest ancestor joined to the
+ * ground) the vertical force and the tilting moments that hold the chassis: on a free chassis
+ * those are the wheels' contact rows, on a planar chassis the joint's vertical reaction and
+ * roll and pitch moments, which the wheels carry in reality; both forms give the same loads
+ * (docs/vehicles.md "Wheel loads"). */
 typedef struct ap_contact_force {
-  double point[3];         /* contact point on z = 0 (m) */
-  double force[3];         /* ground on body (N): x, y tangential, z = normal */
-  double normal;           /* F_n = force[2] (N); negative: the ground would have to pull */
+  double point[3];         /* contact point on the ground (m) */
+  double force[3];         /* ground on body (N), world axes: x, y tangential, z = normal on the
+                              plane z = 0; on a tilted plane (ap_ground_motion.normal) the sum
+                              of the tangential and normal parts */
+  double normal;           /* F_n (N) along the ground's normal (force[2] on z = 0); negative:
+                              the ground would have to pull */
   double tangential;       /* |F_t| (N) */
   double friction_ratio;   /* |F_t| / F_n: the least friction coefficient a real surface needs
                               for rolling without slip; HUGE_VAL when F_n <= 0 */
@@ -432,6 +466,8 @@ typedef struct ap_contact_force {
                               without it */
   int lift_off;            /* 1 when F_n < 0: the body would lift off (the model keeps it on
                               the plane regardless) */
+  ap_load_kind load;       /* how F_n is known; AP_LOAD_UNIQUE for a plane-contact body */
+  int ncontacts;           /* wheels: the contacts sharing the chassis' load (1 otherwise) */
 } ap_contact_force;
 
 /* The contact force of rolling constraint `constraint` at the data's pipeline state: the

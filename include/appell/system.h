@@ -229,6 +229,15 @@ AP_API int ap_forward(const ap_model *m, ap_data *d);
  * *change (may be NULL) is the g-norm of the correction. AP_ERR_ARG when v is NULL. */
 AP_API int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change);
 
+/* A sticking plastic impact onto the constraints at (d->t, d->q) (a contact touching down, its
+ * rows now active): the speeds after, v+ = v- - g^-1 A^T (A g^-1 A^T)^-1 (A v- + a0), the
+ * nearest admissible speeds in the kinetic-energy metric (ap_project_speeds, with d's basis:
+ * for AP_BASIS_PARTITIONED the partition chosen by ap_partition), and *loss (J, may be NULL)
+ * the kinetic energy lost, 1/2 (v+ - v-)^T g (v+ - v-) (Carnot's theorem). v_plus may be
+ * v_minus. AP_ERR_ARG for a NULL m, d, v_minus or v_plus. */
+AP_API int ap_impact(const ap_model *m, ap_data *d, const double *v_minus, double *v_plus,
+                     double *loss);
+
 /* Largest |A v + a0| at the data's position stage for the speeds v; NaN when d or v is NULL. */
 AP_API double ap_constraint_residual(const ap_data *d, const double *v);
 

@@ -22,6 +22,19 @@ int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) 
   return rc == AP_OK ? ap_core_project_here(m, d, v, change) : rc;
 }
 
+/* A sticking plastic impact: v+ = v- - g^-1 A^T (A g^-1 A^T)^-1 (A v- + a0), the nearest
+ * admissible speeds in the kinetic-energy metric, which is ap_project_speeds; Carnot's theorem:
+ * the energy lost is the kinetic energy of the jump, 1/2 (v+ - v-)^T g (v+ - v-). */
+int ap_impact(const ap_model *m, ap_data *d, const double *v_minus, double *v_plus,
+              double *loss) {
+  if (!m || !d || !v_minus || !v_plus) return AP_ERR_ARG;
+  double change = 0.0;
+  if (v_plus != v_minus) memmove(v_plus, v_minus, (size_t)m->k * sizeof *v_plus);
+  int rc = ap_project_speeds(m, d, v_plus, &change);
+  if (rc == AP_OK && loss) *loss = 0.5 * change * change;
+  return rc;
+}
+
 /* a + sum x_i y_i with the products' and the sums' rounding errors carried along (fma and
  * Neumaier's compensation): the result is as accurate as if computed in twice the precision,
  * then rounded. A constraint residual is a small difference of large terms. */

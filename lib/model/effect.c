@@ -212,13 +212,51 @@ double ap_eff_potential(const ap_bmodel *M, double *S) {
  * force cannot be attributed to bodies: AP_ERR_UNSUPPORTED. */
 int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *v, int root,
                          double *F) {
+  static const double o[3] = {0, 0, 0};
+  return ap_eff_subtree_wrench(M, S, t, v, root, o, F, NULL);
+}
+
+/* Joint damping on the root's own joint to the ground (plane contact or planar): the force
+ * -c v along the joint's x, y axes (at the contact point, or the body origin of a planar
+ * joint) and the torque -c w about its rotation axes. */
+static void root_damping(const ap_bmodel *M, double *S, const ap_effect_def *e, const double *v,
+                         int root, const double *o, double *F, double *T) {
+  const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
+  int pc = j->kind == AP_JOINT_PLANE_CONTACT;
+  if (j->child != root || j->parent != AP_GROUND || (!pc && j->kind != AP_JOINT_PLANAR)) return;
+  kjoint K = ap_kin_joint(M, S, M->joint_topo[e->joint]);
+  kbody C = ap_kin_body(M, S, root);
+  for (int s = 0; s < j->nv; s++) {
+    if (j->vidx[s] < 0) continue;
+    double f = -e->damping * v[j->vidx[s]], dir[3], x[3];
+    int axis = s < 2 ? s : pc ? s - 2 : 2;
+    for (int i = 0; i < 3; i++) dir[i] = f * (pc ? (double)(i == axis) : K.RFP[i + 3 * axis]);
+    if (s >= 2) {
+      if (T) v3_axpy(1.0, dir, T);
+      continue;
+    }
+    for (int i = 0; i < 3; i++) x[i] = C.o[i] + (pc ? K.rc[i] : 0.0);
+    ap_bm_add_force(dir, x, o, F, T);
+  }
+}
+
+/* The same as a wrench: the force F and (T != NULL) its moment T about the world point o. */
+int ap_eff_subtree_wrench(const ap_bmodel *M, double *S, double t, const double *v, int root,
+                          const double *o, double *F, double *T) {
   F[0] = F[1] = F[2] = 0.0;
+  if (T) T[0] = T[1] = T[2] = 0.0;
   for (int i = 0; i < M->ne; i++) {
     const ap_effect_def *e = &M->effs[i].def;
     switch (e->kind) {
       case AP_EFFECT_GRAVITY:
-        for (int b = 0; b < M->nb; b++)
-          if (ap_bm_in_subtree(M, b, root)) v3_axpy(M->bodies[b].mass, e->gravity, F);
+        for (int b = 0; b < M->nb; b++) {
+          if (!ap_bm_in_subtree(M, b, root)) continue;
+          kbody C = ap_kin_body(M, S, b);
+          double f[3], x[3];
+          for (int q = 0; q < 3; q++)
+            f[q] = M->bodies[b].mass * e->gravity[q], x[q] = C.o[q] + C.rcom[q];
+          ap_bm_add_force(f, x, o, F, T);
+        }
         break;
       case AP_EFFECT_SPRING: {
         int ina = e->body >= 0 && ap_bm_in_subtree(M, e->body, root);
@@ -238,24 +276,24 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
           double s = e->stiffness * (L - e->rest_length) + e->damping * v3_dot(dd, dv) / L;
           for (int j = 0; j < 3; j++) f[j] = s * dd[j] / L;
         }
-        v3_axpy(ina ? 1.0 : -1.0, f, F);   /* f acts on A, -f on B */
+        if (!ina)
+          for (int j = 0; j < 3; j++) f[j] = -f[j];   /* f acts on A, -f on B */
+        ap_bm_add_force(f, ina ? xA : xB, o, F, T);
         break;
       }
-      case AP_EFFECT_JOINT_DAMPING: {
-        const ap_mjoint *j = &M->joints[M->joint_topo[e->joint]];
-        if (j->child != root || j->kind != AP_JOINT_PLANE_CONTACT) break;
-        for (int i2 = 0; i2 < 2; i2++)
-          if (j->vidx[i2] >= 0) F[i2] -= e->damping * v[j->vidx[i2]];
-        break;
-      }
+      case AP_EFFECT_JOINT_DAMPING: root_damping(M, S, e, v, root, o, F, T); break;
       case AP_EFFECT_APPLIED: {
         if (!ap_bm_in_subtree(M, e->body, root)) break;
-        double f[3] = {e->force[0], e->force[1], e->force[2]}, T[3] = {0, 0, 0};
+        double f[3] = {e->force[0], e->force[1], e->force[2]}, Tq[3] = {0, 0, 0}, x[3];
         if (e->wrench) {
           f[0] = f[1] = f[2] = 0.0;
-          if (e->wrench(t, f, T, e->user) != 0) return AP_ERR_CALLBACK;
+          if (e->wrench(t, f, Tq, e->user) != 0) return AP_ERR_CALLBACK;
+        } else {
+          v3_copy(e->torque, Tq);
         }
-        v3_axpy(1.0, f, F);
+        ap_kin_point(M, S, e->body, e->point, x, NULL, NULL);
+        ap_bm_add_force(f, x, o, F, T);
+        if (T) v3_axpy(1.0, Tq, T);
         break;
       }
       case AP_EFFECT_USER: return AP_ERR_UNSUPPORTED;

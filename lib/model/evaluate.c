@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "linalg/linalg.h"
-#include "model/model.h"
+#include "model/con_kind.h"
 #include "model/tree_model.h"   /* the tree path's layout and queries (m->ops) */
 
 /* ---- hooks ------------------------------------------------------------------------------- */
@@ -23,9 +23,8 @@
 int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++)
-    if (M->cons[ci].def.kind == AP_CON_USER) {
-      snprintf(msg, len, "constraint '%s' is a user constraint (C callbacks of doubles)",
-               M->cons[ci].name);
+    if (M->cons[ci].kind->no_cs) {
+      snprintf(msg, len, "constraint '%s' is %s", M->cons[ci].name, M->cons[ci].kind->no_cs);
       return -1;
     }
   for (int i = 0; i < M->ne; i++)
@@ -468,17 +467,25 @@ static void finish_force(const ap_mcon *c, const double *lam, ap_contact_force *
   out->lift_off = out->normal < 0;
 }
 
-/* A wheel contact carries its normal force as the multiplier of its contact row .z. */
-static int wheel_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
-                       ap_contact_force *out) {
+/* A wheel contact: its share of its chassis' load (loads.c). */
+static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, int ci,
+                       const double *lam, ap_contact_force *out) {
+  const ap_bmodel *M = ap_bm(m);
+  double *S = ap_bm_scratch(d);
   kwheel W = ap_contact_geom(M, S, c);
   kbody C = ap_kin_body(M, S, c->def.body);
   memset(out, 0, sizeof *out);
   for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + W.rc[i];
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
-  out->force[2] = out->normal = lam[c->row + c->hrow];
+  int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
+  out->force[2] = out->normal;
   finish_force(c, lam, out);
-  return AP_OK;
+  if (c->plane) {   /* a tilted plane or a sphere: tangents and normal to world axes */
+    double t0 = out->force[0], t1 = out->force[1], n[3], e1[3], e2[3];
+    ap_contact_frame(M, S, c, n, e1, e2);
+    for (int i = 0; i < 3; i++) out->force[i] = t0 * e1[i] + t1 * e2[i] + out->normal * n[i];
+  }
+  return rc;
 }
 
 /* The force of the ground on a rolling body (docs/bodies.md "Contact forces"). Tangential: the
@@ -493,12 +500,12 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
                           int constraint, ap_contact_force *out) {
   if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !out) return AP_ERR_ARG;
   const ap_bmodel *M = ap_tree_layout(m);
-  if (constraint < 0 || constraint >= M->nc || M->cons[constraint].def.kind != AP_CON_ROLLING)
+  if (constraint < 0 || constraint >= M->nc || !M->cons[constraint].kind->contact)
     return AP_ERR_ARG;
   const ap_mcon *c = &M->cons[constraint];
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
-  if (c->wheel >= 0) return wheel_force(M, S, c, lam, out);
+  if (c->wheel >= 0) return wheel_force(m, d, c, constraint, lam, out);
   int root = c->def.body, k = M->k;
   if (m->ops) ap_tree_com_accel(ap_tree_ws_of(d), vd, -1, NULL);   /* twists of v' */
   for (int b = 0; b < M->nb; b++) {
@@ -527,6 +534,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   out->point[2] = 0.0;
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   out->force[2] = out->normal = ma[2] - Fe[2] - Fc[2];
+  out->ncontacts = 1;
   finish_force(c, lam, out);
   return AP_OK;
 }

@@ -71,8 +71,6 @@
 #define ap_con_ground_accel ap_con_ground_accel_cs
 #define ap_contact_geom ap_contact_geom_cs
 #define ap_contact_position ap_contact_position_cs
-#define ap_contact_hol_row ap_contact_hol_row_cs
-#define ap_con_contact_rows ap_con_contact_rows_cs
 #define ap_con_contact_gamma ap_con_contact_gamma_cs
 #define ap_eff_forces ap_eff_forces_cs
 #define ap_act_force ap_act_force_cs
@@ -118,6 +116,7 @@ typedef struct ap_mjoint {
 
 typedef struct ap_mcon {
   char name[64];
+  const struct ap_con_kind *kind;   /* its table of operations (con_kind.h) */
   ap_constraint_def def;      /* copy; def.name is not used */
   int row, nrows;             /* first row in A and row count */
   double dir[3];              /* unit direction (knife edge, line) or normal (plane) */
@@ -126,6 +125,12 @@ typedef struct ap_mcon {
   int timed;                  /* needs time functions evaluated (ground motion, speed fn) */
   int nhol, hrow;             /* implicit holonomic rows: rows hrow..hrow+nhol-1 of the
                                  constraint (loop closures: all; wheel contacts: the last) */
+  int plane;                  /* contacts: 1 when the ground plane is not z = 0 (an incline:
+                                 gn . x = goff, tangents gt1, gt2 with gt1 x gt2 = gn); 2 on a
+                                 fixed sphere (centre gc, radius grad, gside +1 outside, -1
+                                 inside: the normal gside (o - gc) / |o - gc|) */
+  double gn[3], gt1[3], gt2[3], goff, gc[3], grad;
+  int gside;
   int wheel;                  /* contact at the shape's lowest point (rolling, knife edge with
                                  def.wheel): index of its geometry block when the body is not on
                                  a plane-contact joint, -1 when the joint carries the geometry;
@@ -369,12 +374,8 @@ kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c);
 /* Support points of the wheel contacts (after the bodies' position stage); AP_RECOVERABLE with
  * a message naming the body when a disk or torus lies flat. */
 int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S);
-/* The contact row .z: returns the height phi of the contact point, row = its K1 coefficients. */
-ap_sc ap_contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *row);
-/* Rows of A, a0 and gamma of a rolling or wheel knife-edge constraint (G: its time scratch);
- * surface = 0 drops the term of the contact point moving over the body surface (tests). */
-void ap_con_contact_rows(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, ap_sc *A,
-                         ap_sc *a0);
+/* gamma of a rolling or wheel knife-edge constraint (G: its time scratch); surface = 0 drops
+ * the term of the contact point moving over the body surface (tests). */
 void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, int surface,
                           ap_sc *gamma);
 
@@ -424,9 +425,11 @@ int ap_bm_phi_cs(const ap_model *m, ap_data_cs *d, double _Complex *S, double _C
 int ap_bm_in_subtree(const ap_bmodel *M, int body, int root);
 /* Potential energy of the gravity and spring effects, after ap_kin_position. */
 double ap_eff_potential(const ap_bmodel *M, double *S);
-/* F += the force (world) of the constraint's rows with multipliers lam on its body. */
-void ap_con_contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,
-                          double *F);
+/* The ground's unit normal n and tangents t1, t2 at the contact of c (contact.c). */
+void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n, double *t1,
+                      double *t2);
+/* F += f and (T != NULL) T += (x - o) x f: a force f at the world point x (constraint.c). */
+void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
  * effects (effect.c), and of the constraint rows other than skip with multipliers lambda
  * (constraint.c). AP_ERR_UNSUPPORTED when a user effect or user constraint is present (its
@@ -435,6 +438,16 @@ int ap_eff_subtree_force(const ap_bmodel *M, double *S, double t, const double *
                          double *F);
 int ap_con_subtree_force(const ap_bmodel *M, double *S, const double *lambda, int root,
                          int skip, double *F);
+int ap_eff_subtree_wrench(const ap_bmodel *M, double *S, double t, const double *v, int root,
+                          const double *o, double *F, double *T);
+/* The same with the moment T about the world point o (T may be NULL). */
+int ap_con_subtree_wrench(const ap_bmodel *M, double *S, const double *lambda, int root,
+                          int skip, const double *o, double *F, double *T);
+/* The normal load of wheel contact `constraint` (c->wheel >= 0) with multipliers lam, after
+ * the pipeline at the data's state (v'): its share of what holds its chassis (loads.c), how it
+ * is known, and how many contacts share it. */
+int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
+                     double *normal, ap_load_kind *kind, int *count);
 void ap_bm_destroy(void *impl);
 #endif
 

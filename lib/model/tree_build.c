@@ -17,29 +17,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "model/con_kind.h"
 #include "model/tree_model.h"
 
 /* The body a constraint's rows live on, or -1 when the tree path cannot take the constraint
  * (its reason in why). */
 static int con_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c, char *why,
                     size_t len) {
-  switch (c->def.kind) {
-    case AP_CON_ROLLING:
-    case AP_CON_KNIFE_EDGE:
-      if (c->nhol == 0 && c->wheel < 0) return c->def.body;
-      snprintf(why, len, "model '%s': constraint '%s' is a wheel contact (an implicit holonomic "
-               "row)", m->name, c->name);
-      return -1;
-    case AP_CON_PRESCRIBED_SPEED: return M->joints[M->joint_topo[c->def.joint]].child;
-    case AP_CON_USER:
-      snprintf(why, len, "model '%s': constraint '%s' is a user constraint (rows over every "
-               "speed)", m->name, c->name);
-      return -1;
-    default:
-      snprintf(why, len, "model '%s': constraint '%s' is a loop closure (rows on two bodies)",
-               m->name, c->name);
-      return -1;
-  }
+  return c->kind->tree_body(m, M, c, why, len);
 }
 
 /* Local free column of global speed col in joint J, or -1. */

@@ -22,9 +22,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "model/con_kind.h"
 #include "model/tree_model.h"
 
-static const double EZ[3] = {0, 0, 1};
 
 static double *con_time(const ap_tplan *P, const ap_tree_ws *ws, int ci) {
   return ws->S + P->shadow.off_con + (size_t)ci * CON_STRIDE;
@@ -61,45 +61,14 @@ void ap_tree_geometry(const ap_tplan *P, ap_tree_ws *ws) {
   }
 }
 
-/* Covector c (w-part r x n, v-part n) of the velocity n . (v + w x r) of a body point. */
-static void point_row(const double *r, const double *n, double *c) {
-  v3_cross(r, n, c);
-  v3_copy(n, c + 3);
-}
-
-/* Row p (on tree body i): its covector into C and its a0. */
+/* Row p (on tree body i): its covector into C and its a0 (the kind's tree_row). */
 static void row(const ap_tplan *P, ap_tree_ws *ws, int i, int p, double *a0) {
   const ap_bmodel *Ms = &P->shadow;
   const ap_mcon *c = &Ms->cons[P->rcon[p]];
-  const double *G = con_time(P, ws, P->rcon[p]), *rho = ws->rho + 6 * (size_t)i;
-  double *cv = ws->g.C + 6 * (size_t)p, n[3], r[3], x[3], Vg[3] = {0, 0, 0};
-  int rr = P->rrow[p], s = P->T.ridx[p];
+  double *cv = ws->g.C + 6 * (size_t)p;
   memset(cv, 0, 6 * sizeof *cv);
-  if (c->def.kind == AP_CON_PRESCRIBED_SPEED) {
-    a0[s] = -G[6];   /* f(t): slot G_F of the constraint's time scratch (constraint.c) */
-    return;
-  }
-  kbody C = ap_kin_body(Ms, ws->S, c->def.body);
-  if (c->def.kind == AP_CON_KNIFE_EDGE && !c->def.wheel) {
-    m3_mul_v(C.R, c->dir, n);
-    m3_mul_v(C.R, c->def.point, r);
-  } else {
-    kwheel Wg = ap_contact_geom(Ms, ws->S, c);
-    v3_copy(Wg.rc, r);
-    if (c->def.kind == AP_CON_KNIFE_EDGE) m3_mul_v(C.R, EZ, n);
-    else n[0] = rr == 0, n[1] = rr == 1, n[2] = 0.0;
-  }
-  for (int q = 0; q < 3; q++) x[q] = C.o[q] + r[q];
-  ap_con_ground_velocity(c, G, x, Vg);
-  if (c->def.kind == AP_CON_ROLLING && rr == 2) {   /* no spin: e_z . w - Omega */
-    cv[2] = 1.0;
-    a0[s] = rho[2] - G[AP_G_OM];
-    return;
-  }
-  point_row(r, n, cv);
-  double cr = 0.0;
-  for (int q = 0; q < 6; q++) cr += cv[q] * rho[q];
-  a0[s] = cr - v3_dot(n, Vg);
+  c->kind->tree_row(Ms, ws->S, c, P->rrow[p], con_time(P, ws, P->rcon[p]),
+                    ws->rho + 6 * (size_t)i, cv, a0 + P->T.ridx[p]);
 }
 
 static int check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,

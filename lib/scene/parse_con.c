@@ -12,7 +12,9 @@
 
 #include "scene/scene_int.h"
 
-static const char *const ground_keys[] = {"kind", "center", "omega", "velocity", NULL};
+static const char *const ground_keys[] = {"kind", "center", "omega", "velocity", "normal",
+                                          "offset", "sphere", NULL};
+static const char *const sphere_keys[] = {"center", "radius", "inside", NULL};
 static const char *const ground_kinds[] = {"fixed", "turntable", "translating", NULL};
 /* In the order of ap_constraint_kind (user constraints are C-only: "user" is refused). */
 static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_speed", "user",
@@ -42,8 +44,24 @@ static const char *const eff_keys[][10] = {
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g) {
   int kind = 0;
   if (sc_check_keys(c, n, ground_keys) || sc_get_enum(c, n, "kind", ground_kinds, &kind) ||
-      sc_get_vec(c, n, "center", 2, g->def.center))
+      sc_get_vec(c, n, "center", 2, g->def.center) ||
+      sc_get_vec(c, n, "normal", 3, g->def.normal) || sc_get_number(c, n, "offset", &g->def.offset))
     return AP_ERR_ARG;
+  const sc_node *nn = sc_map_get(n, "normal"), *sp = sc_map_get(n, "sphere");
+  if (nn && !(fabs(g->def.normal[0]) + fabs(g->def.normal[1]) + fabs(g->def.normal[2]) > 0))
+    return sc_err(c, nn, "the ground plane's normal must not be zero");
+  if (sp) {   /* a fixed sphere instead of the plane */
+    if (nn || sc_map_get(n, "offset"))
+      return sc_err(c, sp, "the ground is a plane (normal, offset) or a sphere, not both");
+    if (sc_check_keys(c, sp, sphere_keys) ||
+        sc_get_vec(c, sp, "center", 3, g->def.sphere_center) ||
+        sc_get_number(c, sp, "radius", &g->def.sphere_radius) ||
+        sc_get_bool(c, sp, "inside", &g->def.inside))
+      return AP_ERR_ARG;
+    if (!(g->def.sphere_radius > 0))
+      return sc_err(c, sp, "a ground sphere needs a positive radius (got %g)",
+                    g->def.sphere_radius);
+  }
   g->def.kind = (ap_ground_kind)kind;
   const sc_node *om = sc_map_get(n, "omega"), *ve = sc_map_get(n, "velocity");
   if (om && kind != AP_GROUND_TURNTABLE)
