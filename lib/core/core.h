@@ -18,6 +18,7 @@
 #include <stddef.h>
 
 #include "appell/system.h"
+#include "core/arena.h"
 #include "linalg/scalar.h"
 
 typedef struct ap_data_cs ap_data_cs;
@@ -156,6 +157,16 @@ void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x);
 /* v = B e' + b0 from the data's position stage (partitioned basis). */
 void ap_core_speeds(const ap_model *m, ap_data *d);
 
+/* Guard build (meson -Dguards=true, core/arena.h): check the guard words of d's blocks after
+ * the stage named; AP_ERR_INTERNAL with a message naming the array overrun and the stage when
+ * one is hit, else rc. Without guards AP_CORE_GUARDED is rc itself: no code, no cost. */
+int ap_core_guards(const ap_model *m, ap_data *d, const char *stage, int rc);
+#if AP_GUARDS
+#define AP_CORE_GUARDED(m, d, stage, rc) AP_SC(ap_core_guards)(m, d, stage, rc)
+#else
+#define AP_CORE_GUARDED(m, d, stage, rc) (rc)
+#endif
+
 /* printf into d->msg. */
 void ap_core_msg(ap_data *d, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -217,6 +228,7 @@ int ap_fwd_velocity_cs(const ap_model *m, ap_data_cs *d);
 int ap_fwd_acceleration_cs(const ap_model *m, ap_data_cs *d);
 int ap_forward_cs(const ap_model *m, ap_data_cs *d);
 void ap_core_speeds_cs(const ap_model *m, ap_data_cs *d);
+int ap_core_guards_cs(const ap_model *m, ap_data_cs *d, const char *stage, int rc);
 int ap_core_check_finite_cs(const ap_model *m, ap_data_cs *d, const char *what,
                             const double _Complex *x, int rows, int cols);
 void ap_core_msg_cs(ap_data_cs *d, const char *fmt, ...)

@@ -180,8 +180,7 @@ int AP_SC(ap_core_position_objects)(const ap_model *m, ap_data *d) {
 #endif
 }
 
-int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_position(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   /* the tree path (m->ops): a basis always (AP_BASIS_NONE as projected mode: g and A are never
    * formed, so the DAE mode refuses such models) */
@@ -290,8 +289,7 @@ void AP_SC(ap_core_speeds)(const ap_model *m, ap_data *d) {
   for (int i = 0; i < m->k; i++) d->v[i] += d->b0[i];
 }
 
-int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_velocity(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   if (ap_core_st(d)) return ap_st_velocity(m, d, ap_core_st(d));
 #endif
@@ -309,8 +307,7 @@ int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
 
 /* ---- acceleration stage ------------------------------------------------------------------- */
 
-int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_acceleration(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   if (ap_core_st(d)) return ap_st_acceleration(m, d, ap_core_st(d));
 #endif
@@ -353,8 +350,7 @@ int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
 /* ---- optional stages ---------------------------------------------------------------------- */
 
 #ifndef AP_SC_COMPLEX
-int ap_fwd_reactions(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_reactions(const ap_model *m, ap_data *d) {
   if (ap_core_st(d)) return ap_st_reactions(m, d, ap_core_st(d));
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
@@ -371,6 +367,32 @@ int ap_fwd_reactions(const ap_model *m, ap_data *d) {
     return rc;
   }
   return AP_OK;
+}
+#endif
+
+/* ---- the stages' entry points -------------------------------------------------------------
+ * Each checks its data, runs the stage and, in the guard build (core/arena.h), the guard words
+ * of the data's blocks after it. */
+
+int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "position", fwd_position(m, d));
+}
+
+int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "velocity", fwd_velocity(m, d));
+}
+
+int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "acceleration", fwd_acceleration(m, d));
+}
+
+#ifndef AP_SC_COMPLEX
+int ap_fwd_reactions(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "reactions", fwd_reactions(m, d));
 }
 #endif
 

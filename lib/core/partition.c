@@ -99,8 +99,7 @@ static int nearby_rank(const ap_model *m, ap_data *d) {
   return r;
 }
 
-int ap_partition(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int partition(const ap_model *m, ap_data *d) {
   if (ap_core_st(d)) return ap_st_partition(m, d, ap_core_st(d));   /* the tree path */
   ap_scratch *s = SCRATCH(d);
   d->cnt.partitions++;
@@ -145,6 +144,11 @@ int ap_partition(const ap_model *m, ap_data *d) {
                  "the loops and contacts close" : "consistent, dropped; some only where the "
                  "loops and contacts close", resid);
   return AP_OK;
+}
+
+int ap_partition(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "partition", partition(m, d));
 }
 
 /* Rows redundant only on the holonomic manifold, at an accepted state (core.h). The residuals
