@@ -7,8 +7,9 @@
  * guard's last word) is found and named, a write inside an array is not; every data layout of
  * the test scenes (dense and tree path) passes ap_data_create's check.
  * Guard build (meson -Dguards=true, AP_GUARDS; the sanitizer build of scripts/test): a write
- * one past d->N, past d->q of a tree-path data and past d->perm (the int block) makes the next
- * stage return AP_ERR_INTERNAL with a message naming the array and the stage. */
+ * one past d->N, past d->q of a tree-path data, past d->perm (the int block) and past the
+ * joints' section of a body model's scratch makes the next stage return AP_ERR_INTERNAL with
+ * a message naming the array and the stage. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -126,6 +127,10 @@ static void overrun(const char *file, const char *path, const char *array, int s
   if (!strcmp(array, "d->N")) d->N[(size_t)n * k] = 0.5;
   else if (!strcmp(array, "d->q")) d->q[n] = 0.5;
   else if (!strcmp(array, "d->perm")) d->perm[k] = -1;
+  else if (!strcmp(array, "joints")) {   /* a section of the body model's scratch */
+    const ap_arena *L = m->ev.layout;
+    ((ap_scratch *)d->internal)->ev[L->e[1].offset + L->e[1].count] = 0.5;
+  }
   int rc = stage == 0 ? ap_fwd_position(m, d) : ap_fwd_velocity(m, d);
   const char *sname = stage == 0 ? "'position'" : "'velocity'";
   char want[64];
@@ -167,6 +172,7 @@ int main(void) {
   overrun("modes_double_top.yaml", "dense", "d->N", 0);
   overrun("modes_chain.yaml", "tree", "d->q", 1);
   overrun("modes_free_balls.yaml", "dense", "d->perm", 0);
+  overrun("modes_chain.yaml", "dense", "joints", 1);
   printf("guard build: %s\n", AP_GUARDS ? "yes" : "no");
   return ap_check_finish("guards");
 }

@@ -62,6 +62,9 @@ typedef struct ap_evaluator {
    * len bytes naming the element that offers only a C callback of doubles (a user constraint
    * or user effect). May be NULL when position_cs is NULL. */
   int (*cs_blocker)(const ap_model *m, char *msg, size_t len);
+  /* The sections of the scratch (a body model's bodies, joints, ... ; core/arena.h), or NULL.
+   * In the guard build the dense path's data fills and checks their guards with its own. */
+  const ap_arena *layout;
 } ap_evaluator;
 
 struct ap_model {
@@ -72,6 +75,11 @@ struct ap_model {
   int nhol;                 /* implicit holonomic rows among the constraint rows (loop
                                closures, wheel contacts): redundancy among the rows may then
                                hold only where they are closed; 0 for math-level systems */
+  double lscale;            /* length scale (m): the largest frame offset, contact point or
+                               shape size of a body model; 1 for math-level systems. The scale
+                               of the gradients of the holonomic rows phi (a contact height or
+                               loop gap moves with the angles by lever arms of this size):
+                               a row of Phi_q below rank_rtol lscale vanishes identically */
   char name[64];
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */
@@ -124,6 +132,19 @@ static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {
  * a stepper's trial states lie off that manifold by O(h^2), and there the dropped rows are
  * neither dependent nor consistent (least squares over all rows keeps the solve smooth). */
 #define AP_CONSISTENCY_RTOL 1e-8
+
+/* The scale the consistency residuals of redundant rows are judged against: the size of the
+ * terms of the constraint equations, |a0|max + |A|max |v|max for the free terms a0 (units of a0,
+ * a speed), |gamma|max + |A|max |v'|max for gamma (units of an acceleration; v' of the last
+ * acceleration stage), each plus an absolute floor in the same units (AP_A0_FLOOR_M_PER_S,
+ * AP_GAMMA_FLOOR_M_PER_S2): with v = 0 and a0 = 0 the residual is the round-off of zero
+ * (8e-221 was seen) and must not count. The relative terms scale with the model's units, so a
+ * model in millimetres is judged as the one in metres wherever a0 or v is not zero; the floors
+ * are 1 unit of the model's own lengths per second (per second squared). */
+#define AP_A0_FLOOR_M_PER_S 1.0
+#define AP_GAMMA_FLOOR_M_PER_S2 1.0
+double ap_core_row_scale(const ap_model *m, const ap_data *d, int of_gamma);
+double ap_core_row_scale_cs(const ap_model *m, const ap_data_cs *d, int of_gamma);
 
 /* The position stage's objects g, N, A, a0 without the basis and without counting a stage
  * (forward.c; ap_partition evaluates nearby states with it). */

@@ -132,6 +132,9 @@ static int data_alloc(const ap_model *m, int tree, ap_data **out, ap_data_block 
   ap_arena_fill_guards(&blk->dl, blk->dbl);
   ap_arena_fill_guards(&blk->il, blk->ints);
   data_carve(d, tree, blk);
+#ifndef AP_SC_COMPLEX
+  if (!tree && m->ev.layout) ap_arena_fill_guards(m->ev.layout, blk->s.ev);
+#endif
   blk->s.model = m;
   d->internal = blk;
   d->n = m->n, d->k = m->k, d->b = m->b;
@@ -149,8 +152,13 @@ int AP_SC(ap_core_guards)(const ap_model *m, ap_data *d, const char *stage, int 
   ap_data_block *blk = d->internal;
   char what[400];
   if (blk->hit_stage) stage = blk->hit_stage;
+  const ap_arena *ev = NULL;   /* the evaluator's sections (double build, dense path) */
+#ifndef AP_SC_COMPLEX
+  if (!blk->s.st) ev = m->ev.layout;
+#endif
   if (ap_arena_guard_msg(&blk->dl, blk->dbl, stage, what, sizeof what) != 0 ||
-      ap_arena_guard_msg(&blk->il, blk->ints, stage, what, sizeof what) != 0) {
+      ap_arena_guard_msg(&blk->il, blk->ints, stage, what, sizeof what) != 0 ||
+      (ev && ap_arena_guard_msg(ev, blk->s.ev, stage, what, sizeof what) != 0)) {
     blk->hit_stage = stage;
     AP_SC(ap_core_msg)(d, "model '%s': %s", m->name, what);
     return AP_ERR_INTERNAL;

@@ -74,6 +74,13 @@ static double max_abs(const ap_sc *x, size_t len) {
   return mx;
 }
 
+double AP_SC(ap_core_row_scale)(const ap_model *m, const ap_data *d, int of_gamma) {
+  size_t b = (size_t)m->b, k = (size_t)m->k;
+  return (of_gamma ? AP_GAMMA_FLOOR_M_PER_S2 : AP_A0_FLOOR_M_PER_S) +
+         max_abs(of_gamma ? d->gamma : d->a0, b) +
+         max_abs(d->A, b * k) * max_abs(of_gamma ? d->vdot : d->v, k);
+}
+
 /* ---- position stage ---------------------------------------------------------------------- */
 
 static int basis_partitioned(const ap_model *m, ap_data *d) {
@@ -196,7 +203,7 @@ static int fwd_position(const ap_model *m, ap_data *d) {
 #endif
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
+  double scale = AP_SC(ap_core_row_scale)(m, d, 0);
   if (d->resid_a0 > AP_CONSISTENCY_RTOL * scale) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
@@ -272,7 +279,7 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = fmax(1.0, max_abs(d->gamma, (size_t)m->b));
+  double scale = AP_SC(ap_core_row_scale)(m, d, 1);
   if (d->resid_gamma > AP_CONSISTENCY_RTOL * scale) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);

@@ -107,6 +107,7 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
   m->n = def->n;
   m->k = def->k;
   m->b = def->b;
+  m->lscale = 1.0;
   snprintf(m->name, sizeof m->name, "%s", def->name ? def->name : "system");
   m->coord_names = copy_names(def->coord_names, m->n, "q");
   m->speed_names = copy_names(def->speed_names, m->k, "v");
