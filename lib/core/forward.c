@@ -203,8 +203,9 @@ static int fwd_position(const ap_model *m, ap_data *d) {
 #endif
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = AP_SC(ap_core_row_scale)(m, d, 0);
-  if (d->resid_a0 > AP_CONSISTENCY_RTOL * scale) {
+  /* the scale is at least the floor: below it no scale is needed (and none is computed) */
+  if (d->resid_a0 > AP_CONSISTENCY_RTOL * AP_A0_FLOOR_M_PER_S &&
+      d->resid_a0 > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 0)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
     return AP_ERR_INCONSISTENT;
@@ -279,8 +280,8 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = AP_SC(ap_core_row_scale)(m, d, 1);
-  if (d->resid_gamma > AP_CONSISTENCY_RTOL * scale) {
+  if (d->resid_gamma > AP_CONSISTENCY_RTOL * AP_GAMMA_FLOOR_M_PER_S2 &&
+      d->resid_gamma > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 1)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);
     return AP_ERR_INCONSISTENT;
