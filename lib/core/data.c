@@ -1,7 +1,10 @@
 /* The data struct: state, pipeline intermediates, scratch (include/appell/system.h).
  *
- * Layout: one block of scalars and one of ints, carved into the fields in the order they are
- * declared; sizes are fixed by the model, so no stage ever allocates. The identity basis
+ * Layout: one block of scalars and one of ints, each described by one table of its arrays
+ * (DENSE_DOUBLES, ... below; core/arena.h): sizes, offsets and carving come from the table and
+ * are checked here; sizes are fixed by the model, so no stage ever allocates. In the guard build
+ * (meson -Dguards=true) guard words follow every array and ap_core_guards checks them after
+ * each stage. The identity basis
  * (b == 0) and identity N (no kinematic callback) are written here once and never touched.
  * Generic in the scalar (linalg/scalar.h): data_cs.c compiles this file again into
  * ap_data_create_cs, which makes the complex-step mirror ap_data_cs (core/core.h). */
@@ -55,7 +58,7 @@ typedef struct data_sizes {
 
 #define LAYOUT_ADD(f_, c_, nul_) ap_arena_add(L, #f_, (c_));
 #define LAYOUT_CARVE(f_, c_, nul_)                                                         \
-  f_ = (nul_) && L->e[i].count == 0 ? NULL : base + L->e[i].offset;                        \
+  f_ = (nul_) && L->e[i].count == 0 ? NULL : base_ + L->e[i].offset;                       \
   i++;
 
 static data_sizes sizes_of(const ap_model *m) {
@@ -86,30 +89,30 @@ static void data_layout(const ap_model *m, int tree, ap_data_block *blk) {
   } else {
     DENSE_INTS(LAYOUT_ADD)
   }
-  (void)z;
 }
 
 /* The fields of d and its scratch pointed into the blocks (the tables' order). */
 static void data_carve(ap_data *d, int tree, ap_data_block *blk) {
   ap_scratch *s = &blk->s;
   const ap_arena *L = &blk->dl;
-  ap_sc *base = blk->dbl;
   int i = 0;
-  if (tree) {
-    TREE_DOUBLES(LAYOUT_CARVE)
-  } else {
-    DENSE_DOUBLES(LAYOUT_CARVE)
+  {
+    ap_sc *base_ = blk->dbl;
+    if (tree) {
+      TREE_DOUBLES(LAYOUT_CARVE)
+    } else {
+      DENSE_DOUBLES(LAYOUT_CARVE)
+    }
   }
-  L = &blk->il;
-  int *ibase = blk->ints;
-  i = 0;
-#define base ibase
-  if (tree) {
-    TREE_INTS(LAYOUT_CARVE)
-  } else {
-    DENSE_INTS(LAYOUT_CARVE)
+  L = &blk->il, i = 0;
+  {
+    int *base_ = blk->ints;
+    if (tree) {
+      TREE_INTS(LAYOUT_CARVE)
+    } else {
+      DENSE_INTS(LAYOUT_CARVE)
+    }
   }
-#undef base
 }
 
 /* Allocate d, its block pair and their tables; carve the fields; check the layout. */
