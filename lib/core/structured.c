@@ -116,9 +116,12 @@ static void solve_G(const ap_sblocks *bl, ap_st *st, double *x) {
 
 /* ---- stages --------------------------------------------------------------------------------- */
 
+/* The residual of x (a0 or gamma) outside the rows' range against |x|max plus the floor in
+ * x's units (core/core.h: AP_A0_FLOOR_M_PER_S, AP_GAMMA_FLOOR_M_PER_S2; A is not formed on
+ * the tree path, so the |A||v| term of ap_core_row_scale is left out). */
 static int judge(const ap_model *m, ap_data *d, double resid, const double *x, int n,
-                 const char *what) {
-  double scale = fmax(1.0, max_abs(x, n));
+                 double floor, const char *what) {
+  double scale = floor + max_abs(x, n);
   if (!(resid > consistency_rtol * scale)) return AP_OK;
   ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and inconsistent at "
               "t = %.17g (%s residual %.3g)", m->name, m->b - d->rank, m->b, d->t, what, resid);
@@ -130,7 +133,7 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   int rc = st->ops->position(m, d, st->ws, 1);
   if (rc != AP_OK) return rc;
   st->chosen = 1;
-  rc = judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+  rc = judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
   if (rc == AP_OK && d->redundant > 0)
     ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
                 "at t = %.17g; residual %.3g", m->name, d->redundant, m->b, d->t, d->resid_a0);
@@ -145,7 +148,7 @@ int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;
   if (rc != AP_OK) return rc;
-  return judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+  return judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
 }
 
 void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st) {
@@ -162,7 +165,8 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
-  if (rc == AP_OK) rc = judge(m, d, d->resid_gamma, d->gamma, m->b, "gamma");
+  if (rc == AP_OK) rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2,
+                                  "gamma");
   return rc;
 }
 
