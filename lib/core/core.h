@@ -219,9 +219,20 @@ struct ap_data_cs {
   void *internal;
 };
 
-/* Every field of ap_data has its mirror: a field added to one and not the other changes the
- * size of one of them. */
+/* Every field of ap_data has its mirror at the same offset (the lists below name every field of
+ * both; a field added to one and not the other changes the size of one of them). */
 _Static_assert(sizeof(struct ap_data_cs) == sizeof(ap_data), "ap_data_cs mirrors ap_data");
+#define AP_DATA_FIELDS(X)                                                                  \
+  X(n) X(k) X(b) X(t) X(q) X(v) X(e) X(basis) X(speeds_from_e) X(want_reactions)           \
+  X(estimate_cond) X(rank_rtol) X(manifold_rtol) X(perm) X(rank) X(l) X(redundant)         \
+  X(redundant_manifold) X(g) X(N) X(A) X(a0) X(B) X(b0) X(growth) X(rcond_R) X(resid_a0)   \
+  X(h) X(Q) X(gamma) X(w) X(resid_gamma) X(G) X(Phi) X(rcond_G) X(edd) X(vdot) X(qdot)     \
+  X(lambda) X(cnt) X(msg) X(internal)
+#define AP_DATA_MIRROR(f)                                                                  \
+  _Static_assert(offsetof(struct ap_data_cs, f) == offsetof(ap_data, f),                   \
+                 "ap_data_cs." #f " is at the offset of ap_data." #f);
+AP_DATA_FIELDS(AP_DATA_MIRROR)
+#undef AP_DATA_MIRROR
 
 typedef struct ap_scratch_cs {
   double _Complex *F, *tau;
@@ -231,6 +242,16 @@ typedef struct ap_scratch_cs {
   const ap_model *model;
   int judge_at_accepted;
 } ap_scratch_cs;
+/* The scratch mirrors ap_scratch field by field (ap_scratch's st has no mirror: the complex
+ * build always takes the dense path). */
+#define AP_SCRATCH_FIELDS(X)                                                               \
+  X(F) X(tau) X(jpvt) X(Qf) X(dg) X(gB) X(tk1) X(tk2) X(tl) X(tn) X(work) X(ev) X(iwork)   \
+  X(model) X(judge_at_accepted)
+#define AP_SCRATCH_MIRROR(f)                                                               \
+  _Static_assert(offsetof(ap_scratch_cs, f) == offsetof(ap_scratch, f),                    \
+                 "ap_scratch_cs." #f " is at the offset of ap_scratch." #f);
+AP_SCRATCH_FIELDS(AP_SCRATCH_MIRROR)
+#undef AP_SCRATCH_MIRROR
 
 static inline int ap_core_data_ok_cs(const ap_model *m, const ap_data_cs *d) {
   return m && d && d->internal && ((const ap_scratch_cs *)d->internal)->model == m;

@@ -165,8 +165,8 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
-  if (rc == AP_OK) rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2,
-                                  "gamma");
+  if (rc == AP_OK)
+    rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2, "gamma");
   return rc;
 }
 
