@@ -23,6 +23,14 @@
 
 static const double consistency_rtol = 1e-8;
 
+/* The state's doubles, one table X(field, count) in block order (core/arena.h): Gf first (it
+ * owns the block). */
+#define ST_DOUBLES(X)                                                                      \
+  X(st->Gf, gcap) X(st->tk1, k) X(st->tk2, k) X(st->tl, k) X(st->te, k) X(st->tb, b)       \
+  X(st->tm, b)
+#define ST_ADD(f_, c_) ap_arena_add(&L, #f_, (c_));
+#define ST_CARVE(f_, c_) f_ = p + L.e[i++].offset;
+
 int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   *out = NULL;
   size_t k = (size_t)m->k, b = (size_t)(m->b > 0 ? m->b : 1), gcap = 0;
@@ -30,19 +38,17 @@ int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   if (!st) return AP_ERR_NOMEM;
   st->m = m, st->ops = ops;
   st->ws = ops->ws_create(ops->ctx, &gcap);
-  double *p = st->ws ? calloc(gcap + 5 * k + 2 * b + 1, sizeof(double)) : NULL;
+  ap_arena L;
+  ap_arena_init(&L, "structured state", sizeof(double), 0);
+  ST_DOUBLES(ST_ADD)
+  double *p = st->ws ? calloc(L.total, sizeof(double)) : NULL;
   if (!p) {
     if (st->ws) ops->ws_free(st->ws);
     free(st);
     return AP_ERR_NOMEM;
   }
-  st->Gf = p, p += gcap;
-  st->tk1 = p, p += k;
-  st->tk2 = p, p += k;
-  st->tl = p, p += k;
-  st->te = p, p += k;
-  st->tb = p, p += b;
-  st->tm = p;
+  int i = 0;
+  ST_DOUBLES(ST_CARVE)
   *out = st;
   return AP_OK;
 }
