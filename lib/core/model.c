@@ -104,10 +104,10 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
   ap_model *m = calloc(1, sizeof *m);
   if (!m) return AP_ERR_NOMEM;
   m->sys = *def;
+  m->lscale = 1.0;   /* a math-level system has no lengths of its own (core.h) */
   m->n = def->n;
   m->k = def->k;
   m->b = def->b;
-  m->lscale = 1.0;
   snprintf(m->name, sizeof m->name, "%s", def->name ? def->name : "system");
   m->coord_names = copy_names(def->coord_names, m->n, "q");
   m->speed_names = copy_names(def->speed_names, m->k, "v");
