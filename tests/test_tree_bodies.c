@@ -288,7 +288,7 @@ static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap
     ap_tree_ws *tws = st->ws;
     AP_CHECK_EQ_INT(ap_tree_body_eval(m, dt, tws), AP_OK);
     AP_CHECK_EQ_INT(ap_body_eval(m, dd), AP_OK);
-    ap_tree_com_accel(tws, dt->vdot, -1, NULL);
+    ap_tree_com_accel(tws, dt->vdot, -1, tws->U, NULL);   /* the workspace's own U */
     double *Jw1 = calloc(12 * (size_t)k, sizeof(double)), *Jv1 = Jw1 + 3 * k, *Jw2 = Jv1 + 3 * k,
            *Jv2 = Jw2 + 3 * k, qerr = 0, jerr = 0, aerr = 0, jmax = 1, amax = 1;
     for (int bd = 0; bd < ap_model_body_count(m); bd++) {
@@ -314,7 +314,7 @@ static void check_pipeline(const ap_model *m, const ap_tplan *P, ap_data *dd, ap
         a2[r] = av[r];
         for (int c = 0; c < k; c++) a2[r] += Jv2[r + 3 * (size_t)c] * dd->vdot[c];
       }
-      ap_tree_com_accel(tws, dt->vdot, bd, a1);
+      ap_tree_com_accel(tws, dt->vdot, bd, tws->U, a1);
       aerr = fmax(aerr, diff(3, a1, a2)), amax = fmax(amax, max_abs(3, a2));
       (void)x;
     }

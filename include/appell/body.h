@@ -476,7 +476,9 @@ typedef struct ap_contact_force {
  * after ap_fwd_reactions). With a simulation pass ap_sim_reactions' lambda: in DAE mode those
  * are IDA's own. AP_ERR_ARG for a math-level model, a bad id or another constraint kind;
  * AP_ERR_UNSUPPORTED when the model has a user effect or a user constraint (their generalized
- * forces cannot be attributed to bodies); AP_ERR_CALLBACK when a wrench callback fails. */
+ * forces cannot be attributed to bodies); AP_ERR_CALLBACK when a wrench callback fails.
+ * d is only read: any number of threads may query one data at once. On the tree path the call
+ * allocates its own 6 x (bodies) doubles for the twists of v' (AP_ERR_NOMEM when it cannot). */
 AP_API int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lambda,
                                  int constraint, ap_contact_force *out);
 

@@ -39,7 +39,13 @@ typedef struct ap_sim_def {
   double h_init;           /* first step (s); 0 = let the stepper choose (default) */
   double h_max;            /* largest step (s); 0 = unlimited (default) */
   long max_steps;          /* internal steps allowed per ap_sim_advance; default 1000000 */
-  double rank_rtol;        /* relative rank tolerance on |R_ii|; default 1e-10 */
+  double rank_rtol;        /* relative rank tolerance, dimensionless; default 1e-10. A pivot of
+                              the QR of A counts when |R_ii| > rank_rtol |R_00| (relative to
+                              the largest pivot); a row of the holonomic rows' gradient Phi_q
+                              counts when its largest entry exceeds rank_rtol times the model's
+                              length scale (the largest frame offset, contact point or shape
+                              size, m; 1 for math-level systems): smaller ones vanish
+                              identically (docs/api.md "Tolerances") */
   double switch_growth;    /* minimal mode: re-partition when max|R11^-1 R12| exceeds this;
                               default 2 */
   double init_tol;         /* initial speeds violating A v + a0 = 0 by more than this (in the

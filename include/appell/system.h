@@ -148,7 +148,8 @@ typedef struct ap_data {
   int want_reactions;  /* compute lambda in ap_forward */
   int estimate_cond;   /* estimate rcond_R and rcond_G (LAPACK condition estimators); the
                           drivers turn it on at output times only, not in the hot path */
-  double rank_rtol;    /* relative tolerance on |R_ii| for the numerical rank; default 1e-10 */
+  double rank_rtol;    /* relative tolerance for the numerical rank, dimensionless: a pivot
+                          counts when |R_ii| > rank_rtol |R_00|; default 1e-10 */
   double manifold_rtol; /* relative tolerance on the consistency of redundant rows that are
                            redundant only where the implicit holonomic rows (loop closures,
                            wheel contacts) hold: judged by ap_partition and at accepted steps,

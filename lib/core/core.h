@@ -18,6 +18,7 @@
 #include <stddef.h>
 
 #include "appell/system.h"
+#include "core/arena.h"
 #include "linalg/scalar.h"
 
 typedef struct ap_data_cs ap_data_cs;
@@ -61,6 +62,9 @@ typedef struct ap_evaluator {
    * len bytes naming the element that offers only a C callback of doubles (a user constraint
    * or user effect). May be NULL when position_cs is NULL. */
   int (*cs_blocker)(const ap_model *m, char *msg, size_t len);
+  /* The sections of the scratch (a body model's bodies, joints, ... ; core/arena.h), or NULL.
+   * In the guard build the dense path's data fills and checks their guards with its own. */
+  const ap_arena *layout;
 } ap_evaluator;
 
 struct ap_model {
@@ -71,6 +75,11 @@ struct ap_model {
   int nhol;                 /* implicit holonomic rows among the constraint rows (loop
                                closures, wheel contacts): redundancy among the rows may then
                                hold only where they are closed; 0 for math-level systems */
+  double lscale;            /* length scale (m): the largest frame offset, contact point or
+                               shape size of a body model; 1 for math-level systems. The scale
+                               of the gradients of the holonomic rows phi (a contact height or
+                               loop gap moves with the angles by lever arms of this size):
+                               a row of Phi_q below rank_rtol lscale vanishes identically */
   char name[64];
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */
@@ -124,6 +133,19 @@ static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {
  * neither dependent nor consistent (least squares over all rows keeps the solve smooth). */
 #define AP_CONSISTENCY_RTOL 1e-8
 
+/* The scale the consistency residuals of redundant rows are judged against: the size of the
+ * terms of the constraint equations, |a0|max + |A|max |v|max for the free terms a0 (units of a0,
+ * a speed), |gamma|max + |A|max |v'|max for gamma (units of an acceleration; v' of the last
+ * acceleration stage), each plus an absolute floor in the same units (AP_A0_FLOOR_M_PER_S,
+ * AP_GAMMA_FLOOR_M_PER_S2): with v = 0 and a0 = 0 the residual is the round-off of zero
+ * (8e-221 was seen) and must not count. The relative terms scale with the model's units, so a
+ * model in millimetres is judged as the one in metres wherever a0 or v is not zero; the floors
+ * are 1 unit of the model's own lengths per second (per second squared). */
+#define AP_A0_FLOOR_M_PER_S 1.0
+#define AP_GAMMA_FLOOR_M_PER_S2 1.0
+double ap_core_row_scale(const ap_model *m, const ap_data *d, int of_gamma);
+double ap_core_row_scale_cs(const ap_model *m, const ap_data_cs *d, int of_gamma);
+
 /* The position stage's objects g, N, A, a0 without the basis and without counting a stage
  * (forward.c; ap_partition evaluates nearby states with it). */
 int ap_core_position_objects(const ap_model *m, ap_data *d);
@@ -156,6 +178,16 @@ void ap_core_project_tangent(const ap_model *m, ap_data *d, double *x);
 /* v = B e' + b0 from the data's position stage (partitioned basis). */
 void ap_core_speeds(const ap_model *m, ap_data *d);
 
+/* Guard build (meson -Dguards=true, core/arena.h): check the guard words of d's blocks after
+ * the stage named; AP_ERR_INTERNAL with a message naming the array overrun and the stage when
+ * one is hit, else rc. Without guards AP_CORE_GUARDED is rc itself: no code, no cost. */
+int ap_core_guards(const ap_model *m, ap_data *d, const char *stage, int rc);
+#if AP_GUARDS
+#define AP_CORE_GUARDED(m, d, stage, rc) AP_SC(ap_core_guards)(m, d, stage, rc)
+#else
+#define AP_CORE_GUARDED(m, d, stage, rc) (rc)
+#endif
+
 /* printf into d->msg. */
 void ap_core_msg(ap_data *d, const char *fmt, ...)
 #if defined(__GNUC__)
@@ -187,9 +219,20 @@ struct ap_data_cs {
   void *internal;
 };
 
-/* Every field of ap_data has its mirror: a field added to one and not the other changes the
- * size of one of them. */
+/* Every field of ap_data has its mirror at the same offset (the lists below name every field of
+ * both; a field added to one and not the other changes the size of one of them). */
 _Static_assert(sizeof(struct ap_data_cs) == sizeof(ap_data), "ap_data_cs mirrors ap_data");
+#define AP_DATA_FIELDS(X)                                                                  \
+  X(n) X(k) X(b) X(t) X(q) X(v) X(e) X(basis) X(speeds_from_e) X(want_reactions)           \
+  X(estimate_cond) X(rank_rtol) X(manifold_rtol) X(perm) X(rank) X(l) X(redundant)         \
+  X(redundant_manifold) X(g) X(N) X(A) X(a0) X(B) X(b0) X(growth) X(rcond_R) X(resid_a0)   \
+  X(h) X(Q) X(gamma) X(w) X(resid_gamma) X(G) X(Phi) X(rcond_G) X(edd) X(vdot) X(qdot)     \
+  X(lambda) X(cnt) X(msg) X(internal)
+#define AP_DATA_MIRROR(f)                                                                  \
+  _Static_assert(offsetof(struct ap_data_cs, f) == offsetof(ap_data, f),                   \
+                 "ap_data_cs." #f " is at the offset of ap_data." #f);
+AP_DATA_FIELDS(AP_DATA_MIRROR)
+#undef AP_DATA_MIRROR
 
 typedef struct ap_scratch_cs {
   double _Complex *F, *tau;
@@ -199,6 +242,16 @@ typedef struct ap_scratch_cs {
   const ap_model *model;
   int judge_at_accepted;
 } ap_scratch_cs;
+/* The scratch mirrors ap_scratch field by field (ap_scratch's st has no mirror: the complex
+ * build always takes the dense path). */
+#define AP_SCRATCH_FIELDS(X)                                                               \
+  X(F) X(tau) X(jpvt) X(Qf) X(dg) X(gB) X(tk1) X(tk2) X(tl) X(tn) X(work) X(ev) X(iwork)   \
+  X(model) X(judge_at_accepted)
+#define AP_SCRATCH_MIRROR(f)                                                               \
+  _Static_assert(offsetof(ap_scratch_cs, f) == offsetof(ap_scratch, f),                    \
+                 "ap_scratch_cs." #f " is at the offset of ap_scratch." #f);
+AP_SCRATCH_FIELDS(AP_SCRATCH_MIRROR)
+#undef AP_SCRATCH_MIRROR
 
 static inline int ap_core_data_ok_cs(const ap_model *m, const ap_data_cs *d) {
   return m && d && d->internal && ((const ap_scratch_cs *)d->internal)->model == m;
@@ -217,6 +270,7 @@ int ap_fwd_velocity_cs(const ap_model *m, ap_data_cs *d);
 int ap_fwd_acceleration_cs(const ap_model *m, ap_data_cs *d);
 int ap_forward_cs(const ap_model *m, ap_data_cs *d);
 void ap_core_speeds_cs(const ap_model *m, ap_data_cs *d);
+int ap_core_guards_cs(const ap_model *m, ap_data_cs *d, const char *stage, int rc);
 int ap_core_check_finite_cs(const ap_model *m, ap_data_cs *d, const char *what,
                             const double _Complex *x, int rows, int cols);
 void ap_core_msg_cs(ap_data_cs *d, const char *fmt, ...)

@@ -74,6 +74,13 @@ static double max_abs(const ap_sc *x, size_t len) {
   return mx;
 }
 
+double AP_SC(ap_core_row_scale)(const ap_model *m, const ap_data *d, int of_gamma) {
+  size_t b = (size_t)m->b, k = (size_t)m->k;
+  return (of_gamma ? AP_GAMMA_FLOOR_M_PER_S2 : AP_A0_FLOOR_M_PER_S) +
+         max_abs(of_gamma ? d->gamma : d->a0, b) +
+         max_abs(d->A, b * k) * max_abs(of_gamma ? d->vdot : d->v, k);
+}
+
 /* ---- position stage ---------------------------------------------------------------------- */
 
 static int basis_partitioned(const ap_model *m, ap_data *d) {
@@ -180,8 +187,7 @@ int AP_SC(ap_core_position_objects)(const ap_model *m, ap_data *d) {
 #endif
 }
 
-int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_position(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   /* the tree path (m->ops): a basis always (AP_BASIS_NONE as projected mode: g and A are never
    * formed, so the DAE mode refuses such models) */
@@ -197,8 +203,9 @@ int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
 #endif
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = fmax(1.0, max_abs(d->a0, (size_t)m->b));
-  if (d->resid_a0 > AP_CONSISTENCY_RTOL * scale) {
+  /* the scale is at least the floor: below it no scale is needed (and none is computed) */
+  if (d->resid_a0 > AP_CONSISTENCY_RTOL * AP_A0_FLOOR_M_PER_S &&
+      d->resid_a0 > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 0)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
     return AP_ERR_INCONSISTENT;
@@ -273,8 +280,8 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  double scale = fmax(1.0, max_abs(d->gamma, (size_t)m->b));
-  if (d->resid_gamma > AP_CONSISTENCY_RTOL * scale) {
+  if (d->resid_gamma > AP_CONSISTENCY_RTOL * AP_GAMMA_FLOOR_M_PER_S2 &&
+      d->resid_gamma > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 1)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);
     return AP_ERR_INCONSISTENT;
@@ -290,8 +297,7 @@ void AP_SC(ap_core_speeds)(const ap_model *m, ap_data *d) {
   for (int i = 0; i < m->k; i++) d->v[i] += d->b0[i];
 }
 
-int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_velocity(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   if (ap_core_st(d)) return ap_st_velocity(m, d, ap_core_st(d));
 #endif
@@ -309,8 +315,7 @@ int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
 
 /* ---- acceleration stage ------------------------------------------------------------------- */
 
-int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_acceleration(const ap_model *m, ap_data *d) {
 #ifndef AP_SC_COMPLEX
   if (ap_core_st(d)) return ap_st_acceleration(m, d, ap_core_st(d));
 #endif
@@ -353,8 +358,7 @@ int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
 /* ---- optional stages ---------------------------------------------------------------------- */
 
 #ifndef AP_SC_COMPLEX
-int ap_fwd_reactions(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int fwd_reactions(const ap_model *m, ap_data *d) {
   if (ap_core_st(d)) return ap_st_reactions(m, d, ap_core_st(d));
   ap_scratch *s = SCRATCH(d);
   int k = m->k;
@@ -371,6 +375,32 @@ int ap_fwd_reactions(const ap_model *m, ap_data *d) {
     return rc;
   }
   return AP_OK;
+}
+#endif
+
+/* ---- the stages' entry points -------------------------------------------------------------
+ * Each checks its data, runs the stage and, in the guard build (core/arena.h), the guard words
+ * of the data's blocks after it. */
+
+int AP_SC(ap_fwd_position)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "position", fwd_position(m, d));
+}
+
+int AP_SC(ap_fwd_velocity)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "velocity", fwd_velocity(m, d));
+}
+
+int AP_SC(ap_fwd_acceleration)(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "acceleration", fwd_acceleration(m, d));
+}
+
+#ifndef AP_SC_COMPLEX
+int ap_fwd_reactions(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "reactions", fwd_reactions(m, d));
 }
 #endif
 

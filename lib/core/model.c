@@ -129,6 +129,7 @@ int ap_model_from_system(const ap_system_def *def, ap_model **out, char *msg, si
   ap_model *m = calloc(1, sizeof *m);
   if (!m) return AP_ERR_NOMEM;
   m->sys = *def;
+  m->lscale = 1.0;   /* a math-level system has no lengths of its own (core.h) */
   m->n = def->n;
   m->k = def->k;
   m->b = def->b;

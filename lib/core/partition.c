@@ -99,8 +99,7 @@ static int nearby_rank(const ap_model *m, ap_data *d) {
   return r;
 }
 
-int ap_partition(const ap_model *m, ap_data *d) {
-  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+static int partition(const ap_model *m, ap_data *d) {
   if (ap_core_st(d)) return ap_st_partition(m, d, ap_core_st(d));   /* the tree path */
   ap_scratch *s = SCRATCH(d);
   d->cnt.partitions++;
@@ -132,8 +131,7 @@ int ap_partition(const ap_model *m, ap_data *d) {
   rc = ap_la_orth_basis(m->b, m->k, d->A, d->a0, d->rank_rtol, &rr, s->F, s->tau, s->jpvt,
                         s->Qf, s->gB, s->tk1, &resid, s->work, s->iwork);
   if (rc != AP_OK) return rc;
-  double scale = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A,
-                                                                       (size_t)m->b * m->k)));
+  double scale = ap_core_row_scale(m, d, 0);
   double tol = d->redundant_manifold ? d->manifold_rtol : AP_CONSISTENCY_RTOL;
   if (resid > tol * scale) {
     name_inconsistent(m, d, s->F, s->jpvt, rr, d->a0, tol * scale, "the free terms a0",
@@ -147,14 +145,20 @@ int ap_partition(const ap_model *m, ap_data *d) {
   return AP_OK;
 }
 
+int ap_partition(const ap_model *m, ap_data *d) {
+  if (!ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  return AP_CORE_GUARDED(m, d, "partition", partition(m, d));
+}
+
 /* Rows redundant only on the holonomic manifold, at an accepted state (core.h). The residuals
- * scale like the distance from the manifold: relative to the largest entry of A, a0 (resp.
- * gamma). Which rows: the row-pivoted QR of A^T names them (as ap_partition). */
+ * scale like the distance from the manifold: relative to the size of the terms of A v + a0
+ * (resp. A v' = gamma; ap_core_row_scale). Which rows: the row-pivoted QR of A^T names them
+ * (as ap_partition). */
 int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
   if (!d->redundant_manifold) return AP_OK;
   ap_scratch *s = SCRATCH(d);
-  double sa = fmax(1.0, fmax(max_abs(d->a0, (size_t)m->b), max_abs(d->A, (size_t)m->b * m->k)));
-  double sg = fmax(1.0, max_abs(d->gamma, (size_t)m->b)), tol = d->manifold_rtol;
+  double sa = ap_core_row_scale(m, d, 0), sg = ap_core_row_scale(m, d, 1);
+  double tol = d->manifold_rtol;
   int bad_a = d->resid_a0 > tol * sa, bad_g = !bad_a && d->resid_gamma > tol * sg;
   if (!bad_a && !bad_g) return AP_OK;
   double resid = 0.0;

@@ -19,7 +19,8 @@
 int ap_project_speeds(const ap_model *m, ap_data *d, double *v, double *change) {
   if (!v) return AP_ERR_ARG;
   int rc = ap_fwd_position(m, d);
-  return rc == AP_OK ? ap_core_project_here(m, d, v, change) : rc;
+  if (rc != AP_OK) return rc;
+  return AP_CORE_GUARDED(m, d, "projection", ap_core_project_here(m, d, v, change));
 }
 
 /* A sticking plastic impact: v+ = v- - g^-1 A^T (A g^-1 A^T)^-1 (A v- + a0), the nearest

@@ -23,6 +23,14 @@
 
 static const double consistency_rtol = 1e-8;
 
+/* The state's doubles, one table X(field, count) in block order (core/arena.h): Gf first (it
+ * owns the block). */
+#define ST_DOUBLES(X)                                                                      \
+  X(st->Gf, gcap) X(st->tk1, k) X(st->tk2, k) X(st->tl, k) X(st->te, k) X(st->tb, b)       \
+  X(st->tm, b)
+#define ST_ADD(f_, c_) ap_arena_add(&L, #f_, (c_));
+#define ST_CARVE(f_, c_) f_ = p + L.e[i++].offset;
+
 int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   *out = NULL;
   size_t k = (size_t)m->k, b = (size_t)(m->b > 0 ? m->b : 1), gcap = 0;
@@ -30,19 +38,17 @@ int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   if (!st) return AP_ERR_NOMEM;
   st->m = m, st->ops = ops;
   st->ws = ops->ws_create(ops->ctx, &gcap);
-  double *p = st->ws ? calloc(gcap + 5 * k + 2 * b + 1, sizeof(double)) : NULL;
+  ap_arena L;
+  ap_arena_init(&L, "structured state", sizeof(double), 0);
+  ST_DOUBLES(ST_ADD)
+  double *p = st->ws ? calloc(L.total, sizeof(double)) : NULL;
   if (!p) {
     if (st->ws) ops->ws_free(st->ws);
     free(st);
     return AP_ERR_NOMEM;
   }
-  st->Gf = p, p += gcap;
-  st->tk1 = p, p += k;
-  st->tk2 = p, p += k;
-  st->tl = p, p += k;
-  st->te = p, p += k;
-  st->tb = p, p += b;
-  st->tm = p;
+  int i = 0;
+  ST_DOUBLES(ST_CARVE)
   *out = st;
   return AP_OK;
 }
@@ -116,9 +122,12 @@ static void solve_G(const ap_sblocks *bl, ap_st *st, double *x) {
 
 /* ---- stages --------------------------------------------------------------------------------- */
 
+/* The residual of x (a0 or gamma) outside the rows' range against |x|max plus the floor in
+ * x's units (core/core.h: AP_A0_FLOOR_M_PER_S, AP_GAMMA_FLOOR_M_PER_S2; A is not formed on
+ * the tree path, so the |A||v| term of ap_core_row_scale is left out). */
 static int judge(const ap_model *m, ap_data *d, double resid, const double *x, int n,
-                 const char *what) {
-  double scale = fmax(1.0, max_abs(x, n));
+                 double floor, const char *what) {
+  double scale = floor + max_abs(x, n);
   if (!(resid > consistency_rtol * scale)) return AP_OK;
   ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and inconsistent at "
               "t = %.17g (%s residual %.3g)", m->name, m->b - d->rank, m->b, d->t, what, resid);
@@ -130,7 +139,7 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   int rc = st->ops->position(m, d, st->ws, 1);
   if (rc != AP_OK) return rc;
   st->chosen = 1;
-  rc = judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+  rc = judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
   if (rc == AP_OK && d->redundant > 0)
     ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
                 "at t = %.17g; residual %.3g", m->name, d->redundant, m->b, d->t, d->resid_a0);
@@ -145,7 +154,7 @@ int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;
   if (rc != AP_OK) return rc;
-  return judge(m, d, d->resid_a0, d->a0, m->b, "a0");
+  return judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
 }
 
 void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st) {
@@ -162,7 +171,8 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
-  if (rc == AP_OK) rc = judge(m, d, d->resid_gamma, d->gamma, m->b, "gamma");
+  if (rc == AP_OK)
+    rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2, "gamma");
   return rc;
 }
 

@@ -87,9 +87,10 @@ double ap_dae_rtol(double rtol) { return fmax(rtol / AP_DAE_TOL_FACTOR, fmin(rto
 /* Row-pivoted QR of M^T (M rows x cols) in the scratch: the rank, the row order (jpvt: the
  * first rank rows are the independent ones, as ap_partition chooses them) and the quality
  * |R_rr| / |R_11| of the last kept pivot against the first (1 when rank is 0). With floor,
- * pivots below rank_rtol (absolute) do not count either: rows of phi that vanish identically
- * (a wheel contact whose height is fixed by the tree) have gradients of round-off size, and
- * a relative test would keep one of them as noise. */
+ * pivots below rank_rtol times the model's length scale m->lscale (core/core.h: the scale of
+ * the gradients of phi) do not count either: rows of phi that vanish identically (a wheel
+ * contact whose height is fixed by the tree) have gradients of round-off size, and a test
+ * relative to the largest pivot would keep one of them as noise. */
 static int row_qr(ap_dae *s, int rows, int cols, const double *M, double rank_rtol, int floor,
                   int *rank, double *quality) {
   int mx = rows > cols ? rows : cols;
@@ -100,7 +101,7 @@ static int row_qr(ap_dae *s, int rows, int cols, const double *M, double rank_rt
   int rc = ap_la_orth_basis(rows, cols, M, NULL, rank_rtol, rank, F, tau, s->jpvt, Qf, Z, NULL,
                             &resid, Z + (size_t)cols * cols, s->jpvt + rows);
   while (rc == AP_OK && floor && *rank > 0 &&
-         !(fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]) > rank_rtol))
+         !(fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]) > rank_rtol * s->m->lscale))
     (*rank)--;
   if (rc == AP_OK && *rank > 0)
     *quality = fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]) / fabs(F[0]);

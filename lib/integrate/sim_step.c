@@ -237,8 +237,8 @@ int ap_drv_stage_partition(ap_sim *s, double *tp) {
  * model's own project_q waits for a threshold and then jumps, which BDF's error test sees as
  * noise: projected that way, Hoffmann's loop at rtol 1e-11 ended in a NaN). With
  * err, its q part is projected onto the tangent space the same way.
- * Rows whose gradient is below rank_rtol (absolute, as the DAE mode's choice of rows) are left
- * out: a row that vanishes identically (the contact row of a wheel whose height the tree holds,
+ * Rows whose gradient is below rank_rtol times the model's length scale (m->lscale, the scale
+ * of the gradients of phi; as the DAE mode's choice of rows) are left out: a row that vanishes identically (the contact row of a wheel whose height the tree holds,
  * as on a planar chassis) has phi and Phi_q of round-off size, and the least-squares solve,
  * which decides the rank relative to the largest pivot, would divide one by the other (the
  * robot of diff_drive.yaml: 1.4e-17 / 4.6e-25, a wheel angle moved by 3e7 rad). */
@@ -259,7 +259,7 @@ static int gn_project_q(ap_sim *s, double t, const double *q, double *dq, double
   for (int r = 0; r < np; r++) {
     double size = 0.0;
     for (int i = 0; i < n; i++) size = fmax(size, fabs(Phi[r + (size_t)i * np]));
-    int noise = !(size > s->def.rank_rtol);
+    int noise = !(size > s->def.rank_rtol * m->lscale);
     rhs[r] = noise ? 0.0 : -rhs[r];
     for (int i = 0; i < n; i++) {
       if (noise) Phi[r + (size_t)i * np] = 0.0;

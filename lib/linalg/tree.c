@@ -68,47 +68,39 @@ void ap_la_tree_inertia(const double *M13, const double *U, double *F) {
 
 /* ---- workspace ---------------------------------------------------------------------------- */
 
+/* The work's ints and doubles, one table each X(field, count) in block order: the sizes
+ * (ap_la_tree_work_size) and the carving (ap_la_tree_work_init) both come from it. G holds
+ * sum_t l_t^2 <= l lmax, B sum_t k_t l_t <= k lmax; loc is the per-body local scratch. */
+#define TREE_WORK_INTS(X)                                                                  \
+  X(perm, k) X(eidx, k) X(ecol, k) X(kpos, k) X(pbody, k) X(kidx, k) X(lidx, k) X(rank, nb) \
+  X(nrow, nb) X(slot, nb) X(tpos, nb) X(pin, nb) X(lofs, nt + 1) X(kofs, nt + 1)            \
+  X(gofs, nt + 1) X(bofs, nt + 1)
+#define TREE_WORK_DOUBLES(X)                                                               \
+  X(F, cap * nf) X(CX, 6 * cap) X(tau, k) X(T, cap * (nf + 6)) X(rq, cap) X(rs, cap)        \
+  X(U, 6 * nb) X(G, k * lc) X(B, k * lc) X(Y, 6 * nb * lc)                                  \
+  X(loc, mr * (2 * nf + 8) + nf * lc + 6 * lc + 64)
+#define TREE_WORK_SIZES                                                                    \
+  size_t nb = (size_t)T->nb, k = (size_t)T->k, cap = (size_t)T->cap, nf = (size_t)T->maxnf, \
+         nt = (size_t)T->ntree, lc = (size_t)(lmax > 0 ? lmax : 1), mr = (size_t)T->maxrow
+#define TW_SUM(f_, c_) +(c_)
+
 size_t ap_la_tree_work_size(const ap_la_tree *T, int lmax, size_t *nint) {
-  size_t nb = (size_t)T->nb, k = (size_t)T->k, cap = (size_t)T->cap, nf = (size_t)T->maxnf,
-         nt = (size_t)T->ntree, lc = (size_t)(lmax > 0 ? lmax : 1), mr = (size_t)T->maxrow;
-  if (nint) *nint = 7 * k + 5 * nb + 4 * (nt + 1);
-  return cap * nf + 6 * cap + k + cap * (nf + 6) + 2 * cap + 6 * nb + 2 * k * lc + 6 * nb * lc +
-         mr * (2 * nf + 8) + nf * lc + 6 * lc + 64;
+  TREE_WORK_SIZES;
+  if (nint) *nint = 0 TREE_WORK_INTS(TW_SUM);
+  return 0 TREE_WORK_DOUBLES(TW_SUM);
 }
 
 void ap_la_tree_work_init(const ap_la_tree *T, int lmax, double *dbl, int *ints,
                           ap_la_tree_work *W) {
-  size_t nb = (size_t)T->nb, k = (size_t)T->k, cap = (size_t)T->cap, nf = (size_t)T->maxnf,
-         nt = (size_t)T->ntree, lc = (size_t)(lmax > 0 ? lmax : 1);
+  TREE_WORK_SIZES;
   memset(W, 0, sizeof *W);
   W->lmax = (int)lc;
-  W->perm = ints, ints += k;
-  W->eidx = ints, ints += k;
-  W->ecol = ints, ints += k;
-  W->kpos = ints, ints += k;
-  W->pbody = ints, ints += k;
-  W->kidx = ints, ints += k;
-  W->lidx = ints, ints += k;
-  W->rank = ints, ints += nb;
-  W->nrow = ints, ints += nb;
-  W->slot = ints, ints += nb;
-  W->tpos = ints, ints += nb;
-  W->pin = ints, ints += nb;
-  W->lofs = ints, ints += nt + 1;
-  W->kofs = ints, ints += nt + 1;
-  W->gofs = ints, ints += nt + 1;
-  W->bofs = ints;
-  W->F = dbl, dbl += cap * nf;
-  W->CX = dbl, dbl += 6 * cap;
-  W->tau = dbl, dbl += k;
-  W->T = dbl, dbl += cap * (nf + 6);
-  W->rq = dbl, dbl += cap;
-  W->rs = dbl, dbl += cap;
-  W->U = dbl, dbl += 6 * nb;
-  W->G = dbl, dbl += k * lc;   /* sum_t l_t^2 <= l lmax */
-  W->B = dbl, dbl += k * lc;   /* sum_t k_t l_t <= k lmax */
-  W->Y = dbl, dbl += 6 * nb * lc;
-  W->loc = dbl;
+#define TW_CARVE_I(f_, c_) W->f_ = ints, ints += (c_);
+#define TW_CARVE_D(f_, c_) W->f_ = dbl, dbl += (c_);
+  TREE_WORK_INTS(TW_CARVE_I)
+  TREE_WORK_DOUBLES(TW_CARVE_D)
+#undef TW_CARVE_I
+#undef TW_CARVE_D
   /* static maps: the body of each column, the column of each speed, speeds by tree */
   for (int i = 0; i < T->nb; i++)
     for (int c = T->fofs[i]; c < T->fofs[i + 1]; c++) W->pbody[c] = i, W->kpos[T->fidx[c]] = c;

@@ -379,10 +379,12 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->ev.check_q = ap_bm_check_q;
   m->nphi = M->nloop + M->nquat;
   m->nhol = M->nloop;
+  m->lscale = M->lscale;
   if (m->nphi > 0) m->ev.phi = ap_bm_phi;
   m->ev.position_cs = ap_bm_position_cs, m->ev.velocity_cs = ap_bm_velocity_cs;
   if (m->nphi > 0) m->ev.phi_cs = ap_bm_phi_cs;
   m->ev.cs_blocker = ap_bm_cs_blocker;
+  m->ev.layout = &M->layout;
   *out = m;
   return AP_OK;
 }
@@ -418,6 +420,9 @@ static int compile_all(ap_builder *b, ap_bmodel *M) {
     M->lscale = fmax(M->lscale, fmax(v3_norm(M->joints[j].ppf), v3_norm(M->joints[j].pcf)));
   if (!(M->lscale > 0)) M->lscale = 1.0;
   ap_kin_layout(M);
+  char why[256];
+  if (rc == AP_OK && ap_arena_check(&M->layout, why, sizeof why) != 0)
+    FAIL("model '%s': %s", b->name, why);
   return rc;
 }
 

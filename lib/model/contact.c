@@ -68,7 +68,10 @@ static void ground_frame(const ap_mcon *c, const ap_sc *o, ap_sc *gf, const ap_s
 kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c) {
   if (c->wheel >= 0) {
     ap_sc *p = S + M->off_wheel + (size_t)c->wheel * WHEEL_STRIDE;
-    kwheel W = {p, p + 3, p + 6, p + 15, p + 18};
+    kwheel W;
+#define KW_VIEW(f, c) W.f = p + KW_##f;
+    KWHEEL_FIELDS(KW_VIEW)   /* model/model.h */
+#undef KW_VIEW
     return W;
   }
   kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);

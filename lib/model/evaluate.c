@@ -507,13 +507,17 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
   if (c->wheel >= 0) return wheel_force(m, d, c, constraint, lam, out);
   int root = c->def.body, k = M->k;
-  if (m->ops) ap_tree_com_accel(ap_tree_ws_of(d), vd, -1, NULL);   /* twists of v' */
+  /* tree path: the twists of v' in this call's own memory (d is shared: read only) */
+  const ap_tree_ws *ws = m->ops ? ap_tree_ws_of(d) : NULL;
+  double *U = ws ? malloc(sizeof(double) * ap_tree_twist_len(ws)) : NULL;
+  if (ws && !U) return AP_ERR_NOMEM;
+  if (ws) ap_tree_com_accel(ws, vd, -1, U, NULL);
   for (int b = 0; b < M->nb; b++) {
     if (!ap_bm_in_subtree(M, b, root)) continue;
     kbody C = ap_kin_body(M, S, b);
     double a[3], t[3];
-    if (m->ops) {   /* tree path: J_b v' from the twists, plus the bias */
-      ap_tree_com_accel(ap_tree_ws_of(d), vd, b, a);
+    if (ws) {   /* tree path: J_b v' from the twists, plus the bias */
+      ap_tree_com_accel(ws, vd, b, U, a);
       v3_axpy(M->bodies[b].mass, a, ma);
       continue;
     }
@@ -524,6 +528,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
     for (int col = 0; col < k; col++) v3_axpy(vd[col], C.Jc + 3 * col, a);
     v3_axpy(M->bodies[b].mass, a, ma);
   }
+  free(U);
   int rc = ap_eff_subtree_force(M, S, d->t, d->v, root, Fe);
   if (rc == AP_OK) rc = ap_con_subtree_force(M, S, lam, root, constraint, Fc);
   if (rc != AP_OK) return rc;

@@ -31,37 +31,46 @@
 static const ap_sc ZERO3[3] = {0, 0, 0};
 
 #ifndef AP_SC_COMPLEX
+/* The sections of the scratch, one table (core/arena.h; guard words between them in the guard
+ * build, which the core checks after every stage on the dense path). */
 void ap_kin_layout(ap_bmodel *M) {
   size_t K1 = (size_t)M->K1, k = (size_t)M->k, nl = (size_t)M->nloop;
-  M->body_stride = 36 + 9 * K1;
-  M->off_body = 0;
-  M->off_joint = M->off_body + (size_t)M->nb * M->body_stride;
-  M->off_con = M->off_joint + (size_t)M->nj * JOINT_STRIDE;
-  M->off_wheel = M->off_con + (size_t)M->nc * CON_STRIDE;
-  M->off_cnt = M->off_wheel + (size_t)M->nwheel * WHEEL_STRIDE;
-  M->off_tmp = M->off_cnt + (size_t)M->ne;
-  size_t tmp = 6 * K1 + 2 * k + (size_t)M->max_user_rows * (k + 2) + 16;
-  M->off_proj = M->off_tmp + tmp;
+  M->body_stride = KBODY_FIXED + 9 * K1;
   M->proj_work = nl ? ap_la_work_size(M->k, M->nloop) : 0;
   M->proj_iwork = nl ? (ap_la_iwork_size(M->k, M->nloop) * sizeof(int) + sizeof(double) - 1) /
                            sizeof(double) : 0;
+  size_t tmp = 6 * K1 + 2 * k + (size_t)M->max_user_rows * (k + 2) + 16;
   size_t proj = nl ? nl * k + 2 * nl + 2 * k + (size_t)M->n + M->proj_work + M->proj_iwork : 0;
-  M->scratch = M->off_proj + proj;
+  ap_arena *L = &M->layout;
+  ap_arena_init(L, "body model scratch", sizeof(double), AP_ARENA_GUARDS);
+  M->off_body = L->e[ap_arena_add(L, "bodies", (size_t)M->nb * M->body_stride)].offset;
+  M->off_joint = L->e[ap_arena_add(L, "joints", (size_t)M->nj * JOINT_STRIDE)].offset;
+  M->off_con = L->e[ap_arena_add(L, "constraints", (size_t)M->nc * CON_STRIDE)].offset;
+  M->off_wheel = L->e[ap_arena_add(L, "wheels", (size_t)M->nwheel * WHEEL_STRIDE)].offset;
+  M->off_cnt = L->e[ap_arena_add(L, "effect counters", (size_t)M->ne)].offset;
+  M->off_tmp = L->e[ap_arena_add(L, "assembly scratch", tmp)].offset;
+  M->off_proj = L->e[ap_arena_add(L, "loop projection", proj)].offset;
+  M->scratch = L->total;
 }
 #endif
 
 kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int b) {
   ap_sc *p = S + M->off_body + (size_t)b * M->body_stride;
   size_t K3 = 3 * (size_t)M->K1;
-  kbody B = {p, p + 9, p + 12, p + 21, p + 36, p + 36 + K3, p + 36 + 2 * K3,
-             p + 24, p + 27, p + 30, p + 33};
+  kbody B;
+#define KB_VIEW(f, c) B.f = p + KB_##f;
+  KBODY_FIELDS(KB_VIEW)
+#undef KB_VIEW
+  B.Jw = p + KBODY_FIXED, B.Jo = B.Jw + K3, B.Jc = B.Jo + K3;
   return B;
 }
 
 kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j) {
   ap_sc *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
-  kjoint J = {p, p + 7, p + 13, p + 22, p + 25, p + 28, p + 31, p + 34, p + 37,
-              p + 46, p + 49, p + 58, p + 61, p + 64};
+  kjoint J;
+#define KJ_VIEW(f, c) J.f = p + KJ_##f;
+  KJOINT_FIELDS(KJ_VIEW)
+#undef KJ_VIEW
   return J;
 }
 

@@ -6,10 +6,11 @@
  * effects, with every index resolved at compile time. All per-evaluation state lives in the
  * data's evaluator scratch S (m->ev.scratch doubles), laid out as:
  *
- *   bodies       nb blocks of BODY_STRIDE(K1) doubles (kbody below)
- *   joints       nj blocks of JOINT_STRIDE (kjoint below)
+ *   bodies       nb blocks of KBODY_FIXED + 9 K1 doubles (kbody below, KBODY_FIELDS)
+ *   joints       nj blocks of JOINT_STRIDE (kjoint below, KJOINT_FIELDS)
  *   constraints  nc blocks of CON_STRIDE: ground motion and prescribed values at t
- *   wheels       nwheel blocks of WHEEL_STRIDE: contact geometry of the wheel contacts (kwheel)
+ *   wheels       nwheel blocks of WHEEL_STRIDE: contact geometry of the wheel contacts (kwheel,
+ *                KWHEEL_FIELDS)
  *   counters     ne effect evaluation counts (stored as doubles)
  *   tmp          scratch for constraint and effect assembly
  *   proj         loop-closure projection: Jacobian, residual, step, lstsq work
@@ -166,11 +167,33 @@ typedef struct ap_bmodel {
   int max_user_rows;
   size_t off_body, off_joint, off_con, off_wheel, off_cnt, off_tmp, off_proj, scratch;
   size_t body_stride, proj_work, proj_iwork;
+  ap_arena layout;            /* the sections of the scratch (ap_kin_layout): off_* and scratch
+                                 come from it */
 } ap_bmodel;
 
-#define JOINT_STRIDE 72
-#define CON_STRIDE 8
-#define WHEEL_STRIDE 24
+/* ---- the per-element blocks of the scratch, each from one table ----------------------------
+ * X(field, count) in block order; the offsets (KJ_field, KB_field, KW_field) and the strides
+ * are the tables' running sums (an enum: KJ_END_f = KJ_f + count - 1, so the next field starts
+ * right after), and the views below are carved from the same tables. */
+
+/* A joint: local coordinates (7) and full speeds (6), the drivable coordinates' value, rate,
+ * acceleration (3 x 3), r1, r2, r3, the driven accelerations' angular and linear parts, R_FP
+ * (3 x 3), the plane contact's rc, H (3 x 3), u, cb, and the disk/torus track (3 + 1 + 1). */
+#define KJOINT_FIELDS(X)                                                                   \
+  X(qloc, 7) X(vloc, 6) X(drv, 9) X(r1, 3) X(r2, 3) X(r3, 3) X(adw, 3) X(adv, 3) X(RFP, 9) \
+  X(rc, 3) X(H, 9) X(u, 3) X(cb, 3) X(track, 5)
+/* A body: R (3 x 3), o, Iw (3 x 3), R com, w, vo, al, ao; then Jw, Jo, Jc (3 x K1 each). */
+#define KBODY_FIELDS(X) X(R, 9) X(o, 3) X(Iw, 9) X(rcom, 3) X(w, 3) X(vo, 3) X(al, 3) X(ao, 3)
+/* A wheel contact's geometry: u, cb, H (3 x 3), rc, track (3 + 1 + 1). */
+#define KWHEEL_FIELDS(X) X(u, 3) X(cb, 3) X(H, 9) X(rc, 3) X(track, 5)
+
+#define KJ_ENUM(f, c) KJ_##f, KJ_END_##f = KJ_##f + (c) - 1,
+#define KB_ENUM(f, c) KB_##f, KB_END_##f = KB_##f + (c) - 1,
+#define KW_ENUM(f, c) KW_##f, KW_END_##f = KW_##f + (c) - 1,
+enum { KJOINT_FIELDS(KJ_ENUM) JOINT_STRIDE };
+enum { KBODY_FIELDS(KB_ENUM) KBODY_FIXED };     /* the body stride is KBODY_FIXED + 9 K1 */
+enum { KWHEEL_FIELDS(KW_ENUM) WHEEL_STRIDE };
+#define CON_STRIDE 8                           /* Omega, Omega', Vx, Vy, Vx', Vy', f, f' */
 
 /* ---- views into the scratch ------------------------------------------------------------- */
 
@@ -201,6 +224,15 @@ typedef struct kwheel {
                                  Hessian of sigma (body), contact vector R c_b (world) */
   ap_sc *track;               /* disk, torus: as kjoint.track (wheel blocks only) */
 } kwheel;
+
+/* Each view has exactly its table's fields (kbody: and the three Jacobians). */
+#define KFIELD_COUNT(f, c) +1
+_Static_assert(sizeof(kjoint) == (0 KJOINT_FIELDS(KFIELD_COUNT)) * sizeof(ap_sc *),
+               "kjoint and KJOINT_FIELDS list the same fields");
+_Static_assert(sizeof(kbody) == (3 KBODY_FIELDS(KFIELD_COUNT)) * sizeof(ap_sc *),
+               "kbody and KBODY_FIELDS list the same fields");
+_Static_assert(sizeof(kwheel) == (0 KWHEEL_FIELDS(KFIELD_COUNT)) * sizeof(ap_sc *),
+               "kwheel and KWHEEL_FIELDS list the same fields");
 
 static inline const ap_bmodel *ap_bm(const ap_model *m) { return (const ap_bmodel *)m->ev.impl; }
 static inline ap_sc *ap_bm_scratch(const ap_data *d) {

@@ -133,6 +133,27 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
   return AP_OK;
 }
 
+/* The workspace's doubles and ints, one table each X(field, count) in block order
+ * (core/arena.h): the sizes (capacities) and the carving (ap_tree_ws_init) both come from it.
+ * The last entries are lib/linalg's tree work, which carves itself (ap_la_tree_work_init). */
+#define TREE_WS_DOUBLES(X)                                                                 \
+  X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
+  X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
+  X(ws->rb, b) X(work_dbl, ndw)
+#define TREE_WS_INTS(X) X(ws->avoid, k) X(work_int, niw)
+
+#define WS_ADD(f_, c_) ap_arena_add(L, #f_, (c_));
+static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
+  size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, niw = 0;
+  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw);
+  ap_arena *L = Ld;
+  ap_arena_init(L, "tree workspace doubles", sizeof(double), 0);
+  TREE_WS_DOUBLES(WS_ADD)
+  L = Li;
+  ap_arena_init(L, "tree workspace ints", sizeof(int), 0);
+  TREE_WS_INTS(WS_ADD)
+}
+
 /* Capacities (module note) and the workspace sizes. */
 static void capacities(const ap_bmodel *M, ap_tplan *P) {
   ap_la_tree *T = &P->T;
@@ -149,10 +170,9 @@ static void capacities(const ap_bmodel *M, ap_tplan *P) {
   }
   P->lmax = lmax;
   T->cap = 2 * M->b + 16, T->maxrow = M->b + 1;
-  size_t nb = (size_t)M->nj, k = (size_t)M->k, b = (size_t)M->b, niw = 0;
-  size_t ndw = ap_la_tree_work_size(T, lmax, &niw);
-  P->nd = P->shadow.scratch + 3 * nb + 6 * k + 13 * nb + 6 * b + 3 * 6 * nb + k + b + ndw;
-  P->ni = niw + k;
+  ap_arena Ld, Li;
+  ws_layout(P, &Ld, &Li);
+  P->nd = Ld.total, P->ni = Li.total;
 }
 
 int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why_len) {
@@ -204,22 +224,21 @@ void ap_tree_plan_free(ap_tplan *P) {
 }
 
 void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) {
-  size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b;
+  ap_arena Ld, Li;
+  ws_layout(P, &Ld, &Li);
   memset(dbl, 0, sizeof(double) * P->nd);
   memset(ints, 0, sizeof(int) * P->ni);
   ws->P = P;
-  ws->S = dbl, dbl += P->shadow.scratch;
-  ws->g.d = dbl, dbl += 3 * nb;
-  ws->g.S = dbl, dbl += 6 * k;
-  ws->g.M = dbl, dbl += 13 * nb;
-  ws->g.C = dbl, dbl += 6 * b;
-  ws->rho = dbl, dbl += 6 * nb;
-  ws->U = dbl, dbl += 6 * nb;
-  ws->F = dbl, dbl += 6 * nb;
-  ws->x = dbl, dbl += k;
-  ws->rb = dbl, dbl += b;
-  ws->avoid = ints, ints += k;
-  ap_la_tree_work_init(&P->T, P->lmax, dbl, ints, &ws->W);
+  double *work_dbl = NULL;
+  int *work_int = NULL, i = 0;
+#define WS_CARVE(f_, c_) f_ = dbl + Ld.e[i++].offset;
+  TREE_WS_DOUBLES(WS_CARVE)
+#undef WS_CARVE
+#define WS_CARVE(f_, c_) f_ = ints + Li.e[i++].offset;
+  i = 0;
+  TREE_WS_INTS(WS_CARVE)
+#undef WS_CARVE
+  ap_la_tree_work_init(&P->T, P->lmax, work_dbl, work_int, &ws->W);
 }
 
 /* ---- the compile-time choice ------------------------------------------------------------ */

@@ -77,11 +77,15 @@ void ap_tree_twists_to_shadow(const ap_tplan *P, ap_tree_ws *ws, const double *v
 
 /* Body queries (tree_query.c). ap_body_eval on the tree path: positions, velocities, biases.
  * The Jacobian of the world point x of a body (3 x k each, the body's ancestors' columns).
- * com acceleration at v': call with body -1 once per v' (the twists), then per body. */
+ * com acceleration at v': call with body -1 once per v' (the twists J v' into U, 6 nb doubles
+ * the caller owns: ap_tree_twist_len), then per body with the same U. Reads ws only, so
+ * threads may query one data at once (ap_body_contact_force takes a const data). */
 int ap_tree_body_eval(const ap_model *m, ap_data *d, ap_tree_ws *ws);
 void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, double *Jw,
                             double *Jv);
-void ap_tree_com_accel(ap_tree_ws *ws, const double *vdot, int body, double *a);
+void ap_tree_com_accel(const ap_tree_ws *ws, const double *vdot, int body, double *U,
+                       double *a);
+static inline size_t ap_tree_twist_len(const ap_tree_ws *ws) { return 6 * (size_t)ws->P->T.nb; }
 
 /* The compile-time choice of the path (system.h, ap_path): on AP_PATH_TREE, or AP_PATH_AUTO
  * with at least AP_TREE_AUTO_K speeds and a model the plan takes, the plan is attached to m

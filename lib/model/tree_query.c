@@ -43,14 +43,15 @@ void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, dou
   }
 }
 
-void ap_tree_com_accel(ap_tree_ws *ws, const double *vdot, int body, double *a) {
+void ap_tree_com_accel(const ap_tree_ws *ws, const double *vdot, int body, double *U,
+                       double *a) {
   const ap_tplan *P = ws->P;
   if (body < 0) {   /* the twists J v' for every body, once per v' */
-    ap_la_tree_twists(&P->T, &ws->g, vdot, ws->U);
+    ap_la_tree_twists(&P->T, &ws->g, vdot, U);
     return;
   }
   kbody C = ap_kin_body(&P->shadow, ws->S, body);
-  const double *U = ws->U + 6 * (size_t)P->M->bodies[body].joint;
+  U += 6 * (size_t)P->M->bodies[body].joint;
   double t[3];
   v3_copy(C.ao, a);
   v3_cross_add(C.al, C.rcom, a);
