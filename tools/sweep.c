@@ -5,7 +5,8 @@
  * batch (the scene with --set and the shorthands, the channels and times) -> one check of the
  * overrides with typical values -> this shard's runs on --jobs threads -> the CSV, written
  * atomically (tools/output.c, as appell run writes). Columns: run, runs (the plan's size, so that --merge can tell
- * a complete set of shards), each parameter's path, status, the batch's columns, message.
+ * a complete set of shards), plan (the sweep's identity, ap_batch_plan_id, so that --merge
+ * joins only shards of one sweep), each parameter's path, status, the batch's columns, message.
  * Numbers are written with 17 significant digits, which read back to the same double.
  * Invariant: a file at --out holds every run of its shard; an interrupted or failed sweep
  * leaves none. --merge lives in tools/sweep_merge.c. */
@@ -29,9 +30,10 @@ static const char help[] =
     "       appell sweep --merge --out FILE.csv SHARD.csv...\n"
     "\n"
     "Run SCENE once per point of a grid or random sample of its values and write one CSV row\n"
-    "per run: run, runs, the parameters, status, t, steps, rhs_evals, err_fails, max_residual,\n"
-    "energy_drift, the coordinates and speeds at the end (NAME@end), the channels asked for at\n"
-    "the times asked for (CHANNEL@T), message (docs/sweeps.md).\n"
+    "per run: run, runs, plan (the sweep's identity), the parameters, status, t, steps,\n"
+    "rhs_evals, err_fails, max_residual, energy_drift, the coordinates and speeds at the end\n"
+    "(NAME@end), the channels asked for at the times asked for (CHANNEL@T), message\n"
+    "(docs/sweeps.md).\n"
     "\n"
     "parameters (a product: the first grid varies slowest, random samples fastest):\n"
     "  --grid PATH=A:B:N      N values from A to B, both included (A, B may be 70*deg, pi/2)\n"
@@ -206,6 +208,7 @@ typedef struct sweep_state {
   char **messages;
   int bar;
   double t_start;
+  char id[17];             /* the sweep's identity (ap_batch_plan_id), in every row */
 } sweep_state;
 
 static double now(void) {
@@ -261,7 +264,7 @@ static int build_batch(sweep_state *s) {
   if (rc != AP_OK)
     return fprintf(stderr, "appell sweep: the scene with every parameter at a typical value "
                    "(first grid value, mean): %s\n", msg), cli_exit_code(rc);
-  return EXIT_OK;
+  return ap_batch_plan_id(s->batch, s->plan, s->id, sizeof s->id) == AP_OK ? EXIT_OK : EXIT_INTERNAL;
 }
 
 /* The range [t0, t_end] of every run of this shard: the scene's with --set, narrowed by the
@@ -309,7 +312,7 @@ static int check_times(const sweep_state *s) {
 /* ---- the table ---------------------------------------------------------------------------- */
 
 static void write_header(const sweep_state *s, FILE *f) {
-  fputs("run,runs", f);
+  fputs("run,runs,plan", f);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) fprintf(f, ",%s", ap_plan_path(s->plan, r));
   fputs(",status", f);
   for (int j = 0; j < ap_batch_ncols(s->batch); j++) fprintf(f, ",%s", ap_batch_col_name(s->batch, j));
@@ -318,7 +321,7 @@ static void write_header(const sweep_state *s, FILE *f) {
 
 static void write_row(const sweep_state *s, FILE *f, long i) {
   char buf[1024];
-  fprintf(f, "%ld,%ld", s->first + i, s->total);
+  fprintf(f, "%ld,%ld,%s", s->first + i, s->total, s->id);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) {
     double x = 0.0;
     ap_plan_value(s->plan, s->first + i, r, &x, buf, sizeof buf);

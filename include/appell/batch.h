@@ -116,6 +116,13 @@ AP_API void ap_batch_free(ap_batch *b);
 AP_API int ap_batch_ncols(const ap_batch *b);
 AP_API const char *ap_batch_col_name(const ap_batch *b, int j);
 
+/* The identity of a sweep of plan p on batch b: 16 hex digits and a NUL in id (len >= 17),
+ * a hash of the scene text, the batch's overrides (as a set of PATH=VALUE, numbers by value),
+ * its channels, times and final_state, and the plan's parameters, values, samples and seed.
+ * Slices of one sweep share it wherever they run; `appell sweep --merge` refuses shards whose
+ * identities differ. AP_ERR_ARG for NULL arguments or len < 17. */
+AP_API int ap_batch_plan_id(const ap_batch *b, const ap_plan *p, char *id, size_t len);
+
 /* Load the scene once with these overrides after the batch's own, without running it: the
  * overrides' paths and values are checked (AP_ERR_ARG and the scene's message otherwise). */
 AP_API int ap_batch_check(const ap_batch *b, const char *const *sets, int nsets, char *msg,

@@ -19,6 +19,7 @@
 
 #include "appell/batch.h"
 #include "appell/scene.h"
+#include "batch/batch_int.h"
 
 #define PLAN_MAX_PARAMS 64
 #define PLAN_MAX_POINTS 1000000000L
@@ -316,4 +317,27 @@ int ap_plan_typical(const ap_plan *p, int r, char *buf, size_t len) {
     case PL_NORMAL: return write_set(q, NULL, q->a, buf, len);
     default: return write_set(q, NULL, 0.5 * (q->a + q->b), buf, len);
   }
+}
+
+/* The plan's part of a sweep's identity (identity.c): every parameter's path, kind and values
+ * as numbers (lists: each number, or each word), the samples and the seed; not the text the
+ * plan was written in, so 1:2:3 and 1.0:2:3 are the same plan. */
+uint64_t ap_bat_plan_hash(const ap_plan *p, uint64_t h) {
+  long counts[2] = {p->npar, p->samples};
+  h = ap_bat_hash(h, counts, sizeof counts);
+  h = ap_bat_hash(h, &p->seed, sizeof p->seed);
+  for (int r = 0; r < p->npar; r++) {
+    const plan_param *q = &p->par[r];
+    h = ap_bat_hash(h, q->path, strlen(q->path) + 1);
+    h = ap_bat_hash(h, &q->kind, sizeof q->kind);
+    h = ap_bat_hash(h, &q->n, sizeof q->n);
+    if (q->kind != PL_LIST) {
+      double ab[2] = {q->a + 0.0, q->b + 0.0};   /* -0 as 0 */
+      h = ap_bat_hash(h, ab, sizeof ab);
+    }
+    for (long m = 0; q->kind == PL_LIST && m < q->n; m++)
+      h = isnan(q->x[m]) ? ap_bat_hash(h, q->words[m], strlen(q->words[m]) + 1)
+                         : ap_bat_hash(h, &q->x[m], sizeof q->x[m]);
+  }
+  return h;
 }

@@ -22,10 +22,13 @@ _FIXED = ("t", "steps", "rhs_evals", "err_fails", "max_residual", "energy_drift"
 class Table(dict):
     """The result of a sweep: column name -> NumPy array, in the order of `appell sweep`'s CSV:
     run, the parameters, status, t, steps, rhs_evals, err_fails, max_residual, energy_drift,
-    NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths the parameters' paths."""
+    NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths the parameters' paths,
+    .plan the sweep's identity (16 hex digits: a hash of the scene, the overrides and the plan,
+    in every row of the CSV, so that `appell sweep --merge` joins only shards of one sweep)."""
 
     runs = 0
     paths = ()
+    plan = ""
 
     @property
     def columns(self):
@@ -39,7 +42,7 @@ class Table(dict):
     def to_csv(self, path):
         """Write the table as `appell sweep --out` does (same bytes for the same runs)."""
         cols = [c for c in self.columns if c != "run"]
-        lines = [",".join(["run", "runs"] + cols)]
+        lines = [",".join(["run", "runs", "plan"] + cols)]
         tmp = f"{path}.tmp.{os.getpid()}"
         with open(tmp, "w") as f:
             f.write("\n".join(lines + [_row(self, i, cols) for i in range(len(self["run"]))]))
@@ -57,7 +60,7 @@ def _g17(x):
 
 
 def _row(table, i, cols):
-    cells = [str(int(table["run"][i])), str(table.runs)]
+    cells = [str(int(table["run"][i])), str(table.runs), table.plan]
     for c in cols:
         x = table[c][i]
         if c == "message":
@@ -112,7 +115,7 @@ def _assemble(parts, first):
     """One Table from the run_plan results of consecutive slices starting at run first."""
     p0 = parts[0]
     out = Table()
-    out.runs, out.paths = p0["runs"], p0["paths"]
+    out.runs, out.paths, out.plan = p0["runs"], p0["paths"], p0["plan"]
     count = sum(len(p["status"]) for p in parts)
     out["run"] = np.arange(first, first + count, dtype=np.int64)
     for r, path in enumerate(p0["paths"]):
