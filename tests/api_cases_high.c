@@ -322,6 +322,18 @@ static void cases_batch(void) {
   CASE(ap_batch_create, "sets[0] NULL",
        ap_batch_create(SCENE, n, "b", no_sets, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG &&
            !obt);
+  const char *const no_channel[1] = {NULL};
+  ap_batch_def bn = bd;
+  bn.channels = no_channel, bn.nchannels = 1;
+  CASE(ap_batch_create, "def.channels[0] NULL",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &bn, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  bn.channels = NULL;
+  CASE(ap_batch_create, "def.channels NULL, nchannels 1",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &bn, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_plan_id, "b NULL", ap_batch_plan_id(NULL, PL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "p NULL", ap_batch_plan_id(BT, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "id NULL", ap_batch_plan_id(BT, PL, NULL, 17) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "len 16", ap_batch_plan_id(BT, PL, msg, 16) == AP_ERR_ARG);
   CASE(ap_batch_load, "path NULL",
        ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_load, "sets NULL, nsets 1",

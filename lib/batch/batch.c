@@ -117,6 +117,10 @@ static int copy_def(ap_batch *b, const ap_batch_def *def, char *msg, size_t len)
       (b->def.ntimes && !b->def.times))
     return say(msg, len, AP_ERR_ARG, "invalid batch definition: nchannels %d, ntimes %d (need "
                ">= 0, and the arrays when positive)", b->def.nchannels, b->def.ntimes);
+  for (int c = 0; c < b->def.nchannels; c++)
+    if (!b->def.channels[c])
+      return say(msg, len, AP_ERR_ARG, "invalid batch definition: channel %d of %d is NULL", c,
+                 b->def.nchannels);
   b->channels = copy_strings(b->def.channels, b->def.nchannels);
   b->times = malloc(sizeof *b->times * (size_t)(b->def.ntimes + 1));
   b->order = malloc(sizeof *b->order * (size_t)(b->def.ntimes + 1));
