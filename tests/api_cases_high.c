@@ -334,6 +334,18 @@ static void cases_batch(void) {
   CASE(ap_batch_plan_id, "p NULL", ap_batch_plan_id(BT, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_batch_plan_id, "id NULL", ap_batch_plan_id(BT, PL, NULL, 17) == AP_ERR_ARG);
   CASE(ap_batch_plan_id, "len 16", ap_batch_plan_id(BT, PL, msg, 16) == AP_ERR_ARG);
+  char *txt = (char *)1;
+  size_t tlen = 1;
+  CASE(ap_scene_read, "path NULL",
+       ap_scene_read(NULL, &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt && !tlen);
+  CASE(ap_scene_read, "text NULL", ap_scene_read(SCENE_PATH, NULL, &tlen, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "len NULL", ap_scene_read(SCENE_PATH, &txt, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "a directory",
+       ap_scene_read("/", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt);
+  CASE(ap_scene_read, "/dev/zero (larger than 16 MiB)",
+       ap_scene_read("/dev/zero", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt &&
+           strstr(msg, "larger than 16 MiB"));
+  CASE(ap_scene_text_free, "NULL", (ap_scene_text_free(NULL), 1));
   CASE(ap_batch_load, "path NULL",
        ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_load, "sets NULL, nsets 1",

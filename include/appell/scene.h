@@ -38,6 +38,14 @@ AP_API int ap_scene_load_string(const char *text, size_t len, const char *name,
                                 const char *const *sets, int nsets, ap_scene **out, char *msg,
                                 size_t msg_len);
 AP_API void ap_scene_free(ap_scene *s);
+/* Read a scene file as ap_scene_load reads it: at most 16 MiB (a larger file, /dev/zero, is
+ * refused after reading 16 MiB + 1 bytes), not a directory. *text is a NUL-terminated copy of
+ * the *len bytes, to be freed with ap_scene_text_free; on failure *text is NULL, the status
+ * AP_ERR_ARG (AP_ERR_NOMEM when out of memory) and msg says "PATH: why"; errno is fopen's
+ * when the file could not be opened, 0 after any other outcome. ap_scene_load_string
+ * refuses text longer than 16 MiB the same way. */
+AP_API int ap_scene_read(const char *path, char **text, size_t *len, char *msg, size_t msg_len);
+AP_API void ap_scene_text_free(char *text);
 
 /* The compiled model (owned by the scene). */
 AP_API const ap_model *ap_scene_model(const ap_scene *s);

@@ -16,8 +16,6 @@
 #include "appell/scene.h"
 #include "batch/batch_int.h"
 
-#define BAT_MAX_FILE (16L << 20)
-
 ap_batch_def ap_batch_def_default(void) {
   ap_batch_def d;
   memset(&d, 0, sizeof d);
@@ -180,17 +178,11 @@ int ap_batch_create(const char *text, size_t len, const char *name, const char *
 int ap_batch_load(const char *path, const char *const *sets, int nsets, const ap_batch_def *def,
                   ap_batch **out, char *msg, size_t msg_len) {
   if (out) *out = NULL;
-  FILE *f = path ? fopen(path, "rb") : NULL;
-  if (!f) return say(msg, msg_len, AP_ERR_ARG, "%s: cannot open: %s", path ? path : "(null)",
-                         strerror(errno));
-  char *buf = malloc((size_t)BAT_MAX_FILE + 1);
-  size_t len = buf ? fread(buf, 1, (size_t)BAT_MAX_FILE + 1, f) : 0;
-  int bad = !buf || ferror(f) || len > (size_t)BAT_MAX_FILE;
-  fclose(f);
-  int rc = !buf ? say(msg, msg_len, AP_ERR_NOMEM, "%s: out of memory", path)
-           : bad ? say(msg, msg_len, AP_ERR_ARG, "%s: read error or larger than 16 MiB", path)
-                 : ap_batch_create(buf, len, path, sets, nsets, def, out, msg, msg_len);
-  free(buf);
+  char *buf = NULL;
+  size_t len = 0;
+  int rc = ap_scene_read(path, &buf, &len, msg, msg_len);
+  if (rc == AP_OK) rc = ap_batch_create(buf, len, path, sets, nsets, def, out, msg, msg_len);
+  ap_scene_text_free(buf);
   return rc;
 }
 

@@ -91,6 +91,11 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
                                  name ? name : "scene", nsets, bad ? "one" : "the array");
     return AP_ERR_ARG;
   }
+  if (len > (size_t)SC_MAX_FILE) {
+    if (msg && msg_len)
+      snprintf(msg, msg_len, "%s: larger than 16 MiB: not a scene file", name ? name : "scene");
+    return AP_ERR_ARG;
+  }
   ap_scene *sc = calloc(1, sizeof *sc);
   sc_ctx c = {name ? name : "scene", "", AP_OK};
   if (!sc || !text) {
@@ -131,34 +136,48 @@ static int read_all(FILE *f, size_t hint, char **out, size_t *len) {
     n += fread(buf + n, 1, cap - n, f);
     if (ferror(f)) return free(buf), errno ? errno : EIO;
     if (n > (size_t)SC_MAX_FILE) return free(buf), EFBIG;
-    if (feof(f)) break;
+    if (feof(f) && n < cap) break;
   }
   *out = buf, *len = n;
   return 0;
 }
 
-int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
-                  char *msg, size_t msg_len) {
-  if (out) *out = NULL;
+int ap_scene_read(const char *path, char **text, size_t *len, char *msg, size_t msg_len) {
+  if (text) *text = NULL;
+  if (len) *len = 0;
+  if (!text || !len) return AP_ERR_ARG;
+  errno = 0;
   FILE *f = path ? fopen(path, "rb") : NULL;
   if (!f) {
+    int open_err = path ? errno : EINVAL;
     if (msg && msg_len) snprintf(msg, msg_len, "%s: cannot open: %s", path ? path : "(null)",
-                                 strerror(errno));
+                                 strerror(open_err));
+    errno = open_err;
     return AP_ERR_ARG;
   }
   struct stat st;
   int dir = fstat(fileno(f), &st) == 0 && S_ISDIR(st.st_mode);
-  size_t hint = !dir && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536, len = 0;
-  char *buf = NULL;
-  int err = dir ? EISDIR : read_all(f, hint, &buf, &len);
+  size_t hint = !dir && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536;
+  int err = dir ? EISDIR : read_all(f, hint, text, len);
   fclose(f);
-  if (err) {
-    if (msg && msg_len)
-      snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
-               : err == EFBIG ? "larger than 16 MiB: not a scene file" : strerror(err));
-    return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
-  }
-  int rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
+  errno = 0;
+  if (!err) return (*text)[*len] = '\0', AP_OK;
+  if (msg && msg_len)
+    snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
+             : err == EFBIG ? "larger than 16 MiB: not a scene file" : strerror(err));
+  errno = 0;
+  return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
+}
+
+void ap_scene_text_free(char *text) { free(text); }
+
+int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
+                  char *msg, size_t msg_len) {
+  if (out) *out = NULL;
+  char *buf = NULL;
+  size_t len = 0;
+  int rc = ap_scene_read(path, &buf, &len, msg, msg_len);
+  if (rc == AP_OK) rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
   free(buf);
   return rc;
 }
