@@ -345,6 +345,12 @@ static void cases_batch(void) {
   CASE(ap_scene_read, "/dev/zero (larger than 16 MiB)",
        ap_scene_read("/dev/zero", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt &&
            strstr(msg, "larger than 16 MiB"));
+  CASE(ap_scene_locate_failure, "sc NULL",
+       ap_scene_locate_failure(NULL, S, 1.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_locate_failure, "sim NULL",
+       ap_scene_locate_failure(SC, NULL, 1.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_locate_failure, "another scene's simulation, msg NULL",
+       ap_scene_locate_failure(SC, S, NAN, NULL, 0) == AP_OK);
   CASE(ap_scene_text_free, "NULL", (ap_scene_text_free(NULL), 1));
   CASE(ap_batch_load, "path NULL",
        ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);

@@ -181,16 +181,12 @@ static int write_row(run_state *rs, FILE *f) {
   return AP_OK;
 }
 
-/* A run that failed in a callback or on a NaN: name the scene expression that is not finite
- * where it failed (at the failing evaluation's time, or at the output time). */
-static void locate(const run_state *rs, int rc, double tout) {
+/* A run that failed mid-run: name the scene expression that is not finite where it failed
+ * (at the failing evaluation's time and state, or at the output time), whatever the method. */
+static void locate(const run_state *rs, double tout) {
   char msg[1024];
-  double when[2] = {ap_sim_data(rs->sim)->t, tout};
-  for (int i = 0; i < 2 && (rc == AP_ERR_CALLBACK || rc == AP_ERR_NAN); i++)
-    if (ap_scene_check_time(rs->sc, when[i], msg, sizeof msg) != AP_OK) {
-      fprintf(stderr, "%s\n", msg);
-      return;
-    }
+  if (ap_scene_locate_failure(rs->sc, rs->sim, tout, msg, sizeof msg) != AP_OK && msg[0])
+    fprintf(stderr, "%s\n", msg);
 }
 
 /* The simulation's poll (ap_sim_set_poll): stop at a terminating signal. */
@@ -217,7 +213,7 @@ static int loop(run_state *rs, cli_out *out) {
     if (rc != AP_OK) {
       fprintf(stderr, "appell run: the simulation failed at t = %.10g: %s: %s\n",
               ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
-      locate(rs, rc, t);
+      locate(rs, t);
       return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
     }
     rc = write_row(rs, out->f);

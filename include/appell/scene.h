@@ -80,6 +80,16 @@ AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *rep
  * the expression)". Only reads the scene: safe from any thread. For a run that failed with
  * AP_ERR_CALLBACK or AP_ERR_NAN, call it at the failing time to locate the cause. */
 AP_API int ap_scene_check_time(const ap_scene *s, double t, char *msg, size_t msg_len);
+/* After a run of this scene failed mid-run (ap_sim_advance to tout returned an error, whatever
+ * the method or mode): the scene expression that is not finite where it failed, if any.
+ * Checks every expression of t and every expression of the state at the failing evaluation
+ * (ap_sim_data(sim): its t, q and v, when they are finite), then the expressions of t at tout
+ * (a drive with a pole at tout makes the integrator give up short of it). AP_ERR_ARG and msg
+ * "FILE:LINE:COLUMN: key.path: 'EXPR' is not finite at t = T: OPERATION (column C of the
+ * expression)" when one is found; AP_OK and msg "" otherwise (the cause is not a scene
+ * expression). AP_ERR_ARG for NULL sc or sim. */
+AP_API int ap_scene_locate_failure(const ap_scene *s, const ap_sim *sim, double tout, char *msg,
+                                   size_t msg_len);
 
 /* Output channels: column names of a row (column 0 is "t") and their values at the
  * simulation's current state. Count 0 and name NULL when s is NULL or i out of range; the row

@@ -6,6 +6,7 @@
  * columns. Invariant: the model is freed before the expressions it calls, and a failed load
  * frees everything and leaves exactly one message. */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -210,6 +211,30 @@ int ap_scene_check_time(const ap_scene *sc, double t, char *msg, size_t msg_len)
   int rc = sc_check_exprs(&c, &sc->s, t);
   if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
   return rc;
+}
+
+/* Finite entries only: a diverged state makes every expression of it look guilty. */
+static int all_finite(const double *x, int n) {
+  for (int i = 0; i < n; i++)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
+int ap_scene_locate_failure(const ap_scene *sc, const ap_sim *sim, double tout, char *msg,
+                            size_t msg_len) {
+  if (msg && msg_len) msg[0] = '\0';
+  const ap_data *d = ap_sim_data(sim);
+  if (!sc || !d) return AP_ERR_ARG;
+  sc_ctx c = {sc->s.file, "", AP_OK};
+  int n = ap_model_n(sc->m), k = ap_model_k(sc->m), rc = AP_OK;
+  if (isfinite(d->t)) rc = sc_check_exprs(&c, &sc->s, d->t);
+  if (rc == AP_OK && isfinite(d->t) && d->n == n && d->k == k && all_finite(d->q, n) &&
+      all_finite(d->v, k))
+    rc = sc_check_state_exprs(&c, &sc->s, sc->m, d->t, d->q, d->v);
+  if (rc == AP_OK && isfinite(tout)) rc = sc_check_exprs(&c, &sc->s, tout);
+  if (rc == AP_OK) return AP_OK;
+  if (msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
+  return AP_ERR_ARG;
 }
 
 int ap_scene_output_count(const ap_scene *sc) { return sc ? sc->out.ncols : 0; }

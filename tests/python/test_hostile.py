@@ -82,3 +82,65 @@ def test_load_releases_the_gil_while_reading(tmp_path):
         """)
     assert r.returncode == 0, r.stderr
     assert int(r.stdout.split()[0]) > 1000
+
+
+STATE_FAIL = """name: motor
+bodies:
+  fly: {mass: 1, inertia: [0.03, 0.03, 0.05]}
+joints:
+  fly: {kind: revolute, axis: z}
+effects:
+  hold: {kind: motor, joint: fly, rate: "fly.angle^0.5", kd: 0.01}
+initial:
+  fly: {angle: 1, rate: -3}
+simulation: {t_end: 1}
+output: {interval: 0.5}
+"""
+
+POLE = """name: pole
+bodies:
+  arm: {mass: 1, inertia: [0.03, 0.03, 0.05]}
+  fly: {mass: 1, inertia: [0.03, 0.03, 0.05]}
+joints:
+  arm: {kind: revolute, axis: z, drive: {angle: "1/(1.5 - t)"}}
+  fly: {kind: revolute, parent: arm, axis: x}
+initial:
+  fly: {rate: 1}
+simulation: {t_end: 2, max_steps: 20000}
+output: {interval: 0.5}
+"""
+
+
+@pytest.mark.parametrize("how", [("--method", "dopri5"), ("--method", "bdf"),
+                                 ("--method", "adams"), ("--mode", "dae")])
+def test_a_state_expression_failing_mid_run_is_located(tmp_path, how):
+    # exit 3 with no file:line:column and a hint blaming the motor's gains before
+    scene = tmp_path / "motor.yaml"
+    scene.write_text(STATE_FAIL)
+    where = f"{scene}:7:41: effects.hold.rate: 'fly.angle^0.5' is not finite at t = "
+    r = run_cli("run", scene, *how, "--quiet", "-o", tmp_path / "out.csv", check=False)
+    assert r.returncode == 3 and where in r.stderr and "^ 0.5 = nan" in r.stderr, r.stderr
+    assert "large gains" not in r.stderr
+    m = appell.load(scene, set=[f"simulation.{how[0][2:]}={how[1]}"])
+    with pytest.raises(appell.SceneError) as info:
+        appell.Simulation(m).run()
+    e = info.value
+    assert (e.line, e.column) == (7, 41) and str(e).startswith(where)
+    assert e.status == -4 and "the simulation failed at t = " in str(e)
+    t = appell.sweep(scene, grid={"bodies.fly.mass": [1, 2]},
+                     set={f"simulation.{how[0][2:]}": how[1]})
+    assert list(t["status"]) == [-4, -4] and t["message"][0].startswith(where)
+
+
+def test_a_drive_with_a_pole_is_located_not_blamed_on_max_steps(tmp_path):
+    # bdf reported 'raise max_steps' after 10^6 steps, with nothing about the drive
+    scene = tmp_path / "pole.yaml"
+    scene.write_text(POLE)
+    for method in ("bdf", "dopri5"):
+        r = run_cli("run", scene, "--method", method, "--quiet", "-o", tmp_path / "o.csv",
+                    check=False)
+        assert r.returncode == 3, r.stderr
+        assert "step size that kept shrinking" in r.stderr and "raise max_steps" not in r.stderr
+        assert "check them before raising max_steps" in r.stderr
+        assert (f"{scene}:6:49: joints.arm.drive.angle: '1/(1.5 - t)' is not finite at t = 1.5: "
+                "1 / 0 = inf") in r.stderr
