@@ -85,11 +85,19 @@ static int push(const char **list, int *n, const char *v, const char *opt) {
   return 0;
 }
 
-/* --at T1,T2,...: constant expressions. */
+/* --at T1,T2,...: constant expressions, none empty. */
 static int parse_times(sweep_opts *o, const char *v) {
   char buf[4096], msg[512];
+  if (strlen(v) >= sizeof buf) return fprintf(stderr, "appell sweep: --at: too long\n"), -1;
   snprintf(buf, sizeof buf, "%s", v);
-  for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+  int item = 0;
+  for (char *tok = buf, *end; tok; tok = end ? end + 1 : NULL) {
+    end = strchr(tok, ',');
+    if (end) *end = '\0';
+    item++;
+    if (tok[strspn(tok, " \t")] == '\0')
+      return fprintf(stderr, "appell sweep: --at '%s': time %d is empty (expected T1,T2,... in "
+                     "seconds)\n", v, item), -1;
     if (o->ntimes >= MAX_ARGS) return fprintf(stderr, "appell sweep: too many --at times\n"), -1;
     if (ap_scene_constant(tok, &o->times[o->ntimes++], msg, sizeof msg) != AP_OK)
       return fprintf(stderr, "appell sweep: --at '%s': %s\n", tok, msg), -1;
@@ -118,6 +126,15 @@ static int parse_count(const char *opt, const char *v, long lo, long *out) {
   return 0;
 }
 
+/* --samples N: 1 to 10^9, as a grid's N (the library's limit, said here before any work). */
+static int parse_samples(sweep_opts *o, const char *v) {
+  if (parse_count("--samples", v, 1, &o->samples) != 0) return -1;
+  if (o->samples > 1000000000L)
+    return fprintf(stderr, "appell sweep: --samples %s: at most 10^9 random samples per grid "
+                   "point\n", v), -1;
+  return 0;
+}
+
 /* Options that take a value; returns 1 when argv[*i] was one, -1 on error, 0 otherwise. */
 static int value_opt(int argc, char **argv, int *i, sweep_opts *o, int *extra) {
   static const char *const mapped[][2] = {
@@ -140,7 +157,7 @@ static int value_opt(int argc, char **argv, int *i, sweep_opts *o, int *extra) {
   if ((r = cli_opt(argc, argv, i, "--at", &v))) return r < 0 ? need("--at") : parse_times(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--shard", &v))) return r < 0 ? need("--shard") : parse_shard(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--samples", &v)))
-    return r < 0 ? need("--samples") : parse_count("--samples", v, 1, &o->samples) ? -1 : 1;
+    return r < 0 ? need("--samples") : parse_samples(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--seed", &v)))
     return r < 0 ? need("--seed") : parse_count("--seed", v, 0, &x) ? -1 : (o->seed = (unsigned long long)x, 1);
   if ((r = cli_opt(argc, argv, i, "--jobs", &v)) || (r = cli_opt(argc, argv, i, "-j", &v)))
@@ -259,7 +276,9 @@ static int build_batch(sweep_state *s) {
   def.progress = on_progress, def.user = s;
   def.times = o->times, def.ntimes = o->ntimes;   /* none: t_end */
   int rc = ap_batch_load(o->scene, o->sets, o->nsets, &def, &s->batch, msg, sizeof msg);
-  if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
+  if (rc != AP_OK)   /* "channel 'X': ..." is about an option: name it */
+    return fprintf(stderr, "%s%s\n", strncmp(msg, "channel '", 9) ? "" : "appell sweep: --",
+                   msg), cli_exit_code(rc);
   rc = ap_batch_check_plan(s->batch, s->plan, msg, sizeof msg);
   if (rc != AP_OK)
     return fprintf(stderr, "appell sweep: the scene with every parameter at a typical value "
@@ -354,7 +373,22 @@ static int summary(const sweep_state *s, double wall) {
   return EXIT_OK;
 }
 
+/* The rows of a shard are held until it is written: refuse up front a shard whose rows need
+ * more than this machine's memory (rather than "out of memory" after loading everything). */
+static int check_rows_fit(const sweep_state *s) {
+  double per_row = 8.0 * ap_batch_ncols(s->batch) + sizeof(int) + sizeof(char *);
+  double need = per_row * (double)s->count;
+  long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  double have = pages > 0 && page > 0 ? (double)pages * (double)page : INFINITY;
+  if (need <= have) return EXIT_OK;
+  fprintf(stderr, "appell sweep: the %ld runs of this shard need %.3g GiB for their rows, more "
+          "than this machine's %.3g GiB: split the plan with --shard I/N (%ld or more shards)\n",
+          s->count, need / 1073741824.0, have / 1073741824.0, (long)ceil(need / have) * s->o->shard_n);
+  return EXIT_INPUT;
+}
+
 static int run_sweep(sweep_state *s, cli_out *out) {
+  if (check_rows_fit(s) != EXIT_OK) return EXIT_INPUT;
   long nc = ap_batch_ncols(s->batch), n = s->count > 0 ? s->count : 1;
   s->values = malloc(sizeof *s->values * (size_t)(n * nc));
   s->status = malloc(sizeof *s->status * (size_t)n);

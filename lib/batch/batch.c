@@ -73,6 +73,20 @@ static int say(char *msg, size_t len, int rc, const char *fmt, ...) {
   return rc;
 }
 
+/* "channel 'X': no output column ... (did you mean 'Y'?)". */
+static int unknown_channel(const ap_scene *sc, const char *name, char *msg, size_t len) {
+  int nc = ap_scene_output_count(sc);
+  const char **names = malloc(sizeof *names * (size_t)(nc + 1));
+  for (int i = 0; names && i < nc; i++) names[i] = ap_scene_output_name(sc, i);
+  const char *near = names ? ap_suggest(name, names, nc) : NULL;
+  char hint[300] = "";
+  if (near) snprintf(hint, sizeof hint, "did you mean '%s'? ", near);
+  free(names);
+  return say(msg, len, AP_ERR_ARG, "channel '%s': no output column of that name in the scene "
+             "(%sthe columns are those of appell run's CSV header; output.channels chooses "
+             "them)", name, hint);
+}
+
 /* The result columns; the channels must be columns of the scene. */
 static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
   static const char *const fixed[AP_BAT_FIXED_COLS] = {"t", "steps", "rhs_evals", "err_fails",
@@ -98,10 +112,7 @@ static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
     int found = 0;
     for (int i = 0; i < ap_scene_output_count(sc) && !found; i++)
       found = strcmp(ap_scene_output_name(sc, i), b->channels[c]) == 0;
-    if (!found)
-      return say(msg, len, AP_ERR_ARG, "no output column '%s' in the scene (its columns are "
-                 "those of appell run's CSV header; output.channels chooses them)",
-                 b->channels[c]);
+    if (!found) return unknown_channel(sc, b->channels[c], msg, len);
   }
   return AP_OK;
 }

@@ -110,6 +110,11 @@ static int parse_range(const char *spec, const char *rest, plan_param *q, char *
   int rc = number(spec, rest, (size_t)(c1 - rest), &q->a, msg, len);
   if (rc == AP_OK) rc = number(spec, c1 + 1, (size_t)(c2 - c1 - 1), &q->b, msg, len);
   if (rc != AP_OK) return rc;
+  if (!isfinite(q->b - q->a)) {
+    if (msg && len) snprintf(msg, len, "'%s': B - A = %g - (%g) overflows: the values would not "
+                             "be finite", spec, q->b, q->a);
+    return AP_ERR_ARG;
+  }
   char *end = NULL;
   long n = strtol(c2 + 1, &end, 10);
   while (end && isspace((unsigned char)*end)) end++;
@@ -244,7 +249,7 @@ int ap_plan_add_random(ap_plan *p, const char *spec, char *msg, size_t len) {
 }
 
 int ap_plan_set_samples(ap_plan *p, long samples, uint64_t seed) {
-  if (!p || samples < 1) return AP_ERR_ARG;
+  if (!p || samples < 1 || samples > PLAN_MAX_POINTS) return AP_ERR_ARG;
   p->samples = samples, p->seed = seed;
   return ap_plan_count(p) < 0 ? (p->samples = 0, AP_ERR_ARG) : AP_OK;
 }

@@ -102,11 +102,19 @@ const char **apx_strings(PyObject *tuple, Py_ssize_t *n) {
   *n = PyTuple_GET_SIZE(tuple);
   const char **s = PyMem_Calloc((size_t)*n + 1, sizeof *s);
   if (!s) return (const char **)PyErr_NoMemory();
-  for (Py_ssize_t i = 0; i < *n; i++)
-    if (!(s[i] = PyUnicode_AsUTF8(PyTuple_GET_ITEM(tuple, i)))) {
+  for (Py_ssize_t i = 0; i < *n; i++) {
+    Py_ssize_t len = 0;
+    if (!(s[i] = PyUnicode_AsUTF8AndSize(PyTuple_GET_ITEM(tuple, i), &len))) {
       PyMem_Free(s);
       return NULL;
     }
+    if ((size_t)len != strlen(s[i])) {   /* C would read only up to the NUL */
+      PyErr_Format(PyExc_ValueError, "a NUL character inside %R (item %zd)",
+                   PyTuple_GET_ITEM(tuple, i), i);
+      PyMem_Free(s);
+      return NULL;
+    }
+  }
   return s;
 }
 

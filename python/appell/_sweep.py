@@ -11,6 +11,7 @@ and a chunk's rows depend only on the plan and the run indices, so no run is los
 
 import math
 import os
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -133,6 +134,57 @@ def _assemble(parts, first):
     return out
 
 
+MAX_SAMPLES = 10 ** 9   # as a grid's N: `appell sweep --samples` keeps the same limit
+
+
+def _whole(x):
+    return not isinstance(x, bool) and isinstance(x, (int, np.integer))
+
+
+def _check_args(grid, random, samples, seed, shard, chunk_size, client):
+    """TypeError / ValueError naming the argument, before anything runs."""
+    for name, value in (("grid", grid), ("random", random)):
+        if value is not None and not isinstance(value, Mapping):
+            raise TypeError(f"{name} must be a dict {{path: values}}, got {type(value).__name__}")
+    if samples is not None and not _whole(samples):
+        raise TypeError(f"samples must be a whole number, got {samples!r}")
+    if samples is not None and not 1 <= samples <= MAX_SAMPLES:
+        raise ValueError(f"samples must be from 1 to 10**9 (random draws per grid point), got "
+                         f"{samples!r}")
+    if not _whole(seed) or not 0 <= seed < 2 ** 64:
+        raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, got {seed!r}")
+    if shard is not None and (not isinstance(shard, (tuple, list)) or len(shard) != 2
+                              or not all(_whole(x) for x in shard)):
+        raise TypeError(f"shard must be a pair (i, n) of whole numbers, got {shard!r}")
+    if chunk_size is not None and (not _whole(chunk_size) or chunk_size < 1):
+        raise ValueError(f"chunk_size must be a whole number >= 1, got {chunk_size!r}")
+    if chunk_size is not None and client is None:
+        raise ValueError("chunk_size needs a Dask client (client=...)")
+
+
+def _channels(channels):
+    if isinstance(channels, str):
+        return (channels,)
+    try:
+        out = tuple(channels)
+    except TypeError:
+        raise TypeError(f"channels must be a str or a sequence of str, got "
+                        f"{type(channels).__name__}") from None
+    for c in out:
+        if not isinstance(c, str):
+            raise TypeError(f"channels: {c!r} is not a str")
+    return out
+
+
+def _times(times):
+    if times is None:
+        return ()
+    try:
+        return tuple(float(t) for t in np.ravel(times))
+    except (TypeError, ValueError):
+        raise TypeError(f"times must be numbers (seconds), got {times!r}") from None
+
+
 def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channels=(),
           times=None, final_state=True, jobs=1, shard=None, client=None, chunk_size=None,
           progress=None):
@@ -152,6 +204,7 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
     """
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
         raise ValueError(f"jobs must be a whole number >= 0 (0: one per processor), got {jobs!r}")
+    _check_args(grid, random, samples, seed, shard, chunk_size, client)
     text, name, sets = _source(scene, set)
     grids = tuple(_grid_spec(p, v) for p, v in (grid or {}).items())
     randoms = tuple(_random_spec(p, v) for p, v in (random or {}).items())
@@ -166,8 +219,7 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
         count = runs // n * i + runs % n * i // n - first
     args = dict(text=text, name=name, sets=sets, grids=grids, randoms=randoms,
                 samples=n_samples, seed=int(seed),
-                channels=(channels,) if isinstance(channels, str) else tuple(channels),
-                times=() if times is None else tuple(float(t) for t in np.ravel(times)),
+                channels=_channels(channels), times=_times(times),
                 final_state=bool(final_state))
     if client is None:
         part = _appell.run_plan(first=first, count=count, jobs=int(jobs),

@@ -144,3 +144,54 @@ def test_a_drive_with_a_pole_is_located_not_blamed_on_max_steps(tmp_path):
         assert "check them before raising max_steps" in r.stderr
         assert (f"{scene}:6:49: joints.arm.drive.angle: '1/(1.5 - t)' is not finite at t = 1.5: "
                 "1 / 0 = inf") in r.stderr
+
+
+def test_sweep_options_refused_up_front_with_their_limits(tmp_path, disk):
+    out = tmp_path / "x.csv"
+    mass = ("--grid", "bodies.disk.mass=1,2")
+    cases = [  # arguments -> the message (each was accepted or said "out of memory")
+        (("--random", "bodies.disk.mass=uniform(1,2)", "--samples", "1e12"),
+         "--samples 1e12: at most 10^9 random samples per grid point"),
+        (mass + ("--channel", "disk.tilx"),
+         "--channel 'disk.tilx': no output column of that name in the scene (did you mean "
+         "'disk.tilt'?"),
+        (mass + ("--channel", "disk.tilt", "--at", "1,,2"), "--at '1,,2': time 2 is empty"),
+        (mass + ("--channel", "disk.tilt", "--at", ","), "--at ',': time 1 is empty"),
+        (("--grid", "initial.disk.x=-1e308:1e308:3"),
+         "B - A = 1e+308 - (-1e+308) overflows: the values would not be finite"),
+        (("--random", "bodies.disk.mass=uniform(1,2)", "--samples", "1e9",
+          "--grid", "initial.disk.x=1:2:1000000"), "GiB for their rows, more than this machine"),
+    ]
+    for args, says in cases:
+        r = run_cli("sweep", disk, *args, "--out", out, check=False)
+        assert r.returncode == 2 and says in r.stderr, (args, r.stderr)
+        assert not out.exists()
+
+
+@pytest.mark.parametrize("kw, exc, says", [
+    (dict(grid=5), TypeError, "grid must be a dict {path: values}, got int"),
+    (dict(random=[1]), TypeError, "random must be a dict"),
+    (dict(random={"bodies.disk.mass": "uniform(1,2)"}, samples=10 ** 12), ValueError,
+     "samples must be from 1 to 10**9"),
+    (dict(samples="3"), TypeError, "samples must be a whole number"),
+    (dict(seed=-1), ValueError, "seed must be a whole number from 0"),
+    (dict(shard=3), TypeError, "shard must be a pair (i, n)"),
+    (dict(channels=5), TypeError, "channels must be a str or a sequence of str"),
+    (dict(channels=["disk.tilx"]), appell.SceneError, "did you mean 'disk.tilt'?"),
+    (dict(times="x"), TypeError, "times must be numbers"),
+    (dict(set=["simulation.t_end=0.01\x00junk"]), ValueError, "a NUL character inside"),
+    (dict(set={"simulation.t_end": "0.01\x00"}), ValueError, "a NUL character inside"),
+    (dict(chunk_size=0), ValueError, "chunk_size must be a whole number >= 1"),
+    (dict(chunk_size=-3), ValueError, "chunk_size must be a whole number >= 1"),
+])
+def test_sweep_argument_errors_name_the_argument(disk, kw, exc, says):
+    args = dict(grid={"bodies.disk.mass": [1, 2]}, set={"simulation.t_end": 0.01})
+    args.update(kw)
+    with pytest.raises(exc) as info:
+        appell.sweep(disk, **args)
+    assert says in str(info.value)
+
+
+def test_load_refuses_a_nul_inside_an_override(disk):
+    with pytest.raises(ValueError, match="a NUL character inside"):
+        appell.load(disk, set=["bodies.disk.mass=2\x00"])
