@@ -195,3 +195,22 @@ def test_sweep_argument_errors_name_the_argument(disk, kw, exc, says):
 def test_load_refuses_a_nul_inside_an_override(disk):
     with pytest.raises(ValueError, match="a NUL character inside"):
         appell.load(disk, set=["bodies.disk.mass=2\x00"])
+
+
+def test_linearize_plot_target_checked_before_anything_is_written(tmp_path):
+    # --plot f.jpg exited 1 and left f.jpg.csv; a missing directory was named as a .csv path
+    disk = SCENES / "rolling_disk.yaml"
+    sweep = ("linearize", disk, "--sweep", "speed=0:5:11")
+    for fig, says in ((tmp_path / "f.jpg", "the figure must end in .png or .svg"),
+                      (tmp_path / "no" / "f.png", f"the directory {tmp_path / 'no'} does not exist"),
+                      (tmp_path / "d.png", "is a directory")):
+        if fig.name == "d.png":
+            fig.mkdir()
+        r = run_cli(*sweep, "--plot", fig, check=False)
+        assert r.returncode == 2 and f"--plot {fig}: {says}" in r.stderr, r.stderr
+        assert ".csv" not in r.stderr
+        assert [p.name for p in tmp_path.iterdir()] in ([], ["d.png"])
+    (tmp_path / "d.png").rmdir()
+    r = run_cli(*sweep, "--plot", tmp_path / "f.svg")
+    assert [p.name for p in tmp_path.iterdir()] == ["f.svg"]   # no side CSV, no temporary
+    assert (tmp_path / "f.svg").read_text().count("<path") > 10
