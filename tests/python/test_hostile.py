@@ -214,3 +214,47 @@ def test_linearize_plot_target_checked_before_anything_is_written(tmp_path):
     r = run_cli(*sweep, "--plot", tmp_path / "f.svg")
     assert [p.name for p in tmp_path.iterdir()] == ["f.svg"]   # no side CSV, no temporary
     assert (tmp_path / "f.svg").read_text().count("<path") > 10
+
+
+def _with_lin(tmp_path, name, scene, old, new):
+    path = tmp_path / name
+    text = scene.read_text() if hasattr(scene, "read_text") else scene
+    assert old in text
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def test_check_reports_what_run_and_linearize_refuse(tmp_path):
+    # appell check said 0 for each of these; linearize (or run) refused them afterwards
+    sleigh = SCENES / "chaplygin_sleigh.yaml"
+    init = "  initial: {sleigh: {heading_rate: 0}}\n"
+    cases = [
+        (_with_lin(tmp_path, "free.yaml", sleigh, init, init + "  free: [sleigh.hedding]\n"),
+         ":41:10: linearize.free[0]: 'sleigh.hedding' is not a state variable",
+         "did you mean 'sleigh.heading'?"),
+        (_with_lin(tmp_path, "indep.yaml", sleigh, init, init + "  independent: [sleigh.vxx]\n"),
+         ":41:17: linearize.independent[0]: 'sleigh.vxx' is not a state variable", ""),
+        (_with_lin(tmp_path, "inputs.yaml", sleigh, init, init + "  inputs: [sleigh.wz]\n"),
+         ":41:12: linearize.inputs[0]: 'sleigh.wz' is not a speed", ""),
+        (_with_lin(tmp_path, "speed.yaml", sleigh, "speed: {sleigh: {vx: -1}}",
+                   "speed: {sleigh: {x: -1}}"),
+         ":41:20: linearize.speed.sleigh.x: 'x' is a coordinate; speed: gives the initial rates",
+         ""),
+        (_with_lin(tmp_path, "driven.yaml", POLE, "simulation:",
+                   "linearize:\n  initial: {arm: {angle: 0.1}}\nsimulation:"),
+         ":11:26: linearize.initial.arm.angle: coordinate 'angle' of joint 'arm' is driven", ""),
+    ]
+    for path, where, more in cases:
+        for cmd in ("check", "linearize"):
+            r = run_cli(cmd, path, check=False)
+            assert r.returncode == 2 and f"{path}{where}" in r.stderr and more in r.stderr, \
+                (cmd, r.stderr)
+            assert "--set" not in r.stderr
+    tree_dae = ("--set", "simulation.path=tree", "--set", "simulation.mode=dae")
+    for cmd in ("check", "run"):
+        r = run_cli(cmd, sleigh, *tree_dae, *(("-o", tmp_path / "o.csv") if cmd == "run" else ()),
+                    check=False)
+        assert r.returncode == 2 and "path: tree forms no g or A, which mode: dae needs" \
+            in r.stderr, (cmd, r.stderr)
+    r = run_cli("check", sleigh)
+    assert "linearize    section good: about a steady motion, with a speed parameter" in r.stdout
