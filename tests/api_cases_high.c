@@ -440,6 +440,7 @@ static void cases_lin(void) {
   CASE(ap_lin_eigen, "not linearized", ap_lin_eigen(LN, sel, 1, 0) == AP_ERR_ARG);
   CASE(ap_lin_get_eigen, "L NULL", ap_lin_get_eigen(NULL, &eg) == AP_ERR_ARG);
   CASE(ap_lin_get_eigen, "out NULL", ap_lin_get_eigen(LN, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_set_poll, "L NULL", (ap_lin_set_poll(NULL, NULL, NULL), 1));
   CASE(ap_lin_sweep_run, "fn NULL",
        ap_lin_sweep_run(NULL, NULL, 2, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "n 0",

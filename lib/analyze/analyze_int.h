@@ -159,6 +159,8 @@ struct ap_lin {
   const char *bad_list;     /* "free", "independent" or "inputs" when a name there is not a
                                variable (a speed, for inputs) */
   int bad_index;            /* its entry */
+  int (*poll)(void *user);  /* ap_lin_set_poll: asked before each speed of a sweep */
+  void *poll_user;
 };
 
 void ap_an_msg(ap_lin *L, const char *fmt, ...)

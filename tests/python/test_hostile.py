@@ -258,3 +258,24 @@ def test_check_reports_what_run_and_linearize_refuse(tmp_path):
             in r.stderr, (cmd, r.stderr)
     r = run_cli("check", sleigh)
     assert "linearize    section good: about a steady motion, with a speed parameter" in r.stdout
+
+
+def test_ctrl_c_stops_a_linearize_sweep_promptly():
+    # 10^6 speeds took 51 s with Ctrl-C ignored; the signal now stops it at the next speed
+    r = child(f"""
+        import os, signal, threading, time
+        import numpy as np
+        speeds = np.linspace(0.5, 5, 10 ** 6)
+        m = appell.load({str(SCENES / "rolling_disk.yaml")!r})
+        t = []
+        threading.Timer(1.0, lambda: (t.append(time.perf_counter()),
+                                      os.kill(os.getpid(), signal.SIGINT))).start()
+        try:
+            appell.linearize(m, sweep=speeds)
+            print("finished")
+        except KeyboardInterrupt:
+            print("stopped", time.perf_counter() - t[0])
+        """)
+    assert r.returncode == 0, r.stderr
+    word, *late = r.stdout.split()
+    assert word == "stopped" and float(late[0]) < 1.0, r.stdout   # polled every 0.2 s
