@@ -274,6 +274,8 @@ static int start(run_state *rs, const run_opts *o) {
   }
   if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
   ap_scene_get_run(rs->sc, &rs->run);
+  cli_warn_tolerance("run", rs->run.sim.mode == AP_MODE_DAE, rs->run.sim.method,
+                     rs->run.sim.rtol);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
   if (rc != AP_OK) {
     fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc), msg);

@@ -464,6 +464,7 @@ static int fill_info(const ap_step_method *meth, ap_method_info *info) {
   info->summary = meth->summary;
   info->order = meth->order;
   info->adaptive = meth->adaptive;
+  info->rtol_floor = ap_step_rtol_floor(meth->name);
   return AP_OK;
 }
 

@@ -279,3 +279,17 @@ def test_ctrl_c_stops_a_linearize_sweep_promptly():
     assert r.returncode == 0, r.stderr
     word, *late = r.stdout.split()
     assert word == "stopped" and float(late[0]) < 1.0, r.stdout   # polled every 0.2 s
+
+
+def test_run_warns_when_a_method_cannot_deliver_the_tolerance(tmp_path):
+    # CVODE BDF at rtol 1e-12 missed the skate and sleigh bounds by 2.6x, silently
+    sleigh = SCENES / "chaplygin_sleigh.yaml"
+    for method, rtol, warned in (("bdf", "1e-12", True), ("adams", "1e-10", True),
+                                 ("bdf", "1e-8", False), ("dop853", "1e-12", False)):
+        r = run_cli("run", sleigh, "--method", method, "--rtol", rtol, "--t-end", "0.1",
+                    "--quiet", "-o", tmp_path / "o.csv")
+        says = f"warning: method {method} at rtol = {rtol}: below rtol 1e-08 its global error"
+        assert (says in r.stderr) == warned, (method, rtol, r.stderr)
+    r = run_cli("run", sleigh, "--mode", "dae", "--method", "bdf", "--rtol", "1e-12",
+                "--t-end", "0.1", "--quiet", "-o", tmp_path / "o.csv", check=False)
+    assert "warning: method" not in r.stderr   # DAE mode integrates with IDA
