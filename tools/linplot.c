@@ -72,6 +72,16 @@ static int close_out(out_file *o) {
   return -1;
 }
 
+/* The rows of a sweep: the parameter, then re_i, im_i of each tracked eigenvalue. */
+static void sweep_rows(FILE *f, const ap_lin_sweep *sw) {
+  for (int c = 0; c < sw->count; c++) {
+    fprintf(f, "%.17g", sw->p[c]);
+    for (int i = 0; i < sw->n; i++)
+      fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
+    fprintf(f, "\n");
+  }
+}
+
 int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep *sw) {
   out_file o;
   FILE *f = open_out(&o, file);
@@ -79,12 +89,7 @@ int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep 
   fprintf(f, "%s", param);
   for (int i = 0; i < sw->n; i++) fprintf(f, ",re%d,im%d", i, i);
   fprintf(f, "\n");
-  for (int c = 0; c < sw->count; c++) {
-    fprintf(f, "%.17g", sw->p[c]);
-    for (int i = 0; i < sw->n; i++)
-      fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
-    fprintf(f, "\n");
-  }
+  sweep_rows(f, sw);
   return close_out(&o);
 }
 
@@ -102,12 +107,7 @@ int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
 /* The sweep as gnuplot's inline data block $eig (no side file): p, re_i, im_i per row. */
 static void data_block(FILE *g, const ap_lin_sweep *sw) {
   fprintf(g, "$eig << EOD\n");
-  for (int c = 0; c < sw->count; c++) {
-    fprintf(g, "%.17g", sw->p[c]);
-    for (int i = 0; i < sw->n; i++)
-      fprintf(g, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
-    fprintf(g, "\n");
-  }
+  sweep_rows(g, sw);
   fprintf(g, "EOD\n");
 }
 
