@@ -8,8 +8,12 @@
  * a complete set of shards), plan (the sweep's identity, ap_batch_plan_id, so that --merge
  * joins only shards of one sweep), each parameter's path, status, the batch's columns, message.
  * Numbers are written with 17 significant digits, which read back to the same double.
- * Invariant: a file at --out holds every run of its shard; an interrupted or failed sweep
- * leaves none. --merge lives in tools/sweep_merge.c. */
+ * The runs go a batch at a time; each batch's rows are appended to the checkpoint
+ * FILE.csv.partial (flushed and synced; tools/sweep_resume.c), so memory does not depend on
+ * the number of runs and --resume continues an interrupted sweep. Invariant: a file at --out
+ * holds every run of its shard; an interrupted or failed sweep leaves none (only the
+ * checkpoint). --merge lives in tools/sweep_merge.c. */
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -56,6 +60,7 @@ static const char help[] =
     "  --shard I/N            only the I-th of N equal slices of the runs (1 <= I <= N)\n"
     "  --out FILE.csv         where the table goes (required); it appears only when complete\n"
     "  --quiet                no progress bar and no summary\n"
+    "  --resume               continue an interrupted sweep from its checkpoint FILE.csv.partial\n"
     "  --merge                join shard files (same header, every run exactly once)\n"
     "\n"
     "A failed run is a row with its status (the library's code, 0 = success) and message.\n"
@@ -68,7 +73,7 @@ typedef struct sweep_opts {
   int ngrids, nrandoms, nsets, nchannels;
   char extra[6][128];
   double times[MAX_ARGS];
-  int ntimes, quiet, final, jobs, merge;
+  int ntimes, quiet, final, jobs, merge, resume;
   long samples, shard_i, shard_n;
   unsigned long long seed;
   const char *inputs[MAX_ARGS];
@@ -178,7 +183,7 @@ static int parse_args(int argc, char **argv, sweep_opts *o) {
   static const char *const known[] = {
       "--out", "--grid", "--random", "--samples", "--seed", "--channel", "--at", "--no-final",
       "--set", "--mode", "--method", "--rtol", "--atol", "--t-end", "--interval", "--jobs",
-      "--shard", "--quiet", "--merge", "--help", NULL};
+      "--shard", "--quiet", "--merge", "--resume", "--help", NULL};
   int extra = 0;
   for (int i = 1; i < argc; i++) {
     int r;
@@ -186,6 +191,7 @@ static int parse_args(int argc, char **argv, sweep_opts *o) {
     if (strcmp(argv[i], "--quiet") == 0) o->quiet = 1;
     else if (strcmp(argv[i], "--no-final") == 0) o->final = 0;
     else if (strcmp(argv[i], "--merge") == 0) o->merge = 1;
+    else if (strcmp(argv[i], "--resume") == 0) o->resume = 1;
     else if ((r = value_opt(argc, argv, &i, o, &extra)) != 0) {
       if (r < 0) return -1;
     } else if (argv[i][0] == '-' && argv[i][1]) {
@@ -226,6 +232,14 @@ typedef struct sweep_state {
   int bar;
   double t_start;
   char id[17];             /* the sweep's identity (ap_batch_plan_id), in every row */
+  long base;               /* the shard row of values[0] (runs go a batch at a time) */
+  long resumed;            /* rows kept from the checkpoint (--resume) */
+  FILE *ck;                /* the checkpoint: OUT.partial, or a temporary file */
+  char ck_path[PATH_MAX + 16];
+  long failed, ran;        /* failed runs and runs made by this process */
+  int first_status;        /* the first failure's status and message */
+  char first_msg[512];
+  long first_bad;
 } sweep_state;
 
 static double now(void) {
@@ -236,6 +250,7 @@ static double now(void) {
 
 static int on_progress(long done, long total, void *user) {
   sweep_state *s = user;
+  done += s->base, total = s->count;   /* this batch's count, within the shard */
   if (s->bar) {
     double frac = total ? (double)done / (double)total : 1.0, el = now() - s->t_start;
     int w = 30, fill = (int)(frac * w + 0.5);
@@ -338,12 +353,14 @@ static void write_header(const sweep_state *s, FILE *f) {
   fputs(",message\n", f);
 }
 
+/* Row i of the current batch (run first + base + i). */
 static void write_row(const sweep_state *s, FILE *f, long i) {
   char buf[1024];
-  fprintf(f, "%ld,%ld,%s", s->first + i, s->total, s->id);
+  long run = s->first + s->base + i;
+  fprintf(f, "%ld,%ld,%s", run, s->total, s->id);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) {
     double x = 0.0;
-    ap_plan_value(s->plan, s->first + i, r, &x, buf, sizeof buf);
+    ap_plan_value(s->plan, run, r, &x, buf, sizeof buf);
     fprintf(f, ",%s", strchr(buf, '=') + 1);
   }
   fprintf(f, ",%d", s->status[i]);
@@ -355,63 +372,132 @@ static void write_row(const sweep_state *s, FILE *f, long i) {
 }
 
 static int summary(const sweep_state *s, double wall) {
-  long failed = 0, first_bad = -1;
-  for (long i = 0; i < s->count; i++)
-    if (s->status[i] != AP_OK && failed++ == 0) first_bad = i;
   if (!s->o->quiet) {
     fprintf(stderr, "appell sweep: %ld runs", s->count);
     if (s->o->shard_n > 1)
       fprintf(stderr, " (shard %ld/%ld: runs %ld..%ld of %ld)", s->o->shard_i, s->o->shard_n,
               s->first, s->first + s->count - 1, s->total);
+    if (s->resumed) fprintf(stderr, ", %ld of them from the checkpoint,", s->resumed);
     fprintf(stderr, " in %.3f s (%.1f runs/s), %ld failed -> %s\n", wall,
-            wall > 0 ? (double)s->count / wall : 0.0, failed, s->o->out);
-    if (first_bad >= 0)
-      fprintf(stderr, "  first failure: run %ld: %s\n", s->first + first_bad,
-              s->messages[first_bad] ? s->messages[first_bad] : ap_strerror(s->status[first_bad]));
+            wall > 0 ? (double)s->ran / wall : 0.0, s->failed, s->o->out);
+    if (s->first_bad >= 0)
+      fprintf(stderr, "  first failure: run %ld: %s\n", s->first_bad,
+              s->first_msg[0] ? s->first_msg : ap_strerror(s->first_status));
   }
-  if (s->count > 0 && failed == s->count) return cli_exit_code(s->status[0]);
+  if (s->ran > 0 && s->failed == s->ran && !s->resumed) return cli_exit_code(s->first_status);
   return EXIT_OK;
 }
 
-/* The rows of a shard are held until it is written: refuse up front a shard whose rows need
- * more than this machine's memory (rather than "out of memory" after loading everything). */
-static int check_rows_fit(const sweep_state *s) {
-  double per_row = 8.0 * ap_batch_ncols(s->batch) + sizeof(int) + sizeof(char *);
-  double need = per_row * (double)s->count;
-  long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  double have = pages > 0 && page > 0 ? (double)pages * (double)page : INFINITY;
-  if (need <= have) return EXIT_OK;
-  fprintf(stderr, "appell sweep: the %ld runs of this shard need %.3g GiB for their rows, more "
-          "than this machine's %.3g GiB: split the plan with --shard I/N (%ld or more shards)\n",
-          s->count, need / 1073741824.0, have / 1073741824.0, (long)ceil(need / have) * s->o->shard_n);
-  return EXIT_INPUT;
+/* The header line as text (to compare with a checkpoint's). */
+static char *header_text(const sweep_state *s) {
+  char *text = NULL;
+  size_t len = 0;
+  FILE *m = open_memstream(&text, &len);
+  if (!m) return NULL;
+  write_header(s, m);
+  return fclose(m) == 0 ? text : (free(text), NULL);
 }
 
-static int run_sweep(sweep_state *s, cli_out *out) {
-  if (check_rows_fit(s) != EXIT_OK) return EXIT_INPUT;
-  long nc = ap_batch_ncols(s->batch), n = s->count > 0 ? s->count : 1;
-  s->values = malloc(sizeof *s->values * (size_t)(n * nc));
-  s->status = malloc(sizeof *s->status * (size_t)n);
-  s->messages = calloc((size_t)n, sizeof *s->messages);
-  if (!s->values || !s->status || !s->messages)
-    return fprintf(stderr, "appell sweep: out of memory for %ld rows\n", s->count), EXIT_INTERNAL;
-  s->bar = !s->o->quiet && isatty(STDERR_FILENO);
-  s->t_start = now();
-  int rc = ap_batch_run_plan(s->batch, s->plan, s->first, s->count, s->values, s->status,
-                             s->messages);
-  double wall = now() - s->t_start;
-  int sig = cli_interrupted();
-  if (rc == AP_BATCH_CANCELLED || sig) {
-    fprintf(stderr, "%sappell sweep: interrupted by %s; no table written\n",
-            s->bar ? "\r\033[K" : "", cli_signal_name(sig));
-    return EXIT_SIGNAL(sig ? sig : SIGINT);
+/* The checkpoint: OUT.partial next to a regular --out (resumed with --resume), else a
+ * temporary file (standard output, a device, a FIFO: no resume). */
+static int open_checkpoint(sweep_state *s, const cli_out *out) {
+  char *header = header_text(s);
+  if (!header) return fprintf(stderr, "appell sweep: out of memory\n"), EXIT_INTERNAL;
+  int code = EXIT_OK;
+  if (out->kind != CLI_OUT_FILE) {
+    if (s->o->resume)
+      code = (fprintf(stderr, "appell sweep: --resume needs --out naming a regular file\n"),
+              EXIT_INPUT);
+    else if (!(s->ck = tmpfile()))
+      code = (fprintf(stderr, "appell sweep: cannot make a temporary file\n"), EXIT_INTERNAL);
+    else fputs(header, s->ck);
+    return free(header), code;
   }
-  if (rc != AP_OK) return fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc);
+  snprintf(s->ck_path, sizeof s->ck_path, "%s.partial", out->path);
+  if (s->o->resume) {
+    s->resumed = sweep_checkpoint_rows(s->ck_path, header, s->id, s->first, s->total, s->count);
+    if (s->resumed < 0) code = EXIT_INPUT;
+    else s->ck = fopen(s->ck_path, "a");
+  } else if (access(s->ck_path, F_OK) == 0) {
+    fprintf(stderr, "appell sweep: %s exists: the checkpoint of an interrupted sweep; --resume "
+            "continues it (or remove it)\n", s->ck_path);
+    code = EXIT_INPUT;
+  } else if ((s->ck = fopen(s->ck_path, "w"))) {
+    fputs(header, s->ck);
+    fflush(s->ck);   /* on disk before any run: a resume finds the sweep's header */
+  }
+  if (code == EXIT_OK && !s->ck)
+    code = (fprintf(stderr, "appell sweep: %s: %s\n", s->ck_path, strerror(errno)), EXIT_INTERNAL);
+  free(header);
+  return code;
+}
+
+/* Rows of the batch just run: appended to the checkpoint (flushed and synced), counted. */
+static int keep_batch(sweep_state *s, long n) {
+  for (long i = 0; i < n; i++) {
+    write_row(s, s->ck, i);
+    if (s->status[i] != AP_OK && s->failed++ == 0) {
+      s->first_bad = s->first + s->base + i, s->first_status = s->status[i];
+      snprintf(s->first_msg, sizeof s->first_msg, "%s", s->messages[i] ? s->messages[i] : "");
+    }
+  }
+  s->ran += n;
+  ap_batch_messages_free(n, s->messages);
+  if (fflush(s->ck) != 0 || ferror(s->ck) || fsync(fileno(s->ck)) != 0)
+    return fprintf(stderr, "appell sweep: cannot write the checkpoint %s: %s\n",
+                   s->ck_path[0] ? s->ck_path : "(temporary)", strerror(errno)), EXIT_INTERNAL;
+  return EXIT_OK;
+}
+
+/* The checkpoint's text into the table at --out (tools/output.c's rules), then removed. */
+static int publish(sweep_state *s, cli_out *out) {
   int code = cli_out_open(out);
   if (code != EXIT_OK) return code;
-  write_header(s, out->f);
-  for (long i = 0; i < s->count; i++) write_row(s, out->f, i);
-  code = cli_out_close(out, EXIT_OK);
+  char buf[1 << 16];
+  size_t got;
+  rewind(s->ck);
+  FILE *in = s->ck_path[0] ? fopen(s->ck_path, "rb") : s->ck;
+  while (in && (got = fread(buf, 1, sizeof buf, in)) > 0) fwrite(buf, 1, got, out->f);
+  if (!in || ferror(in)) code = EXIT_INTERNAL;
+  if (in && in != s->ck) fclose(in);
+  code = cli_out_close(out, code);
+  if (code == EXIT_OK && s->ck_path[0]) remove(s->ck_path);
+  return code;
+}
+
+/* The shard's runs a batch at a time (memory does not depend on the number of runs), each
+ * batch's rows checkpointed; then the table. */
+static int run_sweep(sweep_state *s, cli_out *out) {
+  long nc = ap_batch_ncols(s->batch), batch = 64L * (s->o->jobs > 0 ? s->o->jobs : 8);
+  s->values = malloc(sizeof *s->values * (size_t)(batch * nc + 1));
+  s->status = malloc(sizeof *s->status * (size_t)batch);
+  s->messages = calloc((size_t)batch, sizeof *s->messages);
+  s->first_bad = -1;
+  if (!s->values || !s->status || !s->messages)
+    return fprintf(stderr, "appell sweep: out of memory\n"), EXIT_INTERNAL;
+  int code = open_checkpoint(s, out);
+  s->bar = !s->o->quiet && isatty(STDERR_FILENO);
+  s->t_start = now();
+  for (s->base = s->resumed; code == EXIT_OK && s->base < s->count; s->base += batch) {
+    long n = s->count - s->base < batch ? s->count - s->base : batch;
+    int rc = ap_batch_run_plan(s->batch, s->plan, s->first + s->base, n, s->values, s->status,
+                               s->messages);
+    int sig = cli_interrupted();
+    if (rc == AP_BATCH_CANCELLED || sig) {
+      ap_batch_messages_free(n, s->messages);
+      fprintf(stderr, "%sappell sweep: interrupted by %s; no table written%s%s%s\n",
+              s->bar ? "\r\033[K" : "", cli_signal_name(sig),
+              s->ck_path[0] ? "; the finished runs are in " : "", s->ck_path,
+              s->ck_path[0] ? " (--resume continues)" : "");
+      code = EXIT_SIGNAL(sig ? sig : SIGINT);
+    } else if (rc != AP_OK) {
+      code = (fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc));
+    } else {
+      code = keep_batch(s, n);
+    }
+  }
+  double wall = now() - s->t_start;
+  if (code == EXIT_OK) code = publish(s, out);
   return code == EXIT_OK ? summary(s, wall) : code;
 }
 
@@ -434,7 +520,7 @@ int cmd_sweep(int argc, char **argv) {
   if (code == EXIT_OK) code = build_batch(&s);
   if (code == EXIT_OK) code = check_times(&s);
   if (code == EXIT_OK) code = run_sweep(&s, &out);
-  if (s.messages) ap_batch_messages_free(s.count, s.messages);
+  if (s.ck) fclose(s.ck);
   free(s.messages);
   free(s.values);
   free(s.status);
