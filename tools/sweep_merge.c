@@ -135,14 +135,17 @@ static const char *field_end(const char *s) {
   }
 }
 
-/* A whole number (run, runs, status) or any double (%.17g, nan, inf) filling [s, e). */
+/* A whole number of at most 2^53 in magnitude (run, runs, status) or any double (%.17g, nan,
+ * inf) filling [s, e). */
 static int parse_num(const char *s, const char *e, int whole, double *x) {
   char buf[64], *end = NULL;
   size_t n = (size_t)(e - s);
   if (n == 0 || n >= sizeof buf || *s == '"') return -1;
   memcpy(buf, s, n), buf[n] = '\0';
+  errno = 0;
   if (whole) {
     long v = strtol(buf, &end, 10);
+    if (errno == ERANGE || v > (1L << 53) || v < -(1L << 53)) return -1;   /* found by fuzz_merge */
     *x = (double)v;
   } else {
     *x = strtod(buf, &end);

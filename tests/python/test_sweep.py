@@ -217,6 +217,8 @@ def test_merge_parses_every_row(tmp_path, disk):
         "plan": (lambda r: r.replace(r.split(",")[2], "0123456789abcdeg"),
                  "b.csv:3: column plan"),
         "empty": (lambda r: "\n", "b.csv:3: column run"),
+        "huge": (lambda r: "99999999999999999999" + r[r.index(","):],   # fuzz_merge's finding
+                 "b.csv:3: column run: '99999999999999999999' is not a whole number"),
     }
     for what, (spoil, says) in cases.items():
         (tmp_path / "b.csv").write_text("".join(good[:2] + [spoil(good[2])] + good[3:]))
