@@ -338,8 +338,10 @@ static void cases_batch(void) {
   size_t tlen = 1;
   CASE(ap_scene_read, "path NULL",
        ap_scene_read(NULL, &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt && !tlen);
-  CASE(ap_scene_read, "text NULL", ap_scene_read(SCENE_PATH, NULL, &tlen, msg, sizeof msg) == AP_ERR_ARG);
-  CASE(ap_scene_read, "len NULL", ap_scene_read(SCENE_PATH, &txt, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "text NULL",
+       ap_scene_read(SCENE_PATH, NULL, &tlen, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "len NULL",
+       ap_scene_read(SCENE_PATH, &txt, NULL, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_scene_read, "a directory",
        ap_scene_read("/", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt);
   CASE(ap_scene_read, "/dev/zero (larger than 16 MiB)",

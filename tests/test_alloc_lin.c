@@ -1,8 +1,8 @@
 /* Allocation failures in the linearizer's eigenvalue solve (ap_lin_eigen): LAPACKE_dgeevx
  * allocates its workspace itself, and an allocation failure there was reported as "the QR
  * algorithm did not converge" (AP_ERR_SINGULAR). Each allocation ap_lin_eigen makes on the
- * heavy top (examples/scenes/heavy_top.yaml, its linearize: section) fails in turn in a child process
- * (tests/alloc.h): every call must end in AP_OK (the allocation was not needed) or
+ * heavy top (examples/scenes/heavy_top.yaml, its linearize: section) fails in turn in a child
+ * process (tests/alloc.h): every call must end in AP_OK (the allocation was not needed) or
  * AP_ERR_NOMEM with a message about memory, never another status or a crash. */
 #include <math.h>
 #include <stdio.h>

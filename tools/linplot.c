@@ -6,8 +6,9 @@
  * Sweep CSV: the parameter, then re_i and im_i of each tracked eigenvalue (row i of the sweep
  * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension;
  * the data go to gnuplot inline, so no side file is written; checked by lin_check_plot before
- * any work, drawn into a temporary file renamed over the figure when complete) draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
- * the same colour, with a vertical line at each characteristic point: the classic picture of
+ * any work, drawn into a temporary file renamed over the figure when complete) draws every
+ * real part as a solid line and every non-zero imaginary part, as |im|, dashed in the same
+ * colour, with a vertical line at each characteristic point: the classic picture of
  * eigenvalues against speed. */
 #define _XOPEN_SOURCE 700   /* realpath */
 

@@ -298,7 +298,8 @@ static int build_batch(sweep_state *s) {
   if (rc != AP_OK)
     return fprintf(stderr, "appell sweep: the scene with every parameter at a typical value "
                    "(first grid value, mean): %s\n", msg), cli_exit_code(rc);
-  return ap_batch_plan_id(s->batch, s->plan, s->id, sizeof s->id) == AP_OK ? EXIT_OK : EXIT_INTERNAL;
+  rc = ap_batch_plan_id(s->batch, s->plan, s->id, sizeof s->id);
+  return rc == AP_OK ? EXIT_OK : EXIT_INTERNAL;
 }
 
 /* The range [t0, t_end] of every run of this shard: the scene's with --set, narrowed by the
