@@ -330,6 +330,38 @@ static void cases_batch(void) {
   CASE(ap_batch_create, "sets[0] NULL",
        ap_batch_create(SCENE, n, "b", no_sets, 1, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG &&
            !obt);
+  const char *const no_channel[1] = {NULL};
+  ap_batch_def bn = bd;
+  bn.channels = no_channel, bn.nchannels = 1;
+  CASE(ap_batch_create, "def.channels[0] NULL",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &bn, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  bn.channels = NULL;
+  CASE(ap_batch_create, "def.channels NULL, nchannels 1",
+       ap_batch_create(SCENE, n, "b", NULL, 0, &bn, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
+  CASE(ap_batch_plan_id, "b NULL", ap_batch_plan_id(NULL, PL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "p NULL", ap_batch_plan_id(BT, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "id NULL", ap_batch_plan_id(BT, PL, NULL, 17) == AP_ERR_ARG);
+  CASE(ap_batch_plan_id, "len 16", ap_batch_plan_id(BT, PL, msg, 16) == AP_ERR_ARG);
+  char *txt = (char *)1;
+  size_t tlen = 1;
+  CASE(ap_scene_read, "path NULL",
+       ap_scene_read(NULL, &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt && !tlen);
+  CASE(ap_scene_read, "text NULL",
+       ap_scene_read(SCENE_PATH, NULL, &tlen, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "len NULL",
+       ap_scene_read(SCENE_PATH, &txt, NULL, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_read, "a directory",
+       ap_scene_read("/", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt);
+  CASE(ap_scene_read, "/dev/zero (larger than 16 MiB)",
+       ap_scene_read("/dev/zero", &txt, &tlen, msg, sizeof msg) == AP_ERR_ARG && !txt &&
+           strstr(msg, "larger than 16 MiB"));
+  CASE(ap_scene_locate_failure, "sc NULL",
+       ap_scene_locate_failure(NULL, S, 1.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_locate_failure, "sim NULL",
+       ap_scene_locate_failure(SC, NULL, 1.0, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_scene_locate_failure, "another scene's simulation, msg NULL",
+       ap_scene_locate_failure(SC, S, NAN, NULL, 0) == AP_OK);
+  CASE(ap_scene_text_free, "NULL", (ap_scene_text_free(NULL), 1));
   CASE(ap_batch_load, "path NULL",
        ap_batch_load(NULL, NULL, 0, &bd, &obt, msg, sizeof msg) == AP_ERR_ARG && !obt);
   CASE(ap_batch_load, "sets NULL, nsets 1",
@@ -421,6 +453,7 @@ static void cases_lin(void) {
   CASE(ap_lin_eigen, "not linearized", ap_lin_eigen(LN, sel, 1, 0) == AP_ERR_ARG);
   CASE(ap_lin_get_eigen, "L NULL", ap_lin_get_eigen(NULL, &eg) == AP_ERR_ARG);
   CASE(ap_lin_get_eigen, "out NULL", ap_lin_get_eigen(LN, NULL) == AP_ERR_ARG);
+  CASE(ap_lin_set_poll, "L NULL", (ap_lin_set_poll(NULL, NULL, NULL), 1));
   CASE(ap_lin_sweep_run, "fn NULL",
        ap_lin_sweep_run(NULL, NULL, 2, sweep_p, 3, 1e-6, 0.0, &sw, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_lin_sweep_run, "n 0",

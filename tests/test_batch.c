@@ -170,7 +170,8 @@ static void batch_errors(void) {
   const char *ch[] = {"disk.tlit"};
   def.channels = ch, def.nchannels = 1;
   AP_CHECK_EQ_INT(ap_batch_load(scene_path, NULL, 0, &def, &b, msg, sizeof msg), AP_ERR_ARG);
-  AP_CHECK(strstr(msg, "no output column 'disk.tlit'") != NULL);
+  AP_CHECK(strstr(msg, "channel 'disk.tlit': no output column of that name in the scene "
+                      "(did you mean 'disk.tilt'?") != NULL);
   double t[] = {NAN};
   def = ap_batch_def_default();
   def.times = t, def.ntimes = 1;

@@ -140,6 +140,27 @@ static int report(ap_scene *sc, const char *file) {
   return code;
 }
 
+/* The linearize: section as appell linearize reads it: the operating-point guess (its
+ * initial: and speed: loaded as overrides) and a linearizer of it, which checks the names in
+ * free:, independent: and inputs: (nothing is linearized). */
+static int check_linearize(const char *scene, const char *const *sets, int nsets) {
+  char msg[1024];
+  ap_scene_lin_guess g;
+  int rc = ap_scene_lin_guess_load(scene, NULL, 0, sets, nsets, &g, msg, sizeof msg);
+  if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
+  if (!g.sec.present) return ap_scene_lin_guess_free(&g), EXIT_OK;
+  ap_lin_def def = ap_scene_lin_def(&g);
+  ap_lin *L = NULL;
+  rc = ap_scene_lin_create(&g, &def, &L);
+  if (rc != AP_OK) fprintf(stderr, "appell check: %s\n", L ? ap_lin_message(L) : ap_strerror(rc));
+  else printf("linearize    section good: about %s%s\n",
+              def.about == AP_LIN_EQUILIBRIUM ? "an equilibrium" : "a steady motion",
+              g.sec.nspeed ? ", with a speed parameter" : "");
+  ap_lin_free(L);
+  ap_scene_lin_guess_free(&g);
+  return cli_exit_code(rc);
+}
+
 int cmd_check(int argc, char **argv) {
   static const char *const known[] = {"--set", "--help", NULL};
   const char *scene = NULL, *sets[256];
@@ -168,5 +189,5 @@ int cmd_check(int argc, char **argv) {
   if (st != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(st);
   int code = report(sc, scene);
   ap_scene_free(sc);
-  return code;
+  return code == EXIT_OK ? check_linearize(scene, sets, nsets) : code;
 }

@@ -87,4 +87,8 @@ int cli_safe_name(const char *s);
  * `appell CMD` (gnuplot missing, failing, or the pipe or fork failing). tools/gnuplot.c. */
 int cli_gnuplot(const char *cmd, void (*script)(FILE *g, const void *user), const void *user);
 
+/* appell CMD: warning: when method is asked for an rtol below its rtol_floor (ap_method_info;
+ * tools/tolerance.c); nothing in DAE mode (dae non-zero), whose integrator is IDA. */
+void cli_warn_tolerance(const char *cmd, int dae, const char *method, double rtol);
+
 #endif

@@ -34,8 +34,12 @@ int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep 
 int lin_write_point_csv(const char *file, const ap_lin_eig *e);
 /* Refuse an output target that is a directory or the scene itself (message; -1). */
 int lin_check_target(const char *opt, const char *file, const char *scene);
-/* Real and imaginary parts against the parameter, from the CSV file written before. */
-int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
-             const char *title, const lin_opts *o);
+/* --plot FIG before any work: .png or .svg, a name gnuplot can take, not a directory or the
+ * scene, in a directory that exists and is writable (message; -1). */
+int lin_check_plot(const char *fig, const char *scene);
+/* Real and imaginary parts against the parameter (the data inline: no side file), drawn into
+ * a temporary file renamed over fig when gnuplot succeeded. */
+int lin_plot(const char *fig, const char *param, const ap_lin_sweep *sw, const char *title,
+             const lin_opts *o);
 
 #endif

@@ -4,9 +4,11 @@
  * a FIFO or a device (/dev/null) is written in place, and a link to a regular file keeps being
  * a link (the file it names is replaced), as appell run --out does.
  * Sweep CSV: the parameter, then re_i and im_i of each tracked eigenvalue (row i of the sweep
- * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension)
- * draws every real part as a solid line and every non-zero imaginary part, as |im|, dashed in
- * the same colour, with a vertical line at each characteristic point: the classic picture of
+ * follows one eigenvalue by continuity). The figure (gnuplot, pngcairo or svg by the extension;
+ * the data go to gnuplot inline, so no side file is written; checked by lin_check_plot before
+ * any work, drawn into a temporary file renamed over the figure when complete) draws every
+ * real part as a solid line and every non-zero imaginary part, as |im|, dashed in the same
+ * colour, with a vertical line at each characteristic point: the classic picture of
  * eigenvalues against speed. */
 #include <errno.h>
 #include <math.h>
@@ -71,6 +73,16 @@ static int close_out(out_file *o) {
   return -1;
 }
 
+/* The rows of a sweep: the parameter, then re_i, im_i of each tracked eigenvalue. */
+static void sweep_rows(FILE *f, const ap_lin_sweep *sw) {
+  for (int c = 0; c < sw->count; c++) {
+    fprintf(f, "%.17g", sw->p[c]);
+    for (int i = 0; i < sw->n; i++)
+      fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
+    fprintf(f, "\n");
+  }
+}
+
 int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep *sw) {
   out_file o;
   FILE *f = open_out(&o, file);
@@ -78,12 +90,7 @@ int lin_write_sweep_csv(const char *file, const char *param, const ap_lin_sweep 
   fprintf(f, "%s", param);
   for (int i = 0; i < sw->n; i++) fprintf(f, ",re%d,im%d", i, i);
   fprintf(f, "\n");
-  for (int c = 0; c < sw->count; c++) {
-    fprintf(f, "%.17g", sw->p[c]);
-    for (int i = 0; i < sw->n; i++)
-      fprintf(f, ",%.17g,%.17g", sw->re[i + (size_t)c * sw->n], sw->im[i + (size_t)c * sw->n]);
-    fprintf(f, "\n");
-  }
+  sweep_rows(f, sw);
   return close_out(&o);
 }
 
@@ -98,9 +105,16 @@ int lin_write_point_csv(const char *file, const ap_lin_eig *e) {
   return close_out(&o);
 }
 
-static void script(FILE *g, const char *fig, const char *csv, const char *param,
-                   const ap_lin_sweep *sw, const char *title, const lin_opts *o) {
-  const char *ext = strrchr(fig, '.');
+/* The sweep as gnuplot's inline data block $eig (no side file): p, re_i, im_i per row. */
+static void data_block(FILE *g, const ap_lin_sweep *sw) {
+  fprintf(g, "$eig << EOD\n");
+  sweep_rows(g, sw);
+  fprintf(g, "EOD\n");
+}
+
+static void script(FILE *g, const char *fig, const char *param, const ap_lin_sweep *sw,
+                   const char *title, const lin_opts *o) {
+  const char *ext = strrchr(o->plot, '.');
   fprintf(g, "set terminal %s size 900,600 noenhanced\n",
           ext && strcmp(ext, ".svg") == 0 ? "svg" : "pngcairo");
   fprintf(g, "set output '%s'\nset datafile separator ','\nset grid\n", fig);
@@ -111,21 +125,21 @@ static void script(FILE *g, const char *fig, const char *csv, const char *param,
   for (int i = 0; i < sw->npoints; i++)
     fprintf(g, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 3 lc rgb 'gray40'\n",
             sw->points[i].p, sw->points[i].p);
+  data_block(g, sw);
   fprintf(g, "plot ");
   for (int i = 0; i < sw->n; i++) {
     int cplx = 0;
     for (int c = 0; c < sw->count && !cplx; c++) cplx = sw->im[i + (size_t)c * sw->n] != 0.0;
-    fprintf(g, "%s'%s' skip 1 using 1:%d with lines lw 2 lc %d", i ? ", " : "", csv, 2 + 2 * i,
-            i % 8 + 1);
+    fprintf(g, "%s$eig using 1:%d with lines lw 2 lc %d", i ? ", " : "", 2 + 2 * i, i % 8 + 1);
     if (cplx)
-      fprintf(g, ", '%s' skip 1 using 1:(abs($%d)) with lines lw 1.5 dt 2 lc %d", csv,
-              3 + 2 * i, i % 8 + 1);
+      fprintf(g, ", $eig using 1:(abs($%d)) with lines lw 1.5 dt 2 lc %d", 3 + 2 * i,
+              i % 8 + 1);
   }
-  fprintf(g, "\n");
+  fprintf(g, "\nset output\n");
 }
 
 typedef struct lin_job {
-  const char *fig, *csv, *param;
+  const char *fig, *param;
   const ap_lin_sweep *sw;
   const char *title;
   const lin_opts *o;
@@ -133,19 +147,48 @@ typedef struct lin_job {
 
 static void lin_script(FILE *g, const void *user) {
   const lin_job *j = user;
-  script(g, j->fig, j->csv, j->param, j->sw, j->title, j->o);
+  script(g, j->fig, j->param, j->sw, j->title, j->o);
 }
 
-int lin_plot(const char *fig, const char *csv, const char *param, const ap_lin_sweep *sw,
-             const char *title, const lin_opts *o) {
+int lin_check_plot(const char *fig, const char *scene) {
   const char *ext = strrchr(fig, '.');
   if (!ext || (strcmp(ext, ".png") != 0 && strcmp(ext, ".svg") != 0))
     return fprintf(stderr, "appell linearize: --plot %s: the figure must end in .png or .svg\n",
                    fig), -1;
-  if (!cli_safe_name(fig) || !cli_safe_name(csv) || !cli_safe_name(param) ||
-      !cli_safe_name(title))
-    return fprintf(stderr, "appell linearize: file names must not contain quotes, backslashes "
-                   "or newlines\n"), -1;
-  lin_job job = {fig, csv, param, sw, title, o};
-  return cli_gnuplot("linearize", lin_script, &job);
+  if (!cli_safe_name(fig))
+    return fprintf(stderr, "appell linearize: --plot %s: the name must not contain quotes, "
+                   "backslashes or newlines\n", fig), -1;
+  if (lin_check_target("--plot", fig, scene)) return -1;
+  char dir[4200];
+  snprintf(dir, sizeof dir, "%s", fig);
+  char *slash = strrchr(dir, '/');
+  if (!slash) snprintf(dir, sizeof dir, ".");
+  else if (slash == dir) dir[1] = '\0';
+  else *slash = '\0';
+  struct stat st;
+  if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+    return fprintf(stderr, "appell linearize: --plot %s: the directory %s does not exist\n", fig,
+                   dir), -1;
+  if (access(dir, W_OK) != 0)
+    return fprintf(stderr, "appell linearize: --plot %s: cannot write in %s: %s\n", fig, dir,
+                   strerror(errno)), -1;
+  return 0;
+}
+
+/* gnuplot draws into FIG.appell-tmp.PID.EXT, renamed over FIG when it succeeded. */
+int lin_plot(const char *fig, const char *param, const ap_lin_sweep *sw, const char *title,
+             const lin_opts *o) {
+  if (!cli_safe_name(param) || !cli_safe_name(title))
+    return fprintf(stderr, "appell linearize: the parameter and scene names must not contain "
+                   "quotes, backslashes or newlines\n"), -1;
+  char tmp[4300];
+  snprintf(tmp, sizeof tmp, "%s.appell-tmp.%ld%s", fig, (long)getpid(), strrchr(fig, '.'));
+  lin_job job = {tmp, param, sw, title, o};
+  int rc = cli_gnuplot("linearize", lin_script, &job);
+  if (rc == 0 && rename(tmp, fig) != 0) {
+    fprintf(stderr, "appell linearize: cannot write %s: %s\n", fig, strerror(errno));
+    rc = -1;
+  }
+  if (rc != 0) remove(tmp);
+  return rc;
 }

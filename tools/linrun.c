@@ -258,12 +258,9 @@ static int sweep(run *r) {
   free(p);
   if (rc != AP_OK) return rc;
   print_sweep(r, &sw);
-  const char *csv = o->csv;
-  char tmp[1100];
-  if (!csv && o->plot) snprintf(tmp, sizeof tmp, "%s.csv", o->plot), csv = tmp;
-  if (csv && lin_write_sweep_csv(csv, o->sweep_path, &sw)) rc = AP_ERR_INTERNAL;
+  if (o->csv && lin_write_sweep_csv(o->csv, o->sweep_path, &sw)) rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot &&
-      lin_plot(o->plot, csv, o->sweep_path, &sw, ap_scene_name(r->g.scene), o) != 0)
+      lin_plot(o->plot, o->sweep_path, &sw, ap_scene_name(r->g.scene), o) != 0)
     rc = AP_ERR_INTERNAL;
   if (rc == AP_OK && o->plot) printf("%s\n", o->plot);
   ap_lin_sweep_free(&sw);
@@ -272,7 +269,7 @@ static int sweep(run *r) {
 
 int lin_run(lin_opts *o) {
   if ((o->csv && lin_check_target("--csv", o->csv, o->scene)) ||
-      (o->plot && lin_check_target("--plot", o->plot, o->scene)))
+      (o->plot && lin_check_plot(o->plot, o->scene)))
     return EXIT_INPUT;
   run r;
   memset(&r, 0, sizeof r);

@@ -192,19 +192,16 @@ static int write_row(run_state *rs, FILE *f) {
   return AP_OK;
 }
 
-/* A run that failed in a callback or on a NaN: name the scene expression that is not finite
- * where it failed (at the failing evaluation's time, or at the output time), on stderr and
- * after the message of the run record. */
-static void locate(run_state *rs, int rc, double tout) {
+/* A run that failed mid-run: name the scene expression that is not finite where it failed
+ * (at the failing evaluation's time and state, or at the output time), whatever the method,
+ * on stderr and after the message of the run record. */
+static void locate(run_state *rs, double tout) {
   char msg[1024];
-  double when[2] = {ap_sim_data(rs->sim)->t, tout};
-  for (int i = 0; i < 2 && (rc == AP_ERR_CALLBACK || rc == AP_ERR_NAN); i++)
-    if (ap_scene_check_time(rs->sc, when[i], msg, sizeof msg) != AP_OK) {
-      fprintf(stderr, "%s\n", msg);
-      size_t used = strlen(rs->message);
-      snprintf(rs->message + used, sizeof rs->message - used, "\n%s", msg);
-      return;
-    }
+  if (ap_scene_locate_failure(rs->sc, rs->sim, tout, msg, sizeof msg) != AP_OK && msg[0]) {
+    fprintf(stderr, "%s\n", msg);
+    size_t used = strlen(rs->message);
+    snprintf(rs->message + used, sizeof rs->message - used, "\n%s", msg);
+  }
 }
 
 /* The run stopped at a failure (status rc): the message on stderr and in the record. */
@@ -212,7 +209,7 @@ static int failed(run_state *rs, int rc, double tout, const char *what) {
   snprintf(rs->message, sizeof rs->message, "appell run: %s at t = %.10g: %s: %s", what,
            ap_sim_time(rs->sim), ap_strerror(rc), ap_sim_message(rs->sim));
   fprintf(stderr, "%s%s\n", rs->progress ? "\r\033[K" : "", rs->message);
-  locate(rs, rc, tout);
+  locate(rs, tout);
   rs->status = CLI_STATUS_FAILED, rs->error = ap_strerror(rc);
   return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
 }
@@ -331,6 +328,8 @@ static int start(run_state *rs, const run_opts *o) {
   }
   if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
   ap_scene_get_run(rs->sc, &rs->run);
+  cli_warn_tolerance("run", rs->run.sim.mode == AP_MODE_DAE, rs->run.sim.method,
+                     rs->run.sim.rtol);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
   if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
   if (rc != AP_OK) {

@@ -5,11 +5,16 @@
  * batch (the scene with --set and the shorthands, the channels and times) -> one check of the
  * overrides with typical values -> this shard's runs on --jobs threads -> the CSV, written
  * atomically (tools/output.c, as appell run writes). Columns: run, runs (the plan's size, so that --merge can tell
- * a complete set of shards), each parameter's path, status, outcome and events (as in a run
- * record: tools/runrecord.c), the batch's columns, message.
+ * a complete set of shards), plan (the sweep's identity, ap_batch_plan_id, so that --merge
+ * joins only shards of one sweep), each parameter's path, status, outcome and events (as in a
+ * run record: tools/runrecord.c), the batch's columns, message.
  * Numbers are written with 17 significant digits, which read back to the same double.
- * Invariant: a file at --out holds every run of its shard; an interrupted or failed sweep
- * leaves none. --merge lives in tools/sweep_merge.c. */
+ * The runs go a batch at a time; each batch's rows are appended to the checkpoint
+ * FILE.csv.partial (flushed and synced; tools/sweep_resume.c), so memory does not depend on
+ * the number of runs and --resume continues an interrupted sweep. Invariant: a file at --out
+ * holds every run of its shard; an interrupted or failed sweep leaves none (only the
+ * checkpoint). --merge lives in tools/sweep_merge.c. */
+#include <errno.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -31,9 +36,10 @@ static const char help[] =
     "       appell sweep --merge --out FILE.csv SHARD.csv...\n"
     "\n"
     "Run SCENE once per point of a grid or random sample of its values and write one CSV row\n"
-    "per run: run, runs, the parameters, status, outcome, events, t, steps, rhs_evals,\n"
-    "err_fails, max_residual, energy_drift, the coordinates and speeds at the end (NAME@end),\n"
-    "the channels asked for at the times asked for (CHANNEL@T), message (docs/sweeps.md).\n"
+    "per run: run, runs, plan (the sweep's identity), the parameters, status, outcome, events,\n"
+    "t, steps, rhs_evals, err_fails, max_residual, energy_drift, the coordinates and speeds at\n"
+    "the end (NAME@end), the channels asked for at the times asked for (CHANNEL@T), message\n"
+    "(docs/sweeps.md).\n"
     "\n"
     "parameters (a product: the first grid varies slowest, random samples fastest):\n"
     "  --grid PATH=A:B:N      N values from A to B, both included (A, B may be 70*deg, pi/2)\n"
@@ -56,6 +62,7 @@ static const char help[] =
     "  --shard I/N            only the I-th of N equal slices of the runs (1 <= I <= N)\n"
     "  --out FILE.csv         where the table goes (required); it appears only when complete\n"
     "  --quiet                no progress bar and no summary\n"
+    "  --resume               continue an interrupted sweep from its checkpoint FILE.csv.partial\n"
     "  --merge                join shard files (same header, every run exactly once)\n"
     "\n"
     "A failed run is a row with its status (the library's code, 0 = success) and message.\n"
@@ -68,7 +75,7 @@ typedef struct sweep_opts {
   int ngrids, nrandoms, nsets, nchannels;
   char extra[6][128];
   double times[MAX_ARGS];
-  int ntimes, quiet, final, jobs, merge;
+  int ntimes, quiet, final, jobs, merge, resume;
   long samples, shard_i, shard_n;
   unsigned long long seed;
   const char *inputs[MAX_ARGS];
@@ -85,11 +92,19 @@ static int push(const char **list, int *n, const char *v, const char *opt) {
   return 0;
 }
 
-/* --at T1,T2,...: constant expressions. */
+/* --at T1,T2,...: constant expressions, none empty. */
 static int parse_times(sweep_opts *o, const char *v) {
   char buf[4096], msg[512];
+  if (strlen(v) >= sizeof buf) return fprintf(stderr, "appell sweep: --at: too long\n"), -1;
   snprintf(buf, sizeof buf, "%s", v);
-  for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+  int item = 0;
+  for (char *tok = buf, *end; tok; tok = end ? end + 1 : NULL) {
+    end = strchr(tok, ',');
+    if (end) *end = '\0';
+    item++;
+    if (tok[strspn(tok, " \t")] == '\0')
+      return fprintf(stderr, "appell sweep: --at '%s': time %d is empty (expected T1,T2,... in "
+                     "seconds)\n", v, item), -1;
     if (o->ntimes >= MAX_ARGS) return fprintf(stderr, "appell sweep: too many --at times\n"), -1;
     if (ap_scene_constant(tok, &o->times[o->ntimes++], msg, sizeof msg) != AP_OK)
       return fprintf(stderr, "appell sweep: --at '%s': %s\n", tok, msg), -1;
@@ -118,6 +133,15 @@ static int parse_count(const char *opt, const char *v, long lo, long *out) {
   return 0;
 }
 
+/* --samples N: 1 to 10^9, as a grid's N (the library's limit, said here before any work). */
+static int parse_samples(sweep_opts *o, const char *v) {
+  if (parse_count("--samples", v, 1, &o->samples) != 0) return -1;
+  if (o->samples > 1000000000L)
+    return fprintf(stderr, "appell sweep: --samples %s: at most 10^9 random samples per grid "
+                   "point\n", v), -1;
+  return 0;
+}
+
 /* Options that take a value; returns 1 when argv[*i] was one, -1 on error, 0 otherwise. */
 static int value_opt(int argc, char **argv, int *i, sweep_opts *o, int *extra) {
   static const char *const mapped[][2] = {
@@ -140,7 +164,7 @@ static int value_opt(int argc, char **argv, int *i, sweep_opts *o, int *extra) {
   if ((r = cli_opt(argc, argv, i, "--at", &v))) return r < 0 ? need("--at") : parse_times(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--shard", &v))) return r < 0 ? need("--shard") : parse_shard(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--samples", &v)))
-    return r < 0 ? need("--samples") : parse_count("--samples", v, 1, &o->samples) ? -1 : 1;
+    return r < 0 ? need("--samples") : parse_samples(o, v) ? -1 : 1;
   if ((r = cli_opt(argc, argv, i, "--seed", &v)))
     return r < 0 ? need("--seed") : parse_count("--seed", v, 0, &x) ? -1 : (o->seed = (unsigned long long)x, 1);
   if ((r = cli_opt(argc, argv, i, "--jobs", &v)) || (r = cli_opt(argc, argv, i, "-j", &v)))
@@ -161,7 +185,7 @@ static int parse_args(int argc, char **argv, sweep_opts *o) {
   static const char *const known[] = {
       "--out", "--grid", "--random", "--samples", "--seed", "--channel", "--at", "--no-final",
       "--set", "--mode", "--method", "--rtol", "--atol", "--t-end", "--interval", "--jobs",
-      "--shard", "--quiet", "--merge", "--help", NULL};
+      "--shard", "--quiet", "--merge", "--resume", "--help", NULL};
   int extra = 0;
   for (int i = 1; i < argc; i++) {
     int r;
@@ -169,6 +193,7 @@ static int parse_args(int argc, char **argv, sweep_opts *o) {
     if (strcmp(argv[i], "--quiet") == 0) o->quiet = 1;
     else if (strcmp(argv[i], "--no-final") == 0) o->final = 0;
     else if (strcmp(argv[i], "--merge") == 0) o->merge = 1;
+    else if (strcmp(argv[i], "--resume") == 0) o->resume = 1;
     else if ((r = value_opt(argc, argv, &i, o, &extra)) != 0) {
       if (r < 0) return -1;
     } else if (argv[i][0] == '-' && argv[i][1]) {
@@ -208,6 +233,15 @@ typedef struct sweep_state {
   char **messages;
   int bar;
   double t_start;
+  char id[17];             /* the sweep's identity (ap_batch_plan_id), in every row */
+  long base;               /* the shard row of values[0] (runs go a batch at a time) */
+  long resumed;            /* rows kept from the checkpoint (--resume) */
+  FILE *ck;                /* the checkpoint: OUT.partial, or a temporary file */
+  char ck_path[PATH_MAX + 16];
+  long failed, ran;        /* failed runs and runs made by this process */
+  int first_status;        /* the first failure's status and message */
+  char first_msg[512];
+  long first_bad;
 } sweep_state;
 
 static double now(void) {
@@ -218,6 +252,7 @@ static double now(void) {
 
 static int on_progress(long done, long total, void *user) {
   sweep_state *s = user;
+  done += s->base, total = s->count;   /* this batch's count, within the shard */
   if (s->bar) {
     double frac = total ? (double)done / (double)total : 1.0, el = now() - s->t_start;
     int w = 30, fill = (int)(frac * w + 0.5);
@@ -258,12 +293,15 @@ static int build_batch(sweep_state *s) {
   def.progress = on_progress, def.user = s;
   def.times = o->times, def.ntimes = o->ntimes;   /* none: t_end */
   int rc = ap_batch_load(o->scene, o->sets, o->nsets, &def, &s->batch, msg, sizeof msg);
-  if (rc != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(rc);
+  if (rc != AP_OK)   /* "channel 'X': ..." is about an option: name it */
+    return fprintf(stderr, "%s%s\n", strncmp(msg, "channel '", 9) ? "" : "appell sweep: --",
+                   msg), cli_exit_code(rc);
   rc = ap_batch_check_plan(s->batch, s->plan, msg, sizeof msg);
   if (rc != AP_OK)
     return fprintf(stderr, "appell sweep: the scene with every parameter at a typical value "
                    "(first grid value, mean): %s\n", msg), cli_exit_code(rc);
-  return EXIT_OK;
+  rc = ap_batch_plan_id(s->batch, s->plan, s->id, sizeof s->id);
+  return rc == AP_OK ? EXIT_OK : EXIT_INTERNAL;
 }
 
 /* The range [t0, t_end] of every run of this shard: the scene's with --set, narrowed by the
@@ -311,19 +349,21 @@ static int check_times(const sweep_state *s) {
 /* ---- the table ---------------------------------------------------------------------------- */
 
 static void write_header(const sweep_state *s, FILE *f) {
-  fputs("run,runs", f);
+  fputs("run,runs,plan", f);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) fprintf(f, ",%s", ap_plan_path(s->plan, r));
   fputs(",status,outcome,events", f);
   for (int j = 0; j < ap_batch_ncols(s->batch); j++) fprintf(f, ",%s", ap_batch_col_name(s->batch, j));
   fputs(",message\n", f);
 }
 
+/* Row i of the current batch (run first + base + i). */
 static void write_row(const sweep_state *s, FILE *f, long i) {
   char buf[1024];
-  fprintf(f, "%ld,%ld", s->first + i, s->total);
+  long run = s->first + s->base + i;
+  fprintf(f, "%ld,%ld,%s", run, s->total, s->id);
   for (int r = 0; r < ap_plan_nparams(s->plan); r++) {
     double x = 0.0;
-    ap_plan_value(s->plan, s->first + i, r, &x, buf, sizeof buf);
+    ap_plan_value(s->plan, run, r, &x, buf, sizeof buf);
     fprintf(f, ",%s", strchr(buf, '=') + 1);
   }
   fprintf(f, ",%d", s->status[i]);
@@ -336,48 +376,132 @@ static void write_row(const sweep_state *s, FILE *f, long i) {
 }
 
 static int summary(const sweep_state *s, double wall) {
-  long failed = 0, first_bad = -1;
-  for (long i = 0; i < s->count; i++)
-    if (s->status[i] != AP_OK && failed++ == 0) first_bad = i;
   if (!s->o->quiet) {
     fprintf(stderr, "appell sweep: %ld runs", s->count);
     if (s->o->shard_n > 1)
       fprintf(stderr, " (shard %ld/%ld: runs %ld..%ld of %ld)", s->o->shard_i, s->o->shard_n,
               s->first, s->first + s->count - 1, s->total);
+    if (s->resumed) fprintf(stderr, ", %ld of them from the checkpoint,", s->resumed);
     fprintf(stderr, " in %.3f s (%.1f runs/s), %ld failed -> %s\n", wall,
-            wall > 0 ? (double)s->count / wall : 0.0, failed, s->o->out);
-    if (first_bad >= 0)
-      fprintf(stderr, "  first failure: run %ld: %s\n", s->first + first_bad,
-              s->messages[first_bad] ? s->messages[first_bad] : ap_strerror(s->status[first_bad]));
+            wall > 0 ? (double)s->ran / wall : 0.0, s->failed, s->o->out);
+    if (s->first_bad >= 0)
+      fprintf(stderr, "  first failure: run %ld: %s\n", s->first_bad,
+              s->first_msg[0] ? s->first_msg : ap_strerror(s->first_status));
   }
-  if (s->count > 0 && failed == s->count) return cli_exit_code(s->status[0]);
+  if (s->ran > 0 && s->failed == s->ran && !s->resumed) return cli_exit_code(s->first_status);
   return EXIT_OK;
 }
 
-static int run_sweep(sweep_state *s, cli_out *out) {
-  long nc = ap_batch_ncols(s->batch), n = s->count > 0 ? s->count : 1;
-  s->values = malloc(sizeof *s->values * (size_t)(n * nc));
-  s->status = malloc(sizeof *s->status * (size_t)n);
-  s->messages = calloc((size_t)n, sizeof *s->messages);
-  if (!s->values || !s->status || !s->messages)
-    return fprintf(stderr, "appell sweep: out of memory for %ld rows\n", s->count), EXIT_INTERNAL;
-  s->bar = !s->o->quiet && isatty(STDERR_FILENO);
-  s->t_start = now();
-  int rc = ap_batch_run_plan(s->batch, s->plan, s->first, s->count, s->values, s->status,
-                             s->messages);
-  double wall = now() - s->t_start;
-  int sig = cli_interrupted();
-  if (rc == AP_BATCH_CANCELLED || sig) {
-    fprintf(stderr, "%sappell sweep: interrupted by %s; no table written\n",
-            s->bar ? "\r\033[K" : "", cli_signal_name(sig));
-    return EXIT_SIGNAL(sig ? sig : SIGINT);
+/* The header line as text (to compare with a checkpoint's). */
+static char *header_text(const sweep_state *s) {
+  char *text = NULL;
+  size_t len = 0;
+  FILE *m = open_memstream(&text, &len);
+  if (!m) return NULL;
+  write_header(s, m);
+  return fclose(m) == 0 ? text : (free(text), NULL);
+}
+
+/* The checkpoint: OUT.partial next to a regular --out (resumed with --resume), else a
+ * temporary file (standard output, a device, a FIFO: no resume). */
+static int open_checkpoint(sweep_state *s, const cli_out *out) {
+  char *header = header_text(s);
+  if (!header) return fprintf(stderr, "appell sweep: out of memory\n"), EXIT_INTERNAL;
+  int code = EXIT_OK;
+  if (out->kind != CLI_OUT_FILE) {
+    if (s->o->resume)
+      code = (fprintf(stderr, "appell sweep: --resume needs --out naming a regular file\n"),
+              EXIT_INPUT);
+    else if (!(s->ck = tmpfile()))
+      code = (fprintf(stderr, "appell sweep: cannot make a temporary file\n"), EXIT_INTERNAL);
+    else fputs(header, s->ck);
+    return free(header), code;
   }
-  if (rc != AP_OK) return fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc);
+  snprintf(s->ck_path, sizeof s->ck_path, "%s.partial", out->path);
+  if (s->o->resume) {
+    s->resumed = sweep_checkpoint_rows(s->ck_path, header, s->id, s->first, s->total, s->count);
+    if (s->resumed < 0) code = EXIT_INPUT;
+    else s->ck = fopen(s->ck_path, "a");
+  } else if (access(s->ck_path, F_OK) == 0) {
+    fprintf(stderr, "appell sweep: %s exists: the checkpoint of an interrupted sweep; --resume "
+            "continues it (or remove it)\n", s->ck_path);
+    code = EXIT_INPUT;
+  } else if ((s->ck = fopen(s->ck_path, "w"))) {
+    fputs(header, s->ck);
+    fflush(s->ck);   /* on disk before any run: a resume finds the sweep's header */
+  }
+  if (code == EXIT_OK && !s->ck)
+    code = (fprintf(stderr, "appell sweep: %s: %s\n", s->ck_path, strerror(errno)), EXIT_INTERNAL);
+  free(header);
+  return code;
+}
+
+/* Rows of the batch just run: appended to the checkpoint (flushed and synced), counted. */
+static int keep_batch(sweep_state *s, long n) {
+  for (long i = 0; i < n; i++) {
+    write_row(s, s->ck, i);
+    if (s->status[i] != AP_OK && s->failed++ == 0) {
+      s->first_bad = s->first + s->base + i, s->first_status = s->status[i];
+      snprintf(s->first_msg, sizeof s->first_msg, "%s", s->messages[i] ? s->messages[i] : "");
+    }
+  }
+  s->ran += n;
+  ap_batch_messages_free(n, s->messages);
+  if (fflush(s->ck) != 0 || ferror(s->ck) || fsync(fileno(s->ck)) != 0)
+    return fprintf(stderr, "appell sweep: cannot write the checkpoint %s: %s\n",
+                   s->ck_path[0] ? s->ck_path : "(temporary)", strerror(errno)), EXIT_INTERNAL;
+  return EXIT_OK;
+}
+
+/* The checkpoint's text into the table at --out (tools/output.c's rules), then removed. */
+static int publish(sweep_state *s, cli_out *out) {
   int code = cli_out_open(out);
   if (code != EXIT_OK) return code;
-  write_header(s, out->f);
-  for (long i = 0; i < s->count; i++) write_row(s, out->f, i);
-  code = cli_out_close(out, EXIT_OK);
+  char buf[1 << 16];
+  size_t got;
+  rewind(s->ck);
+  FILE *in = s->ck_path[0] ? fopen(s->ck_path, "rb") : s->ck;
+  while (in && (got = fread(buf, 1, sizeof buf, in)) > 0) fwrite(buf, 1, got, out->f);
+  if (!in || ferror(in)) code = EXIT_INTERNAL;
+  if (in && in != s->ck) fclose(in);
+  code = cli_out_close(out, code);
+  if (code == EXIT_OK && s->ck_path[0]) remove(s->ck_path);
+  return code;
+}
+
+/* The shard's runs a batch at a time (memory does not depend on the number of runs), each
+ * batch's rows checkpointed; then the table. */
+static int run_sweep(sweep_state *s, cli_out *out) {
+  long nc = ap_batch_ncols(s->batch), batch = 64L * (s->o->jobs > 0 ? s->o->jobs : 8);
+  s->values = malloc(sizeof *s->values * (size_t)(batch * nc + 1));
+  s->status = malloc(sizeof *s->status * (size_t)batch);
+  s->messages = calloc((size_t)batch, sizeof *s->messages);
+  s->first_bad = -1;
+  if (!s->values || !s->status || !s->messages)
+    return fprintf(stderr, "appell sweep: out of memory\n"), EXIT_INTERNAL;
+  int code = open_checkpoint(s, out);
+  s->bar = !s->o->quiet && isatty(STDERR_FILENO);
+  s->t_start = now();
+  for (s->base = s->resumed; code == EXIT_OK && s->base < s->count; s->base += batch) {
+    long n = s->count - s->base < batch ? s->count - s->base : batch;
+    int rc = ap_batch_run_plan(s->batch, s->plan, s->first + s->base, n, s->values, s->status,
+                               s->messages);
+    int sig = cli_interrupted();
+    if (rc == AP_BATCH_CANCELLED || sig) {
+      ap_batch_messages_free(n, s->messages);
+      fprintf(stderr, "%sappell sweep: interrupted by %s; no table written%s%s%s\n",
+              s->bar ? "\r\033[K" : "", cli_signal_name(sig),
+              s->ck_path[0] ? "; the finished runs are in " : "", s->ck_path,
+              s->ck_path[0] ? " (--resume continues)" : "");
+      code = EXIT_SIGNAL(sig ? sig : SIGINT);
+    } else if (rc != AP_OK) {
+      code = (fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc));
+    } else {
+      code = keep_batch(s, n);
+    }
+  }
+  double wall = now() - s->t_start;
+  if (code == EXIT_OK) code = publish(s, out);
   return code == EXIT_OK ? summary(s, wall) : code;
 }
 
@@ -400,7 +524,7 @@ int cmd_sweep(int argc, char **argv) {
   if (code == EXIT_OK) code = build_batch(&s);
   if (code == EXIT_OK) code = check_times(&s);
   if (code == EXIT_OK) code = run_sweep(&s, &out);
-  if (s.messages) ap_batch_messages_free(s.count, s.messages);
+  if (s.ck) fclose(s.ck);
   free(s.messages);
   free(s.values);
   free(s.status);

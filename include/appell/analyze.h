@@ -105,6 +105,11 @@ AP_API int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, con
                          const double *v, ap_lin **out);
 AP_API void ap_lin_free(ap_lin *L);
 AP_API const char *ap_lin_message(const ap_lin *L);
+/* A function the speed sweep (ap_lin_sweep_speed) calls before each speed it solves (each
+ * sweep value, each refinement of a characteristic point), with user: a non-zero return stops
+ * the sweep with AP_ERR_INTERRUPTED (ap_lin_message says at which speed). poll NULL: none
+ * (default). For Ctrl-C in programs that run long sweeps. */
+AP_API void ap_lin_set_poll(ap_lin *L, int (*poll)(void *user), void *user);
 
 /* Find the operating point at speed parameter s (ignored without def.speed_dir; NaN: leave the
  * speeds as they are; an infinity: AP_ERR_ARG). Starts from the last operating point (or the guess), so a sweep is a

@@ -38,16 +38,16 @@ AP_API int ap_plan_create(ap_plan **out);
 AP_API void ap_plan_free(ap_plan *p);
 
 /* A grid over one path: "PATH=A:B:N" (N values from A to B, equally spaced, both ends
- * included; A and B may be constant expressions such as 70*deg) or "PATH=V1,V2,..." (the
- * values as written: numbers, expressions or words such as verner6). Grids combine as a
- * product, the first one varying slowest. */
+ * included; A and B may be constant expressions such as 70*deg; B - A must be finite) or
+ * "PATH=V1,V2,..." (the values as written: numbers, expressions or words such as verner6).
+ * Grids combine as a product, the first one varying slowest. */
 AP_API int ap_plan_add_grid(ap_plan *p, const char *spec, char *msg, size_t msg_len);
 /* A random value for one path: "PATH=normal(MU,SIGMA)" or "PATH=uniform(A,B)" (A <= x < B);
  * parameters may be constant expressions. Needs ap_plan_set_samples. */
 AP_API int ap_plan_add_random(ap_plan *p, const char *spec, char *msg, size_t msg_len);
-/* samples random draws per grid point (common random numbers: sample j has the same values
- * at every grid point), from seed. Draw j of parameter r depends only on (seed, j, r), so any
- * slice of a plan draws the same numbers as the whole. */
+/* samples random draws per grid point (1 to 10^9, as a grid's N; common random numbers:
+ * sample j has the same values at every grid point), from seed. Draw j of parameter r
+ * depends only on (seed, j, r), so any slice of a plan draws the same numbers as the whole. */
 AP_API int ap_plan_set_samples(ap_plan *p, long samples, uint64_t seed);
 
 /* Runs in the plan: the product of the grid sizes times the samples (1 without random ones);
@@ -117,6 +117,13 @@ AP_API void ap_batch_free(ap_batch *b);
  *   CHANNEL@T     each channel at each time, times outer (T printed with %.10g) */
 AP_API int ap_batch_ncols(const ap_batch *b);
 AP_API const char *ap_batch_col_name(const ap_batch *b, int j);
+
+/* The identity of a sweep of plan p on batch b: 16 hex digits and a NUL in id (len >= 17),
+ * a hash of the scene text, the batch's overrides (as a set of PATH=VALUE, numbers by value),
+ * its channels, times and final_state, and the plan's parameters, values, samples and seed.
+ * Slices of one sweep share it wherever they run; `appell sweep --merge` refuses shards whose
+ * identities differ. AP_ERR_ARG for NULL arguments or len < 17. */
+AP_API int ap_batch_plan_id(const ap_batch *b, const ap_plan *p, char *id, size_t len);
 
 /* Load the scene once with these overrides after the batch's own, without running it: the
  * overrides' paths and values are checked (AP_ERR_ARG and the scene's message otherwise). */

@@ -38,6 +38,14 @@ AP_API int ap_scene_load_string(const char *text, size_t len, const char *name,
                                 const char *const *sets, int nsets, ap_scene **out, char *msg,
                                 size_t msg_len);
 AP_API void ap_scene_free(ap_scene *s);
+/* Read a scene file as ap_scene_load reads it: at most 16 MiB (a larger file, /dev/zero, is
+ * refused after reading 16 MiB + 1 bytes), not a directory. *text is a NUL-terminated copy of
+ * the *len bytes, to be freed with ap_scene_text_free; on failure *text is NULL, the status
+ * AP_ERR_ARG (AP_ERR_NOMEM when out of memory) and msg says "PATH: why"; errno is fopen's
+ * when the file could not be opened, 0 after any other outcome. ap_scene_load_string
+ * refuses text longer than 16 MiB the same way. */
+AP_API int ap_scene_read(const char *path, char **text, size_t *len, char *msg, size_t msg_len);
+AP_API void ap_scene_text_free(char *text);
 
 /* The compiled model (owned by the scene). */
 AP_API const ap_model *ap_scene_model(const ap_scene *s);
@@ -80,6 +88,16 @@ AP_API int ap_scene_initial_state(ap_scene *s, double *q0, double *v0, char *rep
  * the expression)". Only reads the scene: safe from any thread. For a run that failed with
  * AP_ERR_CALLBACK or AP_ERR_NAN, call it at the failing time to locate the cause. */
 AP_API int ap_scene_check_time(const ap_scene *s, double t, char *msg, size_t msg_len);
+/* After a run of this scene failed mid-run (ap_sim_advance to tout returned an error, whatever
+ * the method or mode): the scene expression that is not finite where it failed, if any.
+ * Checks every expression of t and every expression of the state at the failing evaluation
+ * (ap_sim_data(sim): its t, q and v, when they are finite), then the expressions of t at tout
+ * (a drive with a pole at tout makes the integrator give up short of it). AP_ERR_ARG and msg
+ * "FILE:LINE:COLUMN: key.path: 'EXPR' is not finite at t = T: OPERATION (column C of the
+ * expression)" when one is found; AP_OK and msg "" otherwise (the cause is not a scene
+ * expression). AP_ERR_ARG for NULL sc or sim. */
+AP_API int ap_scene_locate_failure(const ap_scene *s, const ap_sim *sim, double tout, char *msg,
+                                   size_t msg_len);
 
 /* Output channels: column names of a row (column 0 is "t") and their values at the
  * simulation's current state. Count 0 and name NULL when s is NULL or i out of range; the row

@@ -152,6 +152,9 @@ typedef struct ap_method_info {
   const char *summary;     /* e.g. "Dormand-Prince 5(4), ARKODE ERKStep" */
   int order;               /* classical order of the propagated solution */
   int adaptive;            /* 1: error-controlled steps; 0: fixed step h_fixed */
+  double rtol_floor;       /* below this rtol the method's global error on the reference
+                              problems grew past 200 x rtol (docs/steppers.md, "Accuracy");
+                              0: no such floor down to rtol 1e-12 */
 } ap_method_info;
 
 AP_API int ap_method_count(void);

@@ -156,8 +156,11 @@ struct ap_lin {
   ap_lin_method used;       /* the method of the last linearization */
   char fallback[512];       /* why Ridders' method was used under AP_LIN_AUTO ("" otherwise) */
   char msg[512];
-  const char *bad_list;     /* "free" or "independent" when a name there is not a variable */
+  const char *bad_list;     /* "free", "independent" or "inputs" when a name there is not a
+                               variable (a speed, for inputs) */
   int bad_index;            /* its entry */
+  int (*poll)(void *user);  /* ap_lin_set_poll: asked before each speed of a sweep */
+  void *poll_user;
 };
 
 void ap_an_msg(ap_lin *L, const char *fmt, ...)

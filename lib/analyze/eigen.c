@@ -128,7 +128,13 @@ static int run_geevx(ap_lin *L, int n) {
   lapack_int info = LAPACKE_dgeevx(LAPACK_COL_MAJOR, 'B', 'V', 'V', 'B', n, a, n, L->ere, L->eim,
                                    vl, n, vr, n, &ilo, &ihi, scale, &abnrm, L->ercond,
                                    L->ercondv);
-  if (info != 0) {
+  if (info == LAPACK_WORK_MEMORY_ERROR || info == LAPACK_TRANSPOSE_MEMORY_ERROR) {
+    ap_an_msg(L, "dgeevx: out of memory for its workspace (%d x %d state matrix)", n, n);
+    rc = AP_ERR_NOMEM;   /* LAPACKE allocates the workspace itself */
+  } else if (info < 0) {
+    ap_an_msg(L, "dgeevx: argument %d is invalid (a bug in Appell)", (int)-info);
+    rc = AP_ERR_INTERNAL;
+  } else if (info > 0) {
     ap_an_msg(L, "dgeevx failed (info %d): the QR algorithm did not converge", (int)info);
     rc = AP_ERR_SINGULAR;
   }
@@ -149,8 +155,17 @@ static int run_geevx(ap_lin *L, int n) {
   return rc;
 }
 
+static int eigen(ap_lin *L, const int *sel, int ns, int drop_cyclic);
+
 int ap_lin_eigen(ap_lin *L, const int *sel, int ns, int drop_cyclic) {
   if (!L || !L->linearized) return AP_ERR_ARG;
+  L->msg[0] = '\0';
+  int rc = eigen(L, sel, ns, drop_cyclic);
+  if (rc == AP_ERR_NOMEM && !L->msg[0]) ap_an_msg(L, "eigenvalues: out of memory");
+  return rc;
+}
+
+static int eigen(ap_lin *L, const int *sel, int ns, int drop_cyclic) {
   int nx = L->nx, n = 0, *inK = calloc((size_t)nx + 1, sizeof *inK);
   if (!inK) return AP_ERR_NOMEM;
   for (int i = 0; i < nx; i++) inK[i] = sel ? 0 : !(drop_cyclic && L->cyclic[i]);

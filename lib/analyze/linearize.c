@@ -116,7 +116,13 @@ static int bind_inputs(ap_lin *L) {
   for (const char *const *s = L->def.inputs; s && *s; s++) {
     int i = ap_model_find_speed(L->m, *s);
     if (i < 0) {
-      ap_an_msg(L, "input '%s' is not a speed of model '%s'", *s, ap_model_name(L->m));
+      const char **names = calloc((size_t)L->k + 1, sizeof *names);
+      for (int j = 0; names && j < L->k; j++) names[j] = ap_model_speed_name(L->m, j);
+      const char *sug = names ? ap_suggest(*s, names, L->k) : NULL;
+      ap_an_msg(L, "inputs: '%s' is not a speed of model '%s'%s%s%s", *s, ap_model_name(L->m),
+                sug ? " (did you mean '" : "", sug ? sug : "", sug ? "'?)" : "");
+      free(names);
+      L->bad_list = "inputs", L->bad_index = (int)(s - L->def.inputs);   /* located by scene */
       return AP_ERR_ARG;
     }
     if (L->nu >= L->k) break;

@@ -298,6 +298,11 @@ typedef struct speed_ctx {
 
 static int speed_eig(double s, int n, double *re, double *im, void *user) {
   speed_ctx *c = user;
+  int stop = c->L->poll ? c->L->poll(c->L->poll_user) : 0;
+  if (stop) {
+    ap_an_msg(c->L, "interrupted at speed %.17g (the poll function returned %d)", s, stop);
+    return AP_ERR_INTERRUPTED;
+  }
   int rc = ap_lin_operating_point(c->L, s);
   if (rc == AP_OK) rc = ap_lin_linearize(c->L);
   if (rc == AP_OK) rc = ap_lin_eigen(c->L, c->sel, c->ns, c->drop);
@@ -322,4 +327,9 @@ int ap_lin_sweep_speed(ap_lin *L, const double *s, int count, const int *sel, in
   rc = ap_lin_sweep_run(speed_eig, &c, L->ne, s, count, ptol, 1e-6, out, msg, sizeof msg);
   if (rc != AP_OK && L->msg[0] == '\0') ap_an_msg(L, "%s", msg);
   return rc;
+}
+
+void ap_lin_set_poll(ap_lin *L, int (*poll)(void *user), void *user) {
+  if (!L) return;
+  L->poll = poll, L->poll_user = user;
 }

@@ -18,8 +18,6 @@
 #include "core/defcheck.h"
 #include "core/text.h"
 
-#define BAT_MAX_FILE (16L << 20)
-
 ap_batch_def ap_batch_def_default(void) {
   ap_batch_def d;
   memset(&d, 0, sizeof d);
@@ -98,6 +96,20 @@ static char *fmt_dup(const char *fmt, ...) {
   return s;
 }
 
+/* "channel 'X': no output column ... (did you mean 'Y'?)". */
+static int unknown_channel(const ap_scene *sc, const char *name, char *msg, size_t len) {
+  int nc = ap_scene_output_count(sc);
+  const char **names = malloc(sizeof *names * (size_t)(nc + 1));
+  for (int i = 0; names && i < nc; i++) names[i] = ap_scene_output_name(sc, i);
+  const char *near = names ? ap_suggest(name, names, nc) : NULL;
+  char hint[300] = "";
+  if (near) snprintf(hint, sizeof hint, "did you mean '%s'? ", near);
+  free(names);
+  return say(msg, len, AP_ERR_ARG, "channel '%s': no output column of that name in the scene "
+             "(%sthe columns are those of appell run's CSV header; output.channels chooses "
+             "them)", name, hint);
+}
+
 /* The result columns; the channels must be columns of the scene. */
 static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
   static const char *const fixed[AP_BAT_FIXED_COLS] = {"t", "steps", "rhs_evals", "err_fails",
@@ -122,10 +134,7 @@ static int make_cols(ap_batch *b, const ap_scene *sc, char *msg, size_t len) {
     int found = 0;
     for (int i = 0; i < ap_scene_output_count(sc) && !found; i++)
       found = strcmp(ap_scene_output_name(sc, i), b->channels[c]) == 0;
-    if (!found)
-      return say(msg, len, AP_ERR_ARG, "no output column '%s' in the scene (its columns are "
-                 "those of appell run's CSV header; output.channels chooses them)",
-                 b->channels[c]);
+    if (!found) return unknown_channel(sc, b->channels[c], msg, len);
   }
   return AP_OK;
 }
@@ -141,6 +150,10 @@ static int copy_def(ap_batch *b, const ap_batch_def *def, char *msg, size_t len)
       (b->def.ntimes && !b->def.times))
     return say(msg, len, AP_ERR_ARG, "invalid batch definition: nchannels %d, ntimes %d (need "
                ">= 0, and the arrays when positive)", b->def.nchannels, b->def.ntimes);
+  for (int c = 0; c < b->def.nchannels; c++)
+    if (!b->def.channels[c])
+      return say(msg, len, AP_ERR_ARG, "invalid batch definition: channel %d of %d is NULL", c,
+                 b->def.nchannels);
   b->channels = copy_strings(b->def.channels, b->def.nchannels);
   b->times = malloc(sizeof *b->times * (size_t)(b->def.ntimes + 1));
   b->order = malloc(sizeof *b->order * (size_t)(b->def.ntimes + 1));
@@ -200,18 +213,11 @@ int ap_batch_create(const char *text, size_t len, const char *name, const char *
 int ap_batch_load(const char *path, const char *const *sets, int nsets, const ap_batch_def *def,
                   ap_batch **out, char *msg, size_t msg_len) {
   if (out) *out = NULL;
-  FILE *f = path ? fopen(path, "rb") : NULL;
-  char ebuf[128];
-  if (!f) return say(msg, msg_len, AP_ERR_ARG, "%s: cannot open: %s", path ? path : "(null)",
-                     ap_core_errno_text(errno, ebuf, sizeof ebuf));
-  char *buf = malloc((size_t)BAT_MAX_FILE + 1);
-  size_t len = buf ? fread(buf, 1, (size_t)BAT_MAX_FILE + 1, f) : 0;
-  int bad = !buf || ferror(f) || len > (size_t)BAT_MAX_FILE;
-  fclose(f);
-  int rc = !buf ? say(msg, msg_len, AP_ERR_NOMEM, "%s: out of memory", path)
-           : bad ? say(msg, msg_len, AP_ERR_ARG, "%s: read error or larger than 16 MiB", path)
-                 : ap_batch_create(buf, len, path, sets, nsets, def, out, msg, msg_len);
-  free(buf);
+  char *buf = NULL;
+  size_t len = 0;
+  int rc = ap_scene_read(path, &buf, &len, msg, msg_len);
+  if (rc == AP_OK) rc = ap_batch_create(buf, len, path, sets, nsets, def, out, msg, msg_len);
+  ap_scene_text_free(buf);
   return rc;
 }
 

@@ -4,6 +4,7 @@
  *   batch.c      ap_batch: the scene text, the overrides, the result columns; checks
  *   batch_run.c  one run: load, initial state, simulate over the output times, summarize
  *   pool.c       the thread pool: workers take run indices in order; progress; cancel
+ *   identity.c   a sweep's identity: a hash of the scene, the overrides and the plan
  *
  * Invariant: after ap_batch_create an ap_batch is only read, so any number of workers share
  * it; everything a run writes (scene, model, data, simulation, row) is its own. */
@@ -50,6 +51,12 @@ typedef struct ap_bat_source {
   const ap_plan *plan;      /* or the plan's run first + i */
   long first;
 } ap_bat_source;
+
+/* FNV-1a (64 bits) of n bytes, continuing from h (start: AP_BAT_HASH0). */
+#define AP_BAT_HASH0 0xcbf29ce484222325ULL
+uint64_t ap_bat_hash(uint64_t h, const void *data, size_t n);
+/* The plan's part of a sweep's identity (plan.c). */
+uint64_t ap_bat_plan_hash(const ap_plan *p, uint64_t h);
 
 int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
                 char **messages);

@@ -100,9 +100,11 @@ static int record(one_run *r, double t, int grid, double tol) {
 static int advance(one_run *r, double t) {
   int rc = ap_sim_advance(r->sim, t);
   if (rc == AP_OK) return AP_OK;
-  char what[160];   /* never cut: 29 + 24 (%.10g) + 2 + 58 (longest ap_strerror) + 2 bytes */
-  snprintf(what, sizeof what, "the simulation failed at t = %.10g: %s: ", ap_sim_time(r->sim),
-           ap_strerror(rc));
+  char what[1200];   /* the scene expression at fault first, when there is one */
+  int n = ap_scene_locate_failure(r->sc, r->sim, t, what, sizeof what - 100) != AP_OK && what[0]
+              ? (int)strlen(what) : 0;
+  snprintf(what + n, sizeof what - (size_t)n, "%sthe simulation failed at t = %.10g: %s: ",
+           n ? "; " : "", ap_sim_time(r->sim), ap_strerror(rc));
   return fail(r, rc, what, ap_sim_message(r->sim));
 }
 

@@ -19,6 +19,7 @@
 
 #include "appell/batch.h"
 #include "appell/scene.h"
+#include "batch/batch_int.h"
 
 #define PLAN_MAX_PARAMS 64
 #define PLAN_MAX_POINTS 1000000000L
@@ -109,6 +110,11 @@ static int parse_range(const char *spec, const char *rest, plan_param *q, char *
   int rc = number(spec, rest, (size_t)(c1 - rest), &q->a, msg, len);
   if (rc == AP_OK) rc = number(spec, c1 + 1, (size_t)(c2 - c1 - 1), &q->b, msg, len);
   if (rc != AP_OK) return rc;
+  if (!isfinite(q->b - q->a)) {
+    if (msg && len) snprintf(msg, len, "'%s': B - A = %g - (%g) overflows: the values would not "
+                             "be finite", spec, q->b, q->a);
+    return AP_ERR_ARG;
+  }
   char *end = NULL;
   long n = strtol(c2 + 1, &end, 10);
   while (end && isspace((unsigned char)*end)) end++;
@@ -243,7 +249,7 @@ int ap_plan_add_random(ap_plan *p, const char *spec, char *msg, size_t len) {
 }
 
 int ap_plan_set_samples(ap_plan *p, long samples, uint64_t seed) {
-  if (!p || samples < 1) return AP_ERR_ARG;
+  if (!p || samples < 1 || samples > PLAN_MAX_POINTS) return AP_ERR_ARG;
   p->samples = samples, p->seed = seed;
   return ap_plan_count(p) < 0 ? (p->samples = 0, AP_ERR_ARG) : AP_OK;
 }
@@ -316,4 +322,27 @@ int ap_plan_typical(const ap_plan *p, int r, char *buf, size_t len) {
     case PL_NORMAL: return write_set(q, NULL, q->a, buf, len);
     default: return write_set(q, NULL, 0.5 * (q->a + q->b), buf, len);
   }
+}
+
+/* The plan's part of a sweep's identity (identity.c): every parameter's path, kind and values
+ * as numbers (lists: each number, or each word), the samples and the seed; not the text the
+ * plan was written in, so 1:2:3 and 1.0:2:3 are the same plan. */
+uint64_t ap_bat_plan_hash(const ap_plan *p, uint64_t h) {
+  long counts[2] = {p->npar, p->samples};
+  h = ap_bat_hash(h, counts, sizeof counts);
+  h = ap_bat_hash(h, &p->seed, sizeof p->seed);
+  for (int r = 0; r < p->npar; r++) {
+    const plan_param *q = &p->par[r];
+    h = ap_bat_hash(h, q->path, strlen(q->path) + 1);
+    h = ap_bat_hash(h, &q->kind, sizeof q->kind);
+    h = ap_bat_hash(h, &q->n, sizeof q->n);
+    if (q->kind != PL_LIST) {
+      double ab[2] = {q->a + 0.0, q->b + 0.0};   /* -0 as 0 */
+      h = ap_bat_hash(h, ab, sizeof ab);
+    }
+    for (long m = 0; q->kind == PL_LIST && m < q->n; m++)
+      h = isnan(q->x[m]) ? ap_bat_hash(h, q->words[m], strlen(q->words[m]) + 1)
+                         : ap_bat_hash(h, &q->x[m], sizeof q->x[m]);
+  }
+  return h;
 }

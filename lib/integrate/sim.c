@@ -359,11 +359,24 @@ static const ap_meff *stiff_effect(const ap_model *m) {
   return NULL;
 }
 
+/* Did the failing evaluation's state grow far past the last accepted one (more than 1e3 times
+ * its largest entry, and 1e3)? A function of the model (a scene expression) that is not
+ * finite at a state like the accepted one is no sign of stiffness: fly.angle^0.5 once the
+ * angle is negative, a drive past its domain. */
+static int grown(const ap_sim *s) {
+  double ref = 1.0, big = 0.0;
+  for (int i = 0; i < s->ny; i++) ref = fmax(ref, fabs(s->y[i]));
+  for (int i = 0; i < s->n; i++) big = fmax(big, fabs(s->d->q[i]));
+  for (int i = 0; i < s->k; i++) big = fmax(big, fabs(s->d->v[i]));
+  return !(big <= 1e3 * ref);
+}
+
 /* A failed step (status rc, message in s->msg): when the integrator gave up (max_steps, the step
  * size collapsed) or the solution blew up with an explicit or Adams method on a model with a
  * motor, spring or damper, append the hint to try BDF. The status is unchanged. */
 static int stiff_hint(ap_sim *s, int rc) {
-  const ap_meff *e = rc == AP_ERR_SOLVER || rc == AP_ERR_NAN ? stiff_effect(s->m) : NULL;
+  int diverged = rc == AP_ERR_SOLVER || (rc == AP_ERR_NAN && (s->rhs_diverged || grown(s)));
+  const ap_meff *e = diverged ? stiff_effect(s->m) : NULL;
   if (!e || s->dae || strcmp(s->meth->name, "bdf") == 0) return rc;
   const char *kind = e->def.kind == AP_EFFECT_MOTOR ? "motor"
                      : e->def.kind == AP_EFFECT_SPRING ? "spring" : "damper";
@@ -388,7 +401,7 @@ static int check_tout(ap_sim *s, double tout) {
 /* One step towards tout of the stepper or IDA; AP_OK or the failure with s->msg set. */
 static int advance_one(ap_sim *s, double tout) {
   double t = s->t;
-  s->rhs_status = AP_OK;
+  s->rhs_status = AP_OK, s->rhs_diverged = 0;
   if (s->dae) {
     int rc = ap_dae_one(s->dae, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
@@ -412,12 +425,40 @@ static int advance_one(ap_sim *s, double tout) {
   return rc;
 }
 
+/* The stepper's last step size (0 in DAE mode). */
+static double last_h(const ap_sim *s) {
+  if (s->dae) return 0.0;
+  ap_step_stats st;
+  ap_step_get_stats(s->st, &st);
+  return fabs(st.h_last);
+}
+
+/* max_steps reached short of tout. When the step size kept shrinking (the last step below
+ * half the one at half of max_steps: near a pole of a drive, h falls like the square of the
+ * distance left), raising max_steps is the wrong advice: say that the equations may be
+ * singular ahead. A stiff model keeps a small but steady step and gets the stiffness hint. */
+static int max_steps_failure(ap_sim *s, double t_start, double tout, double h_mid) {
+  double h = last_h(s);
+  if (h > 0 && h < 0.5 * h_mid)
+    return ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps from t = %.17g "
+                       "reached only t = %.17g, short of the output time %.17g, with a step "
+                       "size that kept shrinking (%.3g at half of them, %.3g at the end): the "
+                       "equations may be singular ahead (a drive, force or set-point with a "
+                       "pole?); check them before raising max_steps", s->m->name,
+                       s->def.max_steps, t_start, s->t, tout, h_mid, h);
+  return stiff_hint(s, ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps "
+                                   "from t = %.17g reached only t = %.17g, short of the "
+                                   "output time %.17g (raise max_steps, in a scene "
+                                   "simulation.max_steps)", s->m->name, s->def.max_steps,
+                                   t_start, s->t, tout));
+}
+
 int ap_sim_advance(ap_sim *s, double tout) {
   if (!s) return AP_ERR_ARG;
   if (s->failed) return s->failed;              /* s->msg still says why */
   int rc = check_tout(s, tout);
   if (rc != AP_OK) return rc;
-  double t_start = s->t;
+  double t_start = s->t, h_mid = 0.0;
   for (long steps = 0; s->t < tout; steps++) {
     int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
     if (stop) {
@@ -425,12 +466,8 @@ int ap_sim_advance(ap_sim *s, double tout) {
       return rc != AP_OK ? rc : ap_drv_fail(s, AP_ERR_INTERRUPTED, "interrupted at t = %.17g "
                                             "(the poll function returned %d)", s->t, stop);
     }
-    if (steps >= s->def.max_steps)
-      return stiff_hint(s, ap_drv_fail(s, AP_ERR_SOLVER, "system '%s': max_steps = %ld steps "
-                                       "from t = %.17g reached only t = %.17g, short of the "
-                                       "output time %.17g (raise max_steps, in a scene "
-                                       "simulation.max_steps)", s->m->name, s->def.max_steps,
-                                       t_start, s->t, tout));
+    if (steps == s->def.max_steps / 2) h_mid = last_h(s);
+    if (steps >= s->def.max_steps) return max_steps_failure(s, t_start, tout, h_mid);
     rc = advance_one(s, tout);
     if (rc == AP_STOPPED) break;
     if (rc != AP_OK) return rc;
@@ -489,6 +526,7 @@ static int fill_info(const ap_step_method *meth, ap_method_info *info) {
   info->summary = meth->summary;
   info->order = meth->order;
   info->adaptive = meth->adaptive;
+  info->rtol_floor = ap_step_rtol_floor(meth->name);
   return AP_OK;
 }
 

@@ -44,6 +44,8 @@ struct ap_sim {
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
   double *phi;              /* (nphi) DAE mode: scratch for phi(q) after a step */
   int rhs_status;           /* last failure of the right-hand side */
+  int rhs_diverged;         /* 1 when that failure was a trial state that is not finite (the
+                               step diverged), 0 when a function of the model failed */
   int failed;               /* DAE mode: a check after an IDA step failed; every later advance
                                returns it (IDA has moved past the state kept in y) */
   char rhs_msg[512];

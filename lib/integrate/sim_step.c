@@ -44,6 +44,7 @@ static int check_trial(ap_sim *s, double t, const double *y) {
     what = ap_model_speed_name(s->m, s->d->perm[s->d->rank + bad - s->n]);
   else if (bad >= 0) what = ap_model_speed_name(s->m, bad - s->n);
   s->rhs_status = AP_ERR_NAN;
+  s->rhs_diverged = 1;
   if (!isfinite(t))
     snprintf(s->rhs_msg, sizeof s->rhs_msg, "system '%s': the %s stepper's step from t = %.17g "
              "overflowed (its next time is %g): the state's derivatives there are too large "

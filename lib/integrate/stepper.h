@@ -78,6 +78,8 @@ int ap_step_native_projection(const ap_step_method *meth);
 int ap_step_method_count(void);
 const ap_step_method *ap_step_method_get(int i);
 const ap_step_method *ap_step_method_find(const char *name);   /* NULL if unknown */
+/* The smallest rtol a method delivers on the reference problems (accuracy.c); 0: no floor. */
+double ap_step_rtol_floor(const char *name);
 
 /* Create a stepper of method meth for y' = f(t, y), y(t0) = y0. */
 int ap_step_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, double t0,

@@ -38,16 +38,36 @@ static int no_joint(sc_ctx *c, const sc_scene *s, const sc_node *key) {
   return AP_ERR_ARG;
 }
 
-/* JOINT: {KEY: value} maps: joints exist, keys are the joint's initial: keys, values are
- * numbers (or sequences of numbers), all checked here with the section's own locations (the
- * guess applies them later as overrides of initial:, whose messages would point there). */
-static int check_joint_map(sc_ctx *c, const sc_scene *s, const sc_node *n) {
+/* A key of initial: that gives a speed: rate, vx vy vz, omega, omega_body, *_rate. */
+static int is_rate_key(const char *k) {
+  size_t n = strlen(k);
+  return strcmp(k, "rate") == 0 || (n == 2 && k[0] == 'v') || strcmp(k, "omega") == 0 ||
+         strcmp(k, "omega_body") == 0 || (n > 5 && strcmp(k + n - 5, "_rate") == 0);
+}
+
+/* speed: gives rates only (its values are rates per unit of the speed parameter). */
+static int check_rates(sc_ctx *c, const sc_node *m) {
+  for (int j = 0; j < m->n; j++)
+    if (!is_rate_key(m->keys[j]->text))
+      return sc_err(c, m->keys[j], "'%s' is a coordinate; speed: gives the initial rates "
+                    "proportional to the speed parameter (rate, vx, heading_rate, omega, ...)",
+                    m->keys[j]->text);
+  return AP_OK;
+}
+
+/* JOINT: {KEY: value} maps: joints exist, keys are the joint's initial: keys (for speed:, its
+ * rates), no driven coordinate is given, values are numbers (or sequences of numbers), all
+ * checked here with the section's own locations (the guess applies them later as overrides of
+ * initial:, whose messages would point at a --set the user never gave). */
+static int check_joint_map(sc_ctx *c, const sc_scene *s, const sc_node *n, int rates) {
   if (sc_expect(c, n, SC_MAP)) return AP_ERR_ARG;
   for (int i = 0; i < n->n; i++) {
     int jt = sc_find_joint(s, n->keys[i]->text);
     if (jt < 0) return no_joint(c, s, n->keys[i]);
     const sc_node *m = n->kids[i];
-    if (sc_check_keys(c, m, sc_init_keys(s->joints[jt].def.kind))) return AP_ERR_ARG;
+    if (sc_check_keys(c, m, sc_init_keys(s->joints[jt].def.kind)) ||
+        sc_check_driven(c, m, &s->joints[jt]) || (rates && check_rates(c, m)))
+      return AP_ERR_ARG;
     for (int j = 0; j < m->n; j++) {
       const sc_node *v = m->kids[j];
       double x;
@@ -86,8 +106,8 @@ int sc_parse_linearize(sc_ctx *c, const sc_scene *s) {
       sc_get_bool(c, n, "drop_cyclic", &drop))
     return AP_ERR_ARG;
   const sc_node *v;
-  if ((v = sc_map_get(n, "initial")) && check_joint_map(c, s, v)) return AP_ERR_ARG;
-  if ((v = sc_map_get(n, "speed")) && check_joint_map(c, s, v)) return AP_ERR_ARG;
+  if ((v = sc_map_get(n, "initial")) && check_joint_map(c, s, v, 0)) return AP_ERR_ARG;
+  if ((v = sc_map_get(n, "speed")) && check_joint_map(c, s, v, 1)) return AP_ERR_ARG;
   static const char *const lists[] = {"free", "independent", "inputs", "states"};
   for (int i = 0; i < 4; i++)
     if ((v = sc_map_get(n, lists[i])) && check_names(c, v)) return AP_ERR_ARG;

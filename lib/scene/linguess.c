@@ -126,13 +126,14 @@ ap_lin_def ap_scene_lin_def(const ap_scene_lin_guess *g) {
   return def;
 }
 
-/* A name of the section's free: or independent: list that is not a state variable: the
+/* A name of the section's free:, independent: or inputs: list that is not a state variable (a
+ * speed, for inputs): the
  * message gets the entry's location in the scene (the linearizer's starts with "LIST: "). */
 static void locate_name(const ap_scene_lin_guess *g, const ap_lin_def *d, ap_lin *L) {
   if (!L->bad_list) return;
-  int is_free = strcmp(L->bad_list, "free") == 0;
-  char *const *mine = is_free ? g->sec.free : g->sec.independent;
-  const char *const *used = is_free ? d->free : d->independent;
+  int list = strcmp(L->bad_list, "free") == 0 ? 0 : strcmp(L->bad_list, "inputs") == 0 ? 2 : 1;
+  char *const *mine = list == 0 ? g->sec.free : list == 2 ? g->sec.inputs : g->sec.independent;
+  const char *const *used = list == 0 ? d->free : list == 2 ? d->inputs : d->independent;
   char at[400], tail[512];
   size_t skip = strlen(L->bad_list) + 2;
   if (!mine || used != (const char *const *)mine || strlen(L->msg) < skip ||

@@ -124,7 +124,7 @@ static int read_init_kind(sc_ctx *c, const sc_node *n, sc_joint *j) {
 }
 
 /* A driven coordinate takes its value from the drive: refuse an initial value for it. */
-static int check_driven(sc_ctx *c, const sc_node *n, const sc_joint *j) {
+int sc_check_driven(sc_ctx *c, const sc_node *n, const sc_joint *j) {
   for (int i = 0; i < n->n; i++) {
     const char *k = n->keys[i]->text;
     int idx = sc_joint_drivable(j->def.kind, k);
@@ -152,7 +152,8 @@ static int parse_initial(sc_ctx *c, sc_scene *s) {
     }
     sc_joint *jt = &s->joints[j];
     jt->init.node = n->kids[i];
-    if (sc_check_keys(c, n->kids[i], sc_init_keys(jt->def.kind)) || check_driven(c, n->kids[i], jt) ||
+    if (sc_check_keys(c, n->kids[i], sc_init_keys(jt->def.kind)) ||
+        sc_check_driven(c, n->kids[i], jt) ||
         read_init_kind(c, n->kids[i], jt))
       return AP_ERR_ARG;
   }
@@ -196,6 +197,9 @@ static int parse_sim(sc_ctx *c, sc_scene *s) {
       sc_get_number(c, n, "switch_growth", &r->sim.switch_growth))
     return AP_ERR_ARG;
   r->sim.mode = (ap_mode)mode;
+  if (s->path == AP_PATH_TREE && r->sim.mode == AP_MODE_DAE)   /* ap_sim_create would refuse */
+    return sc_err(c, sc_map_get(n, "path"), "path: tree forms no g or A, which mode: dae needs "
+                  "(path: dense, or auto, which keeps dae scenes dense)");
   if (sc_check_positive(c, n, "rtol", r->sim.rtol) ||
       sc_check_positive(c, n, "atol", r->sim.atol) ||
       sc_check_positive(c, n, "h_fixed", r->sim.h_fixed) ||

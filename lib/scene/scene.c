@@ -6,6 +6,7 @@
  * columns. Invariant: the model is freed before the expressions it calls, and a failed load
  * frees everything and leaves exactly one message. */
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -93,6 +94,11 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
                                  name ? name : "scene", nsets, bad ? "one" : "the array");
     return AP_ERR_ARG;
   }
+  if (len > (size_t)SC_MAX_FILE) {
+    if (msg && msg_len)
+      snprintf(msg, msg_len, "%s: larger than 16 MiB: not a scene file", name ? name : "scene");
+    return AP_ERR_ARG;
+  }
   ap_scene *sc = calloc(1, sizeof *sc);
   sc_ctx c = {name ? name : "scene", "", AP_OK};
   if (!sc || !text) {
@@ -133,36 +139,50 @@ static int read_all(FILE *f, size_t hint, char **out, size_t *len) {
     n += fread(buf + n, 1, cap - n, f);
     if (ferror(f)) return free(buf), errno ? errno : EIO;
     if (n > (size_t)SC_MAX_FILE) return free(buf), EFBIG;
-    if (feof(f)) break;
+    if (feof(f) && n < cap) break;
   }
   *out = buf, *len = n;
   return 0;
 }
 
-int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
-                  char *msg, size_t msg_len) {
-  if (out) *out = NULL;
+int ap_scene_read(const char *path, char **text, size_t *len, char *msg, size_t msg_len) {
+  if (text) *text = NULL;
+  if (len) *len = 0;
+  if (!text || !len) return AP_ERR_ARG;
+  errno = 0;
   FILE *f = path ? fopen(path, "rb") : NULL;
   char ebuf[128];
   if (!f) {
+    int open_err = path ? errno : EINVAL;
     if (msg && msg_len) snprintf(msg, msg_len, "%s: cannot open: %s", path ? path : "(null)",
-                                 ap_core_errno_text(errno, ebuf, sizeof ebuf));
+                                 ap_core_errno_text(open_err, ebuf, sizeof ebuf));
+    errno = open_err;
     return AP_ERR_ARG;
   }
   struct stat st;   /* read only when fstat succeeds; otherwise read the stream as it comes */
   int known = fstat(fileno(f), &st) == 0, dir = known && S_ISDIR(st.st_mode);
-  size_t hint = known && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536, len = 0;
-  char *buf = NULL;
-  int err = dir ? EISDIR : read_all(f, hint, &buf, &len);
+  size_t hint = known && S_ISREG(st.st_mode) ? (size_t)st.st_size : 65536;
+  int err = dir ? EISDIR : read_all(f, hint, text, len);
   fclose(f);
-  if (err) {
-    if (msg && msg_len)
-      snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
-               : err == EFBIG ? "larger than 16 MiB: not a scene file"
-               : ap_core_errno_text(err, ebuf, sizeof ebuf));
-    return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
-  }
-  int rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
+  errno = 0;
+  if (!err) return (*text)[*len] = '\0', AP_OK;
+  if (msg && msg_len)
+    snprintf(msg, msg_len, "%s: %s", path, err == EISDIR ? "is a directory, not a scene file"
+             : err == EFBIG ? "larger than 16 MiB: not a scene file"
+             : ap_core_errno_text(err, ebuf, sizeof ebuf));
+  errno = 0;
+  return err == ENOMEM ? AP_ERR_NOMEM : AP_ERR_ARG;
+}
+
+void ap_scene_text_free(char *text) { free(text); }
+
+int ap_scene_load(const char *path, const char *const *sets, int nsets, ap_scene **out,
+                  char *msg, size_t msg_len) {
+  if (out) *out = NULL;
+  char *buf = NULL;
+  size_t len = 0;
+  int rc = ap_scene_read(path, &buf, &len, msg, msg_len);
+  if (rc == AP_OK) rc = ap_scene_load_string(buf, len, path, sets, nsets, out, msg, msg_len);
   free(buf);
   return rc;
 }
@@ -195,6 +215,30 @@ int ap_scene_check_time(const ap_scene *sc, double t, char *msg, size_t msg_len)
   int rc = sc_check_exprs(&c, &sc->s, t);
   if (rc != AP_OK && msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
   return rc;
+}
+
+/* Finite entries only: a diverged state makes every expression of it look guilty. */
+static int all_finite(const double *x, int n) {
+  for (int i = 0; i < n; i++)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
+int ap_scene_locate_failure(const ap_scene *sc, const ap_sim *sim, double tout, char *msg,
+                            size_t msg_len) {
+  if (msg && msg_len) msg[0] = '\0';
+  const ap_data *d = ap_sim_data(sim);
+  if (!sc || !d) return AP_ERR_ARG;
+  sc_ctx c = {sc->s.file, "", AP_OK};
+  int n = ap_model_n(sc->m), k = ap_model_k(sc->m), rc = AP_OK;
+  if (isfinite(d->t)) rc = sc_check_exprs(&c, &sc->s, d->t);
+  if (rc == AP_OK && isfinite(d->t) && d->n == n && d->k == k && all_finite(d->q, n) &&
+      all_finite(d->v, k))
+    rc = sc_check_state_exprs(&c, &sc->s, sc->m, d->t, d->q, d->v);
+  if (rc == AP_OK && isfinite(tout)) rc = sc_check_exprs(&c, &sc->s, tout);
+  if (rc == AP_OK) return AP_OK;
+  if (msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
+  return AP_ERR_ARG;
 }
 
 int ap_scene_output_count(const ap_scene *sc) { return sc ? sc->out.ncols : 0; }

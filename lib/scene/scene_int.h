@@ -282,6 +282,8 @@ void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
 /* The keys of initial: for a joint of this kind (NULL-terminated). */
 const char *const *sc_init_keys(ap_joint_kind kind);
+/* An initial-state map n of joint j giving a driven coordinate: the error at its value. */
+int sc_check_driven(sc_ctx *c, const sc_node *n, const sc_joint *j);
 /* The linearize: section (linearize.c): keys, types and joint names checked at load. */
 int sc_parse_linearize(sc_ctx *c, const sc_scene *s);
 /* "FILE:LINE:COL: linearize.LIST.I" (or the --set that gave it), the location of entry i of

@@ -152,10 +152,13 @@ static PyObject *run(ap_batch *b, const ap_plan *p, long first, long count, py_p
     else if (rc != AP_OK) apx_raise(rc, "the sweep could not start");
     else {
       PyObject *params = param_table(p, first, count);
-      out = params ? Py_BuildValue("{s:N,s:N,s:N,s:O,s:O,s:N,s:l}", "paths", paths(p), "params",
-                                   params, "columns", batch_columns(b), "values", values,
-                                   "status", status, "messages", messages_list(msgs, count),
-                                   "runs", ap_plan_count(p))
+      char id[17] = "";
+      ap_batch_plan_id(b, p, id, sizeof id);
+      out = params ? Py_BuildValue("{s:N,s:N,s:N,s:O,s:O,s:N,s:l,s:s}", "paths", paths(p),
+                                   "params", params, "columns", batch_columns(b), "values",
+                                   values, "status", status, "messages",
+                                   messages_list(msgs, count), "runs", ap_plan_count(p),
+                                   "plan", id)
                    : NULL;
     }
     ap_batch_messages_free(count, msgs);

@@ -44,6 +44,11 @@ PyObject *apx_raise(int status, const char *msg);
 /* The same for loading a scene: AP_ERR_ARG is always a SceneError (its location None when
  * the message has none, e.g. a bad --set path). */
 PyObject *apx_raise_input(int status, const char *msg);
+/* The message of a run of scene sc that failed (status rc) advancing to tout (NaN: unknown):
+ * the scene expression at fault first when there is one (FILE:LINE:COLUMN: ..., so that
+ * apx_raise makes it a SceneError), then "the simulation failed at t = ...: reason: detail". */
+void apx_run_message(const ap_scene *sc, const ap_sim *sim, int rc, double tout, char *msg,
+                     size_t len);
 /* A tuple of str as a NULL-terminated array of UTF-8 pointers into the tuple's items (valid
  * while the tuple lives); NULL with an exception set on failure. */
 const char **apx_strings(PyObject *tuple, Py_ssize_t *n);

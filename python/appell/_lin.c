@@ -16,6 +16,7 @@
 #include "_ext.h"
 
 #include <math.h>
+#include <time.h>
 #include <string.h>
 
 typedef struct lin_args {
@@ -39,6 +40,12 @@ typedef struct lin_run {
 
 /* ---- the computation (no Python objects: runs without the GIL) --------------------------- */
 
+static double now_s(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 static int select_states(lin_run *r, const char *const *names) {
   r->ns = 0;
   for (int i = 0; names && names[i]; i++) {
@@ -53,6 +60,18 @@ static int select_states(lin_run *r, const char *const *names) {
     r->sel[r->ns++] = s;
   }
   return AP_OK;
+}
+
+/* ap_lin_set_poll: about every 0.2 s, take the GIL and let Python run its signal handlers; a
+ * handler that raised (KeyboardInterrupt) stops the sweep, its exception left set. */
+static int poll_signals(void *user) {
+  double *due = user, t = now_s();
+  if (t < *due) return 0;
+  PyGILState_STATE st = PyGILState_Ensure();
+  int raised = PyErr_CheckSignals() != 0;
+  PyGILState_Release(st);
+  *due = t + 0.2;
+  return raised;
 }
 
 static int compute(apx_model *m, const char *name, const char *const *sets, int nsets,
@@ -77,6 +96,8 @@ static int compute(apx_model *m, const char *name, const char *const *sets, int 
   const char *const *states = a->states ? a->states : (const char *const *)r->g.sec.states;
   int drop = !a->keep_cyclic && r->g.sec.drop_cyclic;
   if (rc == AP_OK && (rc = select_states(r, states)) != AP_OK) return rc;
+  double due = now_s() + 0.2;
+  if (rc == AP_OK) ap_lin_set_poll(r->L, poll_signals, &due);
   if (rc == AP_OK && a->sweep) {
     rc = ap_lin_sweep_speed(r->L, a->sweep, (int)a->count, r->ns ? r->sel : NULL, r->ns, drop,
                             a->ptol, &r->sw);
@@ -86,6 +107,7 @@ static int compute(apx_model *m, const char *name, const char *const *sets, int 
     if (rc == AP_OK) rc = ap_lin_eigen(r->L, r->ns ? r->sel : NULL, r->ns, drop);
   }
   if (rc != AP_OK && !r->msg[0] && r->L) snprintf(r->msg, sizeof r->msg, "%s", ap_lin_message(r->L));
+  if (r->L) ap_lin_set_poll(r->L, NULL, NULL);
   return rc;
 }
 
@@ -255,7 +277,8 @@ PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw) {
   Py_BEGIN_ALLOW_THREADS   /* m's text, name and sets and the argument tuples stay alive */
   rc = compute(m, name, sets, (int)nsets, &a, r);
   Py_END_ALLOW_THREADS
-  if (rc != AP_OK) apx_raise(rc, r->msg);
+  if (rc == AP_ERR_INTERRUPTED && PyErr_Occurred()) {}   /* the handler's exception */
+  else if (rc != AP_OK) apx_raise(rc, r->msg);
   else out = a.sweep ? sweep_dict(r) : point_dict(r, isfinite(a.speed) ? a.speed : r->g.speed);
 done:
   if (r) {

@@ -4,8 +4,12 @@
  * and overrides so that sweeps can load it again in other threads or processes. */
 #include "_ext.h"
 
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#define APX_MAX_SCENE (16L << 20)   /* as ap_scene_read and ap_scene_load_string */
 
 /* Load text (bytes) named name with the overrides sets (tuple of str). */
 static PyObject *make_model(PyObject *text, PyObject *name, PyObject *sets) {
@@ -34,6 +38,13 @@ PyObject *apx_loads(PyObject *self, PyObject *args, PyObject *kw) {
   static char *kwlist[] = {"text", "name", "sets", NULL};
   PyObject *text = NULL, *name = NULL, *sets_in = NULL;
   if (!PyArg_ParseTupleAndKeywords(args, kw, "O|UO", kwlist, &text, &name, &sets_in)) return NULL;
+  if ((PyUnicode_Check(text) && PyUnicode_GET_LENGTH(text) > APX_MAX_SCENE) ||
+      (PyBytes_Check(text) && PyBytes_GET_SIZE(text) > APX_MAX_SCENE)) {   /* before encoding */
+    const char *nm = name ? PyUnicode_AsUTF8(name) : "scene";
+    char msg[1024];
+    if (nm) snprintf(msg, sizeof msg, "%s: larger than 16 MiB: not a scene file", nm);
+    return nm ? apx_raise_input(AP_ERR_ARG, msg) : NULL;
+  }
   PyObject *bytes = PyUnicode_Check(text) ? PyUnicode_AsUTF8String(text)
                     : PyBytes_Check(text) ? Py_NewRef(text)
                                           : PyErr_Format(PyExc_TypeError, "text must be str or bytes");
@@ -54,24 +65,21 @@ PyObject *apx_load(PyObject *self, PyObject *args, PyObject *kw) {
                                    &sets_in))
     return NULL;
   const char *p = PyBytes_AS_STRING(path);
-  FILE *f = fopen(p, "rb");
-  if (!f) {
+  char *text = NULL, msg[1024];
+  size_t len = 0;
+  int rc, err;
+  Py_BEGIN_ALLOW_THREADS   /* the CLI's reader and limits: 16 MiB, no directory */
+  rc = ap_scene_read(p, &text, &len, msg, sizeof msg);
+  err = errno;             /* fopen's when the file could not be opened */
+  Py_END_ALLOW_THREADS
+  if (rc != AP_OK && err) {   /* a missing file raises FileNotFoundError, as open() does */
+    errno = err;
     PyErr_SetFromErrnoWithFilenameObject(PyExc_OSError, path);
     return Py_DECREF(path), NULL;
   }
-  PyObject *chunks = PyBytes_FromStringAndSize(NULL, 0);
-  char buf[65536];
-  size_t got;
-  while (chunks && (got = fread(buf, 1, sizeof buf, f)) > 0) {
-    PyObject *more = PyBytes_FromStringAndSize(buf, (Py_ssize_t)got);
-    PyBytes_ConcatAndDel(&chunks, more);
-  }
-  int bad = ferror(f);
-  fclose(f);
-  if (bad && chunks) {
-    Py_CLEAR(chunks);
-    PyErr_SetFromErrnoWithFilenameObject(PyExc_OSError, path);
-  }
+  PyObject *chunks = rc == AP_OK ? PyBytes_FromStringAndSize(text, (Py_ssize_t)len)
+                                 : apx_raise_input(rc, msg);
+  ap_scene_text_free(text);
   PyObject *name = chunks ? PyUnicode_DecodeFSDefault(p) : NULL;
   PyObject *sets = name ? apx_str_tuple(sets_in, "sets") : NULL;
   PyObject *m = sets ? make_model(chunks, name, sets) : NULL;

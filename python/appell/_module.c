@@ -72,6 +72,14 @@ PyObject *apx_raise(int status, const char *msg) {
   return raise_as(located ? apx_scene_error : apx_error, status, msg);
 }
 
+void apx_run_message(const ap_scene *sc, const ap_sim *sim, int rc, double tout, char *msg,
+                     size_t len) {
+  char where[1024] = "";
+  if (ap_scene_locate_failure(sc, sim, tout, where, sizeof where) == AP_OK) where[0] = '\0';
+  snprintf(msg, len, "%s%sthe simulation failed at t = %.10g: %s: %s", where,
+           where[0] ? "; " : "", ap_sim_time(sim), ap_strerror(rc), ap_sim_message(sim));
+}
+
 PyObject *apx_raise_input(int status, const char *msg) {
   if (!msg || !msg[0]) msg = ap_strerror(status);
   return status == AP_ERR_ARG ? raise_as(apx_scene_error, status, msg) : apx_raise(status, msg);
@@ -94,11 +102,19 @@ const char **apx_strings(PyObject *tuple, Py_ssize_t *n) {
   *n = PyTuple_GET_SIZE(tuple);
   const char **s = PyMem_Calloc((size_t)*n + 1, sizeof *s);
   if (!s) return (const char **)PyErr_NoMemory();
-  for (Py_ssize_t i = 0; i < *n; i++)
-    if (!(s[i] = PyUnicode_AsUTF8(PyTuple_GET_ITEM(tuple, i)))) {
+  for (Py_ssize_t i = 0; i < *n; i++) {
+    Py_ssize_t len = 0;
+    if (!(s[i] = PyUnicode_AsUTF8AndSize(PyTuple_GET_ITEM(tuple, i), &len))) {
       PyMem_Free(s);
       return NULL;
     }
+    if ((size_t)len != strlen(s[i])) {   /* C would read only up to the NUL */
+      PyErr_Format(PyExc_ValueError, "a NUL character inside %R (item %zd)",
+                   PyTuple_GET_ITEM(tuple, i), i);
+      PyMem_Free(s);
+      return NULL;
+    }
+  }
   return s;
 }
 

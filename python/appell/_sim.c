@@ -179,6 +179,7 @@ typedef struct rec {
   int nc, n, k;
   long rows, done;         /* rows wanted, rows written */
   int rc, interrupted;
+  double tout;             /* the output time of the last advance (NaN before any) */
 } rec;
 
 static int record(apx_sim *s, rec *r) {
@@ -228,6 +229,7 @@ static void record_rows(apx_sim *s, rec *r, double t0, double t_end, double dt) 
   r->rc = record(s, r);
   for (long i = 1; r->rc == AP_OK && !r->interrupted && i < r->rows; i++) {
     double t = i == r->rows - 1 ? t_end : t0 + (double)i * dt;
+    r->tout = t;
     r->rc = advance_released(s, t, &due, &r->interrupted, &ts);
     if (r->rc == AP_STOPPED) {   /* a stop event: its row is the last */
       r->rc = record(s, r);
@@ -278,9 +280,8 @@ static PyObject *attach_partial(apx_sim *s, rec *r, PyArrayObject *arr[3]) {
 }
 
 static PyObject *failed(apx_sim *s, rec *r, PyArrayObject *arr[3]) {
-  char msg[1400];
-  snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),
-           ap_strerror(r->rc), ap_sim_message(s->sim));
+  char msg[2600];
+  apx_run_message(s->model->sc, s->sim, r->rc, r->tout, msg, sizeof msg);
   apx_raise(r->rc, msg);
   return attach_partial(s, r, arr);
 }
@@ -311,7 +312,7 @@ static PyObject *sim_run(apx_sim *s, PyObject *args, PyObject *kw) {
   }
   const ap_model *m = ap_scene_model(s->model->sc);
   rec r = {NULL, NULL, NULL, ap_scene_output_count(s->model->sc), ap_model_n(m), ap_model_k(m),
-           0, 0, AP_OK, 0};
+           0, 0, AP_OK, 0, NAN};
   r.rows = (long)nrows;
   if (r.rows < (t_end > t0 ? 2 : 1)) r.rows = t_end > t0 ? 2 : 1;   /* dt past t_end: t0, t_end */
   npy_intp d0[2] = {r.rows, r.nc}, d1[2] = {r.rows, r.n}, d2[2] = {r.rows, r.k};
@@ -350,9 +351,8 @@ static PyObject *sim_advance(apx_sim *s, PyObject *arg) {
   s->busy = 0;
   if (interrupted) return NULL;   /* the handler's exception (KeyboardInterrupt) is set */
   if (rc == AP_OK || rc == AP_STOPPED) Py_RETURN_NONE;   /* stopped: see .events */
-  char msg[1400];
-  snprintf(msg, sizeof msg, "the simulation failed at t = %.10g: %s: %s", ap_sim_time(s->sim),
-           ap_strerror(rc), ap_sim_message(s->sim));
+  char msg[2600];
+  apx_run_message(s->model->sc, s->sim, rc, t, msg, sizeof msg);
   return apx_raise(rc, msg);
 }
 

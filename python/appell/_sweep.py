@@ -11,6 +11,7 @@ and a chunk's rows depend only on the plan and the run indices, so no run is los
 
 import math
 import os
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -24,11 +25,14 @@ class Table(dict):
     run, the parameters, status, outcome ("ok", "event" or "failed", as in a run record),
     events (the events of the run, "NAME@T;..."), t, steps, rhs_evals, err_fails,
     max_residual, energy_drift, NAME@end, CHANNEL@T, message. .runs is the plan's size, .paths
-    the parameters' paths, .scene the scene file (to_csv never overwrites it)."""
+    the parameters' paths, .scene the scene file (to_csv never overwrites it), .plan the
+    sweep's identity (16 hex digits: a hash of the scene, the overrides and the plan, in every
+    row of the CSV, so that `appell sweep --merge` joins only shards of one sweep)."""
 
     runs = 0
     paths = ()
     scene = None
+    plan = ""
 
     @property
     def columns(self):
@@ -46,7 +50,7 @@ class Table(dict):
         directory and the scene file are refused (OSError: IsADirectoryError,
         FileExistsError, ...), and a failed write leaves nothing behind."""
         cols = [c for c in self.columns if c != "run"]
-        lines = [",".join(["run", "runs"] + cols)]
+        lines = [",".join(["run", "runs", "plan"] + cols)]
         text = "\n".join(lines + [_row(self, i, cols) for i in range(len(self["run"]))]) + "\n"
         keep = () if self.scene is None else (self.scene,)
         _appell.write_file(os.fspath(path), text.encode(), keep=keep)
@@ -62,7 +66,7 @@ def _g17(x):
 
 
 def _row(table, i, cols):
-    cells = [str(int(table["run"][i])), str(table.runs)]
+    cells = [str(int(table["run"][i])), str(table.runs), table.plan]
     for c in cols:
         x = table[c][i]
         if c in ("message", "events"):
@@ -117,7 +121,7 @@ def _assemble(parts, first):
     """One Table from the run_plan results of consecutive slices starting at run first."""
     p0 = parts[0]
     out = Table()
-    out.runs, out.paths = p0["runs"], p0["paths"]
+    out.runs, out.paths, out.plan = p0["runs"], p0["paths"], p0["plan"]
     count = sum(len(p["status"]) for p in parts)
     out["run"] = np.arange(first, first + count, dtype=np.int64)
     for r, path in enumerate(p0["paths"]):
@@ -148,6 +152,57 @@ def _run_events(parts, count):
     return [""] * count
 
 
+MAX_SAMPLES = 10 ** 9   # as a grid's N: `appell sweep --samples` keeps the same limit
+
+
+def _whole(x):
+    return not isinstance(x, bool) and isinstance(x, (int, np.integer))
+
+
+def _check_args(grid, random, samples, seed, shard, chunk_size, client):
+    """TypeError / ValueError naming the argument, before anything runs."""
+    for name, value in (("grid", grid), ("random", random)):
+        if value is not None and not isinstance(value, Mapping):
+            raise TypeError(f"{name} must be a dict {{path: values}}, got {type(value).__name__}")
+    if samples is not None and not _whole(samples):
+        raise TypeError(f"samples must be a whole number, got {samples!r}")
+    if samples is not None and not 1 <= samples <= MAX_SAMPLES:
+        raise ValueError(f"samples must be from 1 to 10**9 (random draws per grid point), got "
+                         f"{samples!r}")
+    if not _whole(seed) or not 0 <= seed < 2 ** 64:
+        raise ValueError(f"seed must be a whole number from 0 to 2**64 - 1, got {seed!r}")
+    if shard is not None and (not isinstance(shard, (tuple, list)) or len(shard) != 2
+                              or not all(_whole(x) for x in shard)):
+        raise TypeError(f"shard must be a pair (i, n) of whole numbers, got {shard!r}")
+    if chunk_size is not None and (not _whole(chunk_size) or chunk_size < 1):
+        raise ValueError(f"chunk_size must be a whole number >= 1, got {chunk_size!r}")
+    if chunk_size is not None and client is None:
+        raise ValueError("chunk_size needs a Dask client (client=...)")
+
+
+def _channels(channels):
+    if isinstance(channels, str):
+        return (channels,)
+    try:
+        out = tuple(channels)
+    except TypeError:
+        raise TypeError(f"channels must be a str or a sequence of str, got "
+                        f"{type(channels).__name__}") from None
+    for c in out:
+        if not isinstance(c, str):
+            raise TypeError(f"channels: {c!r} is not a str")
+    return out
+
+
+def _times(times):
+    if times is None:
+        return ()
+    try:
+        return tuple(float(t) for t in np.ravel(times))
+    except (TypeError, ValueError):
+        raise TypeError(f"times must be numbers (seconds), got {times!r}") from None
+
+
 def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channels=(),
           times=None, final_state=True, jobs=1, shard=None, client=None, chunk_size=None,
           progress=None):
@@ -167,6 +222,7 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
     """
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
         raise ValueError(f"jobs must be a whole number >= 0 (0: one per processor), got {jobs!r}")
+    _check_args(grid, random, samples, seed, shard, chunk_size, client)
     text, name, sets = _source(scene, set)
     grids = tuple(_grid_spec(p, v) for p, v in (grid or {}).items())
     randoms = tuple(_random_spec(p, v) for p, v in (random or {}).items())
@@ -181,8 +237,7 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
         count = runs // n * i + runs % n * i // n - first
     args = dict(text=text, name=name, sets=sets, grids=grids, randoms=randoms,
                 samples=n_samples, seed=int(seed),
-                channels=(channels,) if isinstance(channels, str) else tuple(channels),
-                times=() if times is None else tuple(float(t) for t in np.ravel(times)),
+                channels=_channels(channels), times=_times(times),
                 final_state=bool(final_state))
     if client is None:
         part = _appell.run_plan(first=first, count=count, jobs=int(jobs),

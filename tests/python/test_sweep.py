@@ -176,3 +176,56 @@ def test_critical_speed_of_upright_rolling(disk):
         else:          # stable: bounded, the amplitude of the linearized motion
             bound = 2 / (1 - 1 / f ** 2) - 1
             assert lean[i] / delta == pytest.approx(bound, rel=0.05), (f, delta, lean[i])
+
+
+def _mass_sweep(disk, out, grid, *extra):
+    return run_cli("sweep", disk, "--grid", f"bodies.disk.mass={grid}", "--set",
+                   "simulation.t_end=0.2", "--quiet", "--out", out, *extra, check=False)
+
+
+def test_merge_refuses_shards_of_another_sweep(tmp_path, disk):
+    # Two plans of the same size (1:2:8 and 5:6:8) merged silently before the plan column.
+    _mass_sweep(disk, tmp_path / "a.csv", "1:2:8", "--shard", "1/2")
+    _mass_sweep(disk, tmp_path / "b.csv", "5:6:8", "--shard", "2/2")
+    _mass_sweep(disk, tmp_path / "c.csv", "1:2:8", "--shard", "2/2", "--rtol", "1e-9")
+    _mass_sweep(disk, tmp_path / "d.csv", "1.0:2:8", "--shard", "2/2")
+    for other in ("b.csv", "c.csv"):
+        r = run_cli("sweep", "--merge", "--out", tmp_path / "m.csv", tmp_path / "a.csv",
+                    tmp_path / other, check=False)
+        assert r.returncode == 2, r.stderr
+        assert f"{other}:2: plan " in r.stderr and "shards of different sweeps" in r.stderr
+    assert not (tmp_path / "m.csv").exists()
+    # the same plan written otherwise (1.0 for 1) is the same sweep
+    run_cli("sweep", "--merge", "--out", tmp_path / "m.csv", tmp_path / "a.csv",
+            tmp_path / "d.csv")
+    ids = {line.split(",")[2] for line in (tmp_path / "m.csv").read_text().splitlines()[1:]}
+    assert len(ids) == 1 and len(ids.pop()) == 16
+
+
+def test_merge_parses_every_row(tmp_path, disk):
+    _mass_sweep(disk, tmp_path / "a.csv", "1:2:4", "--shard", "1/2")
+    _mass_sweep(disk, tmp_path / "b.csv", "1:2:4", "--shard", "2/2")
+    good = (tmp_path / "b.csv").read_text().splitlines(keepends=True)
+    n = len(good[0].split(","))
+    cases = {  # how row 3 of b.csv is spoilt -> what the message names
+        "extra": (lambda r: r[:-1] + ",7\n", f"b.csv:3: {n + 1} fields, but the header has {n}"),
+        "missing": (lambda r: r.rsplit(",", 2)[0] + "\n", f"b.csv:3: {n - 2} fields"),
+        "garbage": (lambda r: r.replace(",0,", ",zero,", 1), "b.csv:3: column status"),
+        "number": (lambda r: ",".join(r.split(",")[:6] + ["1.5x"] + r.split(",")[7:]),  # steps
+                   "b.csv:3: column steps: '1.5x' is not a number"),
+        "quote": (lambda r: r[:-2] + 'x"y"\n', f"b.csv:3: field {n}: a malformed field"),
+        "plan": (lambda r: r.replace(r.split(",")[2], "0123456789abcdeg"),
+                 "b.csv:3: column plan"),
+        "empty": (lambda r: "\n", "b.csv:3: column run"),
+        "huge": (lambda r: "99999999999999999999" + r[r.index(","):],   # fuzz_merge's finding
+                 "b.csv:3: column run: '99999999999999999999' is not a whole number"),
+    }
+    for what, (spoil, says) in cases.items():
+        (tmp_path / "b.csv").write_text("".join(good[:2] + [spoil(good[2])] + good[3:]))
+        r = run_cli("sweep", "--merge", "--out", tmp_path / "m.csv", tmp_path / "a.csv",
+                    tmp_path / "b.csv", check=False)
+        assert r.returncode == 2 and says in r.stderr, (what, r.stderr)
+        assert not (tmp_path / "m.csv").exists()
+    (tmp_path / "b.csv").write_text("".join(good))
+    run_cli("sweep", "--merge", "--out", tmp_path / "m.csv", tmp_path / "a.csv",
+            tmp_path / "b.csv")
