@@ -15,6 +15,7 @@
  * holds every run of its shard; an interrupted or failed sweep leaves none (only the
  * checkpoint). --merge lives in tools/sweep_merge.c. */
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -417,7 +418,7 @@ static int open_checkpoint(sweep_state *s, const cli_out *out) {
     else fputs(header, s->ck);
     return free(header), code;
   }
-  snprintf(s->ck_path, sizeof s->ck_path, "%s.partial", out->path);
+  snprintf(s->ck_path, sizeof s->ck_path, "%s.partial", out->file.path);
   if (s->o->resume) {
     s->resumed = sweep_checkpoint_rows(s->ck_path, header, s->id, s->first, s->total, s->count);
     if (s->resumed < 0) code = EXIT_INPUT;
