@@ -12,7 +12,7 @@
 
 #include "bodysys.h"
 
-#define MAXCASE 512
+#define MAXCASE 1024
 extern int pick;                 /* the case a child runs; -1 in the parent (listing) */
 extern int ncase;
 extern const char *case_fn[MAXCASE], *case_what[MAXCASE];

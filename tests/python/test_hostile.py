@@ -201,7 +201,7 @@ def test_linearize_plot_target_checked_before_anything_is_written(tmp_path):
     sweep = ("linearize", disk, "--sweep", "speed=0:5:11")
     for fig, says in ((tmp_path / "f.jpg", "the figure must end in .png or .svg"),
                       (tmp_path / "no" / "f.png",
-                       f"the directory {tmp_path / 'no'} does not exist"),
+                       "its directory does not exist"),
                       (tmp_path / "d.png", "is a directory")):
         if fig.name == "d.png":
             fig.mkdir()

@@ -211,7 +211,7 @@ def test_merge_parses_every_row(tmp_path, disk):
         "extra": (lambda r: r[:-1] + ",7\n", f"b.csv:3: {n + 1} fields, but the header has {n}"),
         "missing": (lambda r: r.rsplit(",", 2)[0] + "\n", f"b.csv:3: {n - 2} fields"),
         "garbage": (lambda r: r.replace(",0,", ",zero,", 1), "b.csv:3: column status"),
-        "number": (lambda r: ",".join(r.split(",")[:6] + ["1.5x"] + r.split(",")[7:]),  # steps
+        "number": (lambda r: ",".join(r.split(",")[:8] + ["1.5x"] + r.split(",")[9:]),  # steps
                    "b.csv:3: column steps: '1.5x' is not a number"),
         "quote": (lambda r: r[:-2] + 'x"y"\n', f"b.csv:3: field {n}: a malformed field"),
         "plan": (lambda r: r.replace(r.split(",")[2], "0123456789abcdeg"),
