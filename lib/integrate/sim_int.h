@@ -67,6 +67,11 @@ void ap_drv_growth_cap(ap_sim *s, double g);
  * coordinates onto their manifold, then the mode's own work (re-partition, projection,
  * residuals). May restart the stepper. */
 int ap_drv_after_step(ap_sim *s, double t);
+/* Before the step to t is accepted (its state in s->ytry): rows redundant for every q, when
+ * judged at accepted states (judge_at_accepted), judged here with v projected onto the
+ * constraints, so that an inconsistency leaves the state as it was; AP_OK when there is
+ * nothing to judge. */
+int ap_drv_judge_trial(ap_sim *s, double t);
 /* IDA's first step from (q, v'): IDA's own guess from |y'| is far too small at tight
  * tolerances; the BDF1 local error h^2 |q''| / 2 = rtol |q| + atol at IDA's tolerances
  * (ap_dae_rtol) with q'' ~ N v' from the Appell solve gives it. 0 when v' = 0. */
