@@ -457,7 +457,7 @@ static int review_rows(ap_sim *s, double t) {
  * rtol 1e-8: gamma off by 2.4e-8 at t = 32.8). (Rows redundant only on the manifold are
  * refused in plain mode at the start, sim.c: the dropped row is not enforced off it, and
  * diff_drive_loops.yaml failed with every method even judged this way.) */
-static int judge_state(ap_sim *s, double t, const double *y) {
+int ap_drv_judge_state(ap_sim *s, double t, const double *y) {
   ap_data *d = s->d;
   ap_scratch *sc = d->internal;
   int later = sc->judge_at_accepted;
@@ -473,14 +473,14 @@ static int judge_state(ap_sim *s, double t, const double *y) {
   return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
 }
 
-static int judge_redundant(ap_sim *s, double t) { return judge_state(s, t, s->y); }
+static int judge_redundant(ap_sim *s, double t) { return ap_drv_judge_state(s, t, s->y); }
 
 int ap_drv_judge_trial(ap_sim *s, double t) {
   const ap_data *d = s->d;
   if (d->redundant == 0 || d->redundant_manifold ||
       !((const ap_scratch *)d->internal)->judge_at_accepted)
     return AP_OK;
-  return judge_state(s, t, s->ytry);
+  return ap_drv_judge_state(s, t, s->ytry);
 }
 
 int ap_drv_after_step(ap_sim *s, double t) {
