@@ -43,7 +43,7 @@ static void closure_text(uint64_t *s, dt_item *c, int a, const double p[3], int 
   int used = snprintf(c->text, DT_TXT, "{kind: %s, body: b%d, point: [%.4g, %.4g, %.4g]", kind,
                       a, p[0], p[1], p[2]);
   if (b2 >= 0) used += snprintf(c->text + used, DT_TXT - (size_t)used, ", body2: b%d", b2);
-  used += snprintf(c->text + used, DT_TXT - (size_t)used, ", point2: [%.6g, %.6g, %.6g]", p2[0],
+  used += snprintf(c->text + used, DT_TXT - (size_t)used, ", point2: [%.17g, %.17g, %.17g]", p2[0],
                    p2[1], p2[2]);
   if (x < 0.5)
     snprintf(c->text + used, DT_TXT - (size_t)used, ", axes: %s}",
