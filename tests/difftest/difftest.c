@@ -112,7 +112,9 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
       printf("  shrunk to %d bodies:\n%s", dt_live_bodies(m), r.what);
       if (dir) save(dir, m, &r, text);
     }
-    fflush(stdout);
+    if (quiet && (i + 1) % 500 == 0)
+      printf("difftest: %ld models, %ld disagree, %.0f s\n", i + 1, t.count[DT_DISAGREE],
+             (double)(clock() - c0) / CLOCKS_PER_SEC);
   }
   printf("difftest: %ld models from seed %llu: %ld agree, %ld refused, %ld stopped, %ld disagree "
          "(%ld with the known disagreement); %ld simulations, %.1f s; largest difference %.3g of "
