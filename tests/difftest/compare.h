@@ -20,8 +20,6 @@ typedef struct dt_result {
   int refused_runs;        /* documented refusals of one mode (plain with manifold rows, ...) */
   double worst;            /* largest difference / bound over all checks that ran */
   char worst_what[160];    /* which check that was */
-  int known;               /* a known disagreement (docs/testing.md) besides the verdict */
-  char known_what[200];
   char what[2048];         /* the disagreements, or why the model was refused or stopped */
 } dt_result;
 
