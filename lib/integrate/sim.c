@@ -161,12 +161,13 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
   if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   size = fmax(size, sqrt(2 * ap_kinetic_energy(d, s->v)));
   s->stats.init_correction = change;
-  /* Refused when far off relative to the speeds' size, unless the change is below atol in
-   * every speed: speeds of round-off size on a mechanism that the constraints lock (a rate
-   * prescribed twice; l = 0 at rest) were refused for a change of 5.7e-17 (tests/difftest). */
+  /* Refused when far off relative to the speeds' size, unless the change is below atol (or
+   * 1e-12) in every speed: speeds of round-off size on a mechanism that the constraints lock
+   * (a rate prescribed twice; l = 0 at rest) were refused for a change of 5.7e-17
+   * (tests/difftest). */
   double dv = 0.0;
   for (int i = 0; i < s->k; i++) dv = fmax(dv, fabs(s->v[i] - v0[i]));
-  if (change > s->def.init_tol * size && dv > s->def.atol)
+  if (change > s->def.init_tol * size && dv > fmax(s->def.atol, 1e-12))
     return ap_drv_fail(s, AP_ERR_INCONSISTENT, "system '%s': the initial speeds violate the "
                          "constraints (max |A v + a0| = %.3g; the nearest admissible speeds differ "
                          "by %.3g in the metric g, more than init_tol %.3g relative to %.3g)",
