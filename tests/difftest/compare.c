@@ -1,35 +1,37 @@
 /* The differential tester's comparer (docs/testing.md, "Modes must agree").
  *
  * A scene is loaded twice through the public API, with simulation.path = dense and = tree, and
- * run from the scene's consistent initial state (ap_scene_initial_state) in minimal, projected
- * and plain mode with each stepper of the options on both paths, and in DAE mode (IDA) on the
- * dense path. The reference is the projected mode, dense path, dop853 at the tighter rtol_ref.
- * With eps the machine epsilon, k the speeds, N = n + k the state size, kappa the condition
- * estimate of G = B^T g B (squared ratio of its Cholesky factor's extreme diagonal entries,
- * dense runs), s the accepted steps of a run up to the compared time and X_i the largest
- * |x_i| of the reference up to then, each run must satisfy:
+ * each path runs from its own consistent initial state (ap_scene_initial_state) in minimal,
+ * projected and plain mode with each stepper of the options, and the dense path in DAE mode
+ * (IDA). The reference is the projected mode, dense path, dop853 at the tighter rtol_ref; the
+ * sensitivity run is the reference from an initial state moved by DELTA (relative), whose
+ * distance from it over DELTA is the measured growth G >= 1 of a perturbation. With eps the
+ * machine epsilon, k the speeds, N = n + k the state size, kappa the condition estimate of
+ * G = B^T g B (squared ratio of its Cholesky factor's extreme diagonal entries, dense runs),
+ * s the accepted steps of a run up to the compared time and X_i the largest |x_i| up to then,
+ * each run must satisfy:
  *
- *   creation      refused by every run or by none (besides the documented refusals: plain
- *                 mode with rows redundant only on the manifold, the DAE mode on the tree
- *                 path); the tree path takes the model exactly when each constraint acts on
- *                 one body (when the generator knows);
+ *   creation      refused by every run or by none (besides the documented refusal: plain mode
+ *                 with rows redundant only on the manifold); the tree path takes the model
+ *                 exactly when each constraint acts on one body (when the generator knows);
  *   initial       q0, v0 of both paths, and v and v' after ap_sim_create, equal to the
  *                 reference's within C_R k eps kappa (1 + |v|) and C_R k eps kappa
  *                 (1 + |v'| + |v|^2) (C_R = 64: round-off of the solves);
- *   trajectory    |x_i - x_ref,i| <= A sqrt(N) (s (rtol X_i + atol) + s_ref (rtol_ref X_i +
- *                 atol_ref)) at t_end/4, t_end/2, 3 t_end/4, t_end: each accepted step adds at
- *                 most one tolerance unit per component (the weighted RMS error test allows
- *                 sqrt(N)), amplified by A = 10 over the short horizon;
- *   energy        when the scene conserves it: |E - E0| <= A sqrt(N) s (rtol + atol / X)
+ *   trajectory    |x_i - x_ref,i| <= AMP G sqrt(N) (s (rtol X_i + atol) + s_ref (rtol_ref X_i
+ *                 + atol_ref)) at t_end/4, t_end/2, 3 t_end/4, t_end: each accepted step adds
+ *                 at most one tolerance unit per component (the weighted RMS error test allows
+ *                 sqrt(N)), grown by G, AMP = 10 for other directions than the one perturbed;
+ *   energy        when the scene conserves it: |E - E0| <= AMP G sqrt(N) s (rtol + atol / X)
  *                 max(2 T + |V|) (a relative error rtol of v costs 2 rtol of T);
  *   residual      max |A v + a0| (its channel, sampled 16 times, and the driver's own) within
- *                 C_R k eps (1 + X_q)(1 + X_v) (x 1/rtol slack none) for minimal and ERK
- *                 projected runs; A (rtol X_v + atol)(1 + X_q) for BDF projected (CVODE
- *                 projects past a tenth of its tolerance) and DAE; A sqrt(N) s (rtol X_v +
- *                 atol)(1 + X_q) for plain mode, which drifts.
+ *                 C_R k eps (1 + X_q)(1 + X_v) for minimal and explicit projected runs;
+ *                 AMP (rtol X_v + atol)(1 + X_q) for BDF projected (CVODE projects past a
+ *                 tenth of its tolerance) and DAE; AMP G sqrt(N) s (rtol X_v + atol)(1 + X_q)
+ *                 for plain mode, which drifts.
  *
  * A run that stops mid-way is a disagreement unless the reference stopped too (a disk that
- * falls flat): the model then counts as stopped. */
+ * falls flat): the model then counts as stopped; so is a reference that stops where another
+ * run goes through, unless it gave up on a stiff model (MAX_STEPS per sample). */
 #include "compare.h"
 
 #include <float.h>

@@ -29,14 +29,16 @@ static double ur(uint64_t *s, double a, double b) { return a + (b - a) * ap_test
 static int ui(uint64_t *s, int n) { return (int)(ap_test_urand(s) * n); }
 static int chance(uint64_t *s, double p) { return ap_test_urand(s) < p; }
 
-/* Append printf output to buf (size DT_TXT). */
-PRINTF(2, 3) static void cat(char *buf, const char *fmt, ...) {
+/* Append printf output to buf (total len); cat: to a DT_TXT fragment. */
+PRINTF(3, 4) static void put(char *buf, size_t len, const char *fmt, ...) {
   size_t used = strlen(buf);
+  if (used + 1 >= len) return;
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(buf + used, DT_TXT - used, fmt, ap);
+  vsnprintf(buf + used, len - used, fmt, ap);
   va_end(ap);
 }
+#define cat(buf, ...) put(buf, DT_TXT, __VA_ARGS__)
 
 static void vec3(char *buf, const char *key, double x, double y, double z) {
   cat(buf, "%s: [%.4g, %.4g, %.4g]", key, x, y, z);
@@ -256,7 +258,8 @@ static void body_constraints(uint64_t *s, dt_model *m, int i) {
              (c = add_con(m, i, -1))) {
     double a = ur(s, -3, 3);
     snprintf(c->text, DT_TXT, "{kind: knife_edge, body: b%d, ", i);
-    vec3(c->text, "point", ur(s, -.2, .2), ur(s, -.2, .2), b->kind == DT_PLANAR ? 0 : ur(s, -.2, .2));
+    vec3(c->text, "point", ur(s, -.2, .2), ur(s, -.2, .2),
+         b->kind == DT_PLANAR ? 0 : ur(s, -.2, .2));
     cat(c->text, ", ");
     vec3(c->text, "direction", cos(a), sin(a), b->kind == DT_PLANAR ? 0 : ur(s, -1, 1));
     cat(c->text, "}");
@@ -400,16 +403,6 @@ void dt_drop_body(dt_model *m, int i) {
     for (int c = 0; c < counts[l]; c++)
       for (int r = 0; r < 2; r++)
         if (lists[l][c].refs[r] >= 0 && !m->b[lists[l][c].refs[r]].live) lists[l][c].live = 0;
-}
-
-/* Append to buf (total len). */
-PRINTF(3, 4) static void put(char *buf, size_t len, const char *fmt, ...) {
-  size_t used = strlen(buf);
-  if (used + 1 >= len) return;
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(buf + used, len - used, fmt, ap);
-  va_end(ap);
 }
 
 static void put_items(char *buf, size_t len, const char *section, char prefix,
