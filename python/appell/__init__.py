@@ -22,7 +22,7 @@ the linearization.
 import math as _math
 import os as _os
 
-from . import _appell
+from . import _appell, _view
 from ._appell import Error, Model, SceneError
 from ._sweep import Table, sweep
 
@@ -121,6 +121,13 @@ class Result:
     def __repr__(self):
         return f"<appell.Result: {len(self)} rows x {len(self.columns)} columns>"
 
+    def view(self, path, plots=(), forces=False, title=None):
+        """Write the 3-D viewer page of this run (docs/viewer.md) to path; returns path."""
+        return _view.view(self, path, plots, forces, title)
+
+    def _repr_html_(self):
+        return _view.repr_html(self)
+
 
 class Simulation(_appell.Simulation):
     """Simulation(model, mode=None, method=None, rtol=None, atol=None, h_fixed=None,
@@ -144,7 +151,9 @@ class Simulation(_appell.Simulation):
             if partial is not None:
                 e.result = Result(*partial, m.coordinate_names, m.speed_names)
             raise
-        return Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+        res = Result(columns, table, q, v, m.coordinate_names, m.speed_names)
+        res.model = m   # for res.view() (_view.py)
+        return res
 
 
 class Linearization:
