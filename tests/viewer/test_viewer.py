@@ -138,6 +138,7 @@ def test_pixels(appell, scenes, work):
         page = br.open("file://" + html, width=1000, height=700)
         nf = len(rows)
         k1, k2 = nf // 6, nf - 1
+        page.eval("(appellView.state.follow = -1, 0)")   # a fixed camera
 
         def shot(k):
             page.eval(f"(appellView.setFrame({k}), appellView.render(), 0)")

@@ -43,6 +43,19 @@
   if (!(bodySize > 0)) bodySize = 0.2;
   var span = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 2 * bodySize, 0.5);
   var centre = new THREE.Vector3((lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, Math.max(0, lo[2]));
+  /* The size of the mechanism itself (its bodies at frame 0): when the motion goes much farther
+   * than that, the camera follows body 0 from a distance that shows the mechanism. */
+  var c0 = [Infinity, Infinity, Infinity, -Infinity, -Infinity, -Infinity];
+  for (i = 0; i < nb; i++)
+    for (var k = 0; k < 3; k++) {
+      c0[k] = Math.min(c0[k], P[7 * i + k]); c0[3 + k] = Math.max(c0[3 + k], P[7 * i + k]);
+    }
+  var size = Math.max(c0[3] - c0[0], c0[4] - c0[1], c0[5] - c0[2]) + 2 * bodySize;
+  var followFirst = span > 4 * size;
+  if (followFirst) {
+    span = 1.6 * size;
+    centre.set(P[0], P[1], Math.max(0, P[2]));
+  }
 
   /* ---- renderer, camera, controls ---- */
   var host = document.getElementById('view3d');
@@ -50,7 +63,7 @@
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   renderer.setClearColor(0xdfe6ee);
   host.appendChild(renderer.domElement);
-  var camera = new THREE.PerspectiveCamera(40, 1, span * 1e-3, span * 100);
+  var camera = new THREE.PerspectiveCamera(40, 1, span * 1e-2, span * 100);
   camera.up.set(0, 0, 1);
   camera.position.set(centre.x + 1.1 * span, centre.y - 1.5 * span, centre.z + 0.9 * span);
   var controls = new THREE.OrbitControls(camera, renderer.domElement);
@@ -63,16 +76,32 @@
   sun.position.set(0.6, -0.8, 1.5);
   scene.add(sun);
 
-  var half = Math.ceil(span * 1.5 + 1);
+  var half = Math.ceil(Math.max(hi[0] - lo[0], hi[1] - lo[1], span) * 1.5 + 1);
   var ground = new THREE.Mesh(new THREE.PlaneGeometry(4 * half, 4 * half),
-    new THREE.MeshLambertMaterial({ color: 0xf2f0ea }));
-  ground.position.set(Math.round(centre.x), Math.round(centre.y), -2e-3 * span);
+    new THREE.MeshLambertMaterial({ color: 0xf2f0ea, polygonOffset: true,
+      polygonOffsetFactor: 2, polygonOffsetUnits: 2 }));
+  ground.position.set(Math.round(centre.x), Math.round(centre.y), -5e-3 * span);
   scene.add(ground);
+  /* The grid: lines every `step` over the motion and a margin, each line cut into segments of
+   * one step (a long line that crosses the camera's near plane is dropped by some software GL
+   * rasterizers). At most 120 cells a side. */
   var step = Math.pow(10, Math.floor(Math.log10(span / 2)));
-  var grid = new THREE.GridHelper(4 * half, Math.round(4 * half / step), 0x9aa0aa, 0xc4c8cf);
-  grid.rotation.x = Math.PI / 2;
-  grid.position.set(Math.round(centre.x), Math.round(centre.y), -1e-3 * span);
+  var gx0 = lo[0] - span, gx1 = hi[0] + span, gy0 = lo[1] - span, gy1 = hi[1] + span;
+  while (Math.max(gx1 - gx0, gy1 - gy0) / step > 120) step *= 2;
+  gx0 = step * Math.floor(gx0 / step), gy0 = step * Math.floor(gy0 / step);
+  var ncx = Math.ceil((gx1 - gx0) / step), ncy = Math.ceil((gy1 - gy0) / step), seg = [];
+  for (var a = 0; a <= ncx; a++)
+    for (var b = 0; b < ncy; b++)
+      seg.push(gx0 + a * step, gy0 + b * step, 0, gx0 + a * step, gy0 + (b + 1) * step, 0);
+  for (b = 0; b <= ncy; b++)
+    for (a = 0; a < ncx; a++)
+      seg.push(gx0 + a * step, gy0 + b * step, 0, gx0 + (a + 1) * step, gy0 + b * step, 0);
+  var gridGeo = new THREE.BufferGeometry();
+  gridGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
+  var grid = new THREE.LineSegments(gridGeo, new THREE.LineBasicMaterial({ color: 0x9098a4 }));
+  grid.position.z = -1e-3 * span;
   scene.add(grid);
+  ground.position.x = (gx0 + gx1) / 2, ground.position.y = (gy0 + gy1) / 2;
   var axes = new THREE.AxesHelper(Math.max(0.3 * span, bodySize));
   scene.add(axes);
 
@@ -289,8 +318,10 @@
   })();
 
   /* ---- state and frames ---- */
-  var state = { frame: 0, time: t0, playing: false, speed: 1, loop: true, follow: -1 };
-  var last = new THREE.Vector3();
+  var state = { frame: 0, time: t0, playing: false, speed: 1, loop: true,
+    follow: followFirst ? 0 : -1 };
+  var last = new THREE.Vector3(P[0], P[1], P[2]);
+  followSel.value = String(state.follow);
 
   function frameAt(t) {   /* the last frame with T[i] <= t */
     var a = 0, b = nf - 1;
