@@ -137,8 +137,11 @@ def test_pixels(appell, scenes, work):
     with cdp.Browser() as br:
         page = br.open("file://" + html, width=1000, height=700)
         nf = len(rows)
-        k1, k2 = nf // 6, nf - 1
-        page.eval("(appellView.state.follow = -1, 0)")   # a fixed camera
+        k1 = nf // 6
+        # A fixed camera, three times farther than the page's first view.
+        page.eval("(function (v) { v.state.follow = -1; v.camera.position.sub(v.controls.target)"
+                  ".multiplyScalar(3).add(v.controls.target); v.controls.update(); return 0; })"
+                  "(appellView)")
 
         def shot(k):
             page.eval(f"(appellView.setFrame({k}), appellView.render(), 0)")
@@ -148,8 +151,17 @@ def test_pixels(appell, scenes, work):
 
         p1 = page.eval(f"appellView.project.apply(null, Array.prototype.slice.call("
                        f"appellView.poses, {7 * k1}, {7 * k1 + 3}))")
-        p2 = page.eval(f"appellView.project.apply(null, Array.prototype.slice.call("
-                       f"appellView.poses, {7 * k2}, {7 * k2 + 3}))")
+        # The second frame: the first after k1 whose disk centre is 150 px away and in view.
+        view_w = page.eval("appellView.renderer.domElement.clientWidth")
+        view_h = page.eval("appellView.renderer.domElement.clientHeight")
+        c1 = page.eval(f"Array.prototype.slice.call(appellView.poses, {7 * k1}, {7 * k1 + 3})")
+        top = page.eval(f"appellView.project({c1[0]}, {c1[1]}, {c1[2] + 0.5})")
+        r_px = math.hypot(top[0] - p1[0], top[1] - p1[1])   # the disk's radius is 0.5 m
+        for k2 in range(k1 + 1, nf):
+            p2 = page.eval(f"appellView.project.apply(null, Array.prototype.slice.call("
+                           f"appellView.poses, {7 * k2}, {7 * k2 + 3}))")
+            if math.hypot(p1[0] - p2[0], p1[1] - p2[1]) > 3 * r_px:
+                break
         # A ground point far from every position of the disk and its trace.
         col = {n: i for i, n in enumerate(names)}
         path = [(r[col["disk.pos.x"]], r[col["disk.pos.y"]]) for r in rows]
@@ -158,16 +170,16 @@ def test_pixels(appell, scenes, work):
         far_px = page.eval(f"appellView.project({far[0]}, {far[1]}, 0)")
         w, h, a = shot(k1)
         _, _, b = shot(k2)
-        view_w = page.eval("appellView.renderer.domElement.clientWidth")
         for p in (p1, p2, far_px):
-            check(0 <= p[0] < view_w and 0 <= p[1] < h, f"pixel {p} inside the 3-D view")
+            check(0 <= p[0] < view_w and 0 <= p[1] < view_h, f"pixel {p} inside the 3-D view")
         moved = [a[int(p1[1])][int(p1[0])], b[int(p1[1])][int(p1[0])]]
         still = [a[int(far_px[1])][int(far_px[0])], b[int(far_px[1])][int(far_px[0])]]
         dist = math.hypot(p1[0] - p2[0], p1[1] - p2[1])
         print(f"disk centre at frame {k1}: pixel {p1[0]:.1f}, {p1[1]:.1f} -> {moved}; "
-              f"moved {dist:.0f} px by frame {k2}; ground point {far_px[0]:.1f}, {far_px[1]:.1f}"
+              f"moved {dist:.0f} px (disk radius {r_px:.0f} px) by frame {k2}; ground point {far_px[0]:.1f}, {far_px[1]:.1f}"
               f" -> {still}")
-        check(dist > 20, f"the disk's image moved {dist:.1f} px between the frames")
+        check(dist > 3 * r_px > 6, f"the disk's image (radius {r_px:.1f} px) moved {dist:.1f} px "
+              f"between the frames")
         check(moved[0] != moved[1], "the pixel where the disk was differs between the shots")
         check(still[0] == still[1], "the pixel where nothing moved is the same in both shots")
         check(not page.problems(), f"console: {page.problems()}")

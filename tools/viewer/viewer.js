@@ -421,6 +421,7 @@
 
   /* World point -> CSS pixel in the page (for tests). */
   function project(x, y, z) {
+    camera.updateMatrixWorld();
     var v = new THREE.Vector3(x, y, z).project(camera), r = renderer.domElement.getBoundingClientRect();
     return [r.left + (v.x + 1) / 2 * r.width, r.top + (1 - v.y) / 2 * r.height];
   }
