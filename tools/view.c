@@ -79,7 +79,10 @@ static int value_opt(int argc, char **argv, int *i, view_opts *o) {
     const char **dst[] = {&o->run, &o->out, &o->title, &o->record};
     if (k < 4) *dst[k] = v;
     else if (k == 4) return add_list(o->sets, &o->nsets, v) ? -1 : 1;
-    else return add_list(o->plots, &o->nplots, v) ? -1 : 1;
+    else   /* "a,b,c": split in place (argv is writable) */
+      for (char *save = NULL, *tok = strtok_r((char *)v, ",", &save); tok;
+           tok = strtok_r(NULL, ",", &save))
+        if (add_list(o->plots, &o->nplots, tok)) return -1;
     return 1;
   }
   return 0;

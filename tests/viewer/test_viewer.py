@@ -15,6 +15,9 @@ CHECK is one of:
            the disk's path (nothing moved there)
   events   a page with a hand-written run record (status and two events) shows each event on
            the timeline at its time, and the status
+  errors   bad input to appell view and export: a CSV without the coordinates, an unknown
+           --plot column, a malformed row, another --format: exit 2, one message naming the
+           column, row or option, and no output file
   gltf     the bicycle's glTF export passes the Khronos validator (no errors) and its animation
            samples equal the CSV's poses to float32 rounding
 
@@ -217,6 +220,30 @@ def test_events(appell, scenes, work):
         check(not page.problems(), f"console: {page.problems()}")
 
 
+def test_errors(appell, scenes, work):
+    scene = os.path.join(scenes, "rolling_disk.yaml")
+    good, nocoord, bad = (os.path.join(work, n) for n in ("good.csv", "nocoord.csv", "bad.csv"))
+    run(appell, "run", scene, "--t-end", "0.1", "--out", good, "--quiet")
+    run(appell, "run", scene, "--t-end", "0.1", "--set", "output.channels=[energy]", "--out",
+        nocoord, "--quiet")
+    with open(bad, "w") as f:
+        f.write("t,disk.x\n0,1\n0.1,oops\n")
+    out = os.path.join(work, "out.html")
+    cases = [(["view", scene, "--run", nocoord, "--out", out], "no column disk.x"),
+             (["view", scene, "--run", good, "--out", out, "--plot", "disk.tilx"],
+              "--plot disk.tilx: no such column"),
+             (["view", scene, "--run", bad, "--out", out], "bad.csv:3: not an appell CSV row"),
+             (["view", scene, "--run", good, "--t-end", "1", "--out", out], "--t-end is a run"),
+             (["export", scene, "--run", good, "--format", "obj", "--out", out],
+              "--format obj: the only format is gltf")]
+    for args, what in cases:
+        r = subprocess.run([appell, *args], capture_output=True, text=True)
+        print(f"appell {args[0]} ... {args[-1]}: exit {r.returncode}: {r.stderr.strip()}")
+        check(r.returncode == 2 and what in r.stderr and len(r.stderr.splitlines()) == 1,
+              f"{args}: exit {r.returncode}, message {r.stderr!r} (want 2 and '{what}')")
+        check(not os.path.exists(out), f"{args}: no output file")
+
+
 def glb_parse(path):
     data = open(path, "rb").read()
     magic, version, length = struct.unpack("<III", data[:12])
@@ -287,11 +314,11 @@ def test_gltf(appell, scenes, work):
 def main():
     appell, scenes, work, what = sys.argv[1:5]
     os.makedirs(work, exist_ok=True)
-    if what != "gltf" and not cdp.find_chromium():
+    if what not in ("gltf", "errors") and not cdp.find_chromium():
         print("SKIP: chromium is not installed (scripts/setup installs Debian's chromium)")
         return 77
     {"pages": test_pages, "pixels": test_pixels, "events": test_events,
-     "gltf": test_gltf}[what](appell, scenes, work)
+     "gltf": test_gltf, "errors": test_errors}[what](appell, scenes, work)
     print(f"{what}: {len(failures)} failures")
     return 1 if failures else 0
 
