@@ -127,7 +127,7 @@ static int parse(int argc, char **argv, view_opts *o) {
 }
 
 /* FILE.EXT -> FILE + suffix (the extension replaced), malloc'd. */
-char *view_sibling(const char *path, const char *suffix) {
+static char *view_sibling(const char *path, const char *suffix) {
   const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
   size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path) : strlen(path);
   char *s = malloc(stem + strlen(suffix) + 1);
@@ -158,7 +158,7 @@ static int run_scene(ap_scene *sc, view_opts *o, const char *csv) {
 }
 
 /* The whole text of a file, or NULL (quietly: the record is optional). */
-char *view_slurp(const char *path) {
+static char *view_slurp(const char *path) {
   FILE *f = path ? fopen(path, "rb") : NULL;
   if (!f) return NULL;
   size_t cap = 4096, len = 0, got;

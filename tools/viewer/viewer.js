@@ -85,7 +85,7 @@
   /* The grid: lines every `step` over the motion and a margin, each line cut into segments of
    * one step (a long line that crosses the camera's near plane is dropped by some software GL
    * rasterizers). At most 120 cells a side. */
-  var step = Math.pow(10, Math.floor(Math.log10(span / 2)));
+  var step = Math.pow(10, Math.round(Math.log10(span / 3)));
   var gx0 = lo[0] - span, gx1 = hi[0] + span, gy0 = lo[1] - span, gy1 = hi[1] + span;
   while (Math.max(gx1 - gx0, gy1 - gy0) / step > 120) step *= 2;
   gx0 = step * Math.floor(gx0 / step), gy0 = step * Math.floor(gy0 / step);
