@@ -174,8 +174,10 @@ class Page:
             time.sleep(0.05)
 
     def eval(self, expr):
-        """The JSON value of a JavaScript expression (raises on an exception)."""
-        r = self.cmd("Runtime.evaluate", {"expression": f"JSON.stringify({expr})",
+        """The JSON value of a JavaScript expression, a promise awaited (raises on an
+        exception)."""
+        r = self.cmd("Runtime.evaluate", {"expression": f"Promise.resolve({expr})"
+                                          ".then(function (v) { return JSON.stringify(v); })",
                                           "returnByValue": True, "awaitPromise": True})
         if "exceptionDetails" in r:
             raise Error(f"{expr}: {r['exceptionDetails'].get('exception', {}).get('description')}")

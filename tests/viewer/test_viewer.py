@@ -217,6 +217,21 @@ def test_events(appell, scenes, work):
                   f"mark {m['name']} drawn at {m['frac']:.4f} of the timeline, "
                   f"expected {e['t'] / 2.0:.4f}")
         check(status == "status: " + record["status"], f"status shown: {status}")
+        # Playback: from the scrubbed frame 50 at 10x the frame advances; paused it stays.
+        page.eval("(appellView.setFrame(50), document.getElementById('speed').value = '10',"
+                  " document.getElementById('speed').dispatchEvent(new Event('change')),"
+                  " document.getElementById('play').click(), 0)")
+        moved = page.eval("new Promise(function (r) { var t0 = performance.now();"
+                          " (function poll() { var f = appellView.state.frame;"
+                          " if (f > 50 || performance.now() - t0 > 20000) r(f);"
+                          " else setTimeout(poll, 50); })(); })")
+        page.eval("(document.getElementById('play').click(), 0)")
+        f1 = page.eval("appellView.state.frame")
+        page.eval("new Promise(function (r) { setTimeout(r, 500); })")
+        f2 = page.eval("appellView.state.frame")
+        print(f"playback at 10x from frame 50: frame {moved}; paused at {f1}, then {f2}")
+        check(moved > 50 and f1 == f2 and page.eval("appellView.state.speed") == 10,
+              f"play advances ({moved}) and pause holds ({f1}, {f2})")
         check(not page.problems(), f"console: {page.problems()}")
 
 

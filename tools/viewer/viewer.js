@@ -330,7 +330,7 @@
     return a;
   }
 
-  function setFrame(k) {
+  function showFrame(k) {
     k = Math.max(0, Math.min(nf - 1, k | 0));
     state.frame = k;
     for (var b = 0; b < nb; b++) {
@@ -361,7 +361,14 @@
     plots.forEach(function (p) { if (p.bg) drawPlotCursor(p, T[k]); });
   }
 
-  function setTime(t) { state.time = t; setFrame(frameAt(t)); }
+  /* Show row k; playback goes on from its time. */
+  function setFrame(k) {
+    k = Math.max(0, Math.min(nf - 1, k | 0));
+    state.time = T[k];
+    showFrame(k);
+  }
+
+  function setTime(t) { state.time = t; showFrame(frameAt(t)); }
 
   function play(on) {
     state.playing = on;
@@ -371,9 +378,7 @@
 
   playBtn.addEventListener('click', function () { play(!state.playing); });
   scrub.addEventListener('input', function () {
-    var k = Number(scrub.value);
-    state.time = T[k];
-    setFrame(k);
+    setFrame(Number(scrub.value));
   });
   speedSel.addEventListener('change', function () { state.speed = Number(speedSel.value); });
   loopBox.addEventListener('change', function () { state.loop = loopBox.checked; });
@@ -408,7 +413,7 @@
         if (state.loop) state.time = t0 + (state.time - t1) % ((t1 - t0) || 1);
         else { state.time = t1; play(false); }
       }
-      setFrame(frameAt(state.time));
+      showFrame(frameAt(state.time));
     }
     before = now;
     render();
