@@ -2,7 +2,7 @@
 """Benchmark of appell view (docs/viewer.md, docs/performance.md): file sizes and playback
 frame time in headless Chromium.
 
-    bench/bench_viewer.py [--appell build/tools/appell] [--frames 10000] [--out DIR]
+    bench/bench_viewer.py [--appell build/tools/appell] [--frames 10000] [--measure N] [--out DIR]
 
 1. Sizes: the viewer page of the bicycle (examples/scenes/bicycle.yaml) run for 10 s at 100
    frames per second (1001 frames), its glTF export, and the rolling disk's page (15 s).
@@ -11,7 +11,8 @@ frame time in headless Chromium.
    this machine) every frame is shown once: appellView.setFrame(i) (the pose update), then a
    render, then a one-pixel readPixels that waits for the GPU work to finish. Reports the median,
    95th percentile and mean per-frame time of the update alone and of update + render, and the
-   share of frames under 16.7 ms (60 frames per second).
+   share of frames under 16.7 ms (60 frames per second). --measure N times only the first N
+   frames of the page (default all); progress goes to standard error.
 
 Prints a table and writes DIR/viewer_bench.csv (DIR default build/bench-viewer)."""
 import argparse
@@ -67,7 +68,7 @@ def summary(xs):
             sum(x < 1000 / 60 for x in xs) / len(xs))
 
 
-def playback(exe, out, frames):
+def playback(exe, out, frames, measure):
     scene, html = os.path.join(out, "twenty.yaml"), os.path.join(out, "twenty.html")
     twenty_disks(scene, (frames - 1) / 100)
     appell(exe, "view", scene, "--out", html)
@@ -81,35 +82,40 @@ def playback(exe, out, frames):
                   " v.gl = v.renderer.getContext(); v.px = new Uint8Array(4); return 0; })"
                   "(appellView)")
         upd, full = [], []
-        for start in range(0, nf, 500):
+        nm = min(nf, measure or nf)
+        for start in range(0, nm, 500):
             r = page.eval(
                 f"(function (v) {{ var u = [], f = [];"
-                f" for (var i = {start}; i < Math.min({start + 500}, {nf}); i++) {{"
+                f" for (var i = {start}; i < Math.min({start + 500}, {nm}); i++) {{"
                 f"  var a = performance.now(); v.setFrame(i); var b = performance.now();"
                 f"  v.render(); v.gl.readPixels(0, 0, 1, 1, v.gl.RGBA, v.gl.UNSIGNED_BYTE, v.px);"
                 f"  var c = performance.now(); u.push(b - a); f.push(c - a); }}"
                 f" return [u, f]; }})(appellView)")
             upd += r[0]
             full += r[1]
-    return nf, size, load, summary(upd), summary(full)
+            print(f"bench_viewer: {len(full)} of {nm} frames, median so far "
+                  f"{statistics.median(full):.1f} ms", file=sys.stderr, flush=True)
+    return nf, nm, size, load, summary(upd), summary(full)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--appell", default=os.path.join(ROOT, "build", "tools", "appell"))
     ap.add_argument("--frames", type=int, default=10000)
+    ap.add_argument("--measure", type=int, default=0)
     ap.add_argument("--out", default=os.path.join(ROOT, "build", "bench-viewer"))
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     rows = [("size", f, n, "bytes") for f, n in sizes(a.appell, a.out)]
-    nf, size, load, upd, full = playback(a.appell, a.out, a.frames)
+    nf, nm, size, load, upd, full = playback(a.appell, a.out, a.frames, a.measure)
     rows.append(("size", "twenty.html", size, "bytes"))
     rows.append(("load", "twenty.html", round(load, 2), "s"))
     for name, s in (("update", upd), ("update+render", full)):
         rows += [(name, "median", round(s[0], 3), "ms"), (name, "p95", round(s[1], 3), "ms"),
                  (name, "mean", round(s[2], 3), "ms"),
                  (name, "share under 16.7 ms", round(s[3], 4), "")]
-    print(f"appell view: 20 bodies, {nf} frames, headless Chromium (SwiftShader), 1280 x 720")
+    print(f"appell view: 20 bodies, {nf} frames ({nm} timed), headless Chromium (SwiftShader), "
+          f"1280 x 720")
     for r in rows:
         print(f"  {r[0]:<14} {r[1]:<20} {r[2]:>12} {r[3]}")
     with open(os.path.join(a.out, "viewer_bench.csv"), "w", newline="") as f:
