@@ -21,6 +21,12 @@ static void cases_body_queries(void) {
   CASE(ap_model_body_count, "math-level model", ap_model_body_count(SM) == AP_ERR_ARG);
   CASE(ap_model_find_body, "m NULL", ap_model_find_body(NULL, "disk") == -1);
   CASE(ap_model_find_body, "name NULL", ap_model_find_body(BM, NULL) == -1);
+  CASE(ap_model_body_name, "m NULL", ap_model_body_name(NULL, 0) == NULL);
+  CASE(ap_model_body_name, "math-level model", ap_model_body_name(SM, 0) == NULL);
+  CASE(ap_model_body_name, "b out of range", ap_model_body_name(BM, 1) == NULL);
+  CASE(ap_model_body_shape, "m NULL", ap_model_body_shape(NULL, 0, &(ap_shape){0}) == AP_ERR_ARG);
+  CASE(ap_model_body_shape, "out NULL", ap_model_body_shape(BM, 0, NULL) == AP_ERR_ARG);
+  CASE(ap_model_body_shape, "b < 0", ap_model_body_shape(BM, -1, &(ap_shape){0}) == AP_ERR_ARG);
   CASE(ap_model_find_coord, "m NULL", ap_model_find_coord(NULL, "x") == -1);
   CASE(ap_model_find_coord, "name NULL", ap_model_find_coord(BM, NULL) == -1);
   CASE(ap_model_find_speed, "m NULL", ap_model_find_speed(NULL, "x") == -1);
@@ -208,6 +214,11 @@ static void cases_scene(void) {
   CASE(ap_scene_element_kind, "i -1", ap_scene_element_kind(SC, AP_SCENE_EFFECTS, -1) == NULL);
   CASE(ap_scene_element_kind, "i 99", ap_scene_element_kind(SC, AP_SCENE_CONSTRAINTS, 99) == NULL);
   CASE(ap_scene_name, "NULL", ap_scene_name(NULL) == NULL);
+  CASE(ap_scene_body_visual, "s NULL",
+       ap_scene_body_visual(NULL, 0, &(ap_scene_visual){0}) == AP_ERR_ARG);
+  CASE(ap_scene_body_visual, "out NULL", ap_scene_body_visual(SC, 0, NULL) == AP_ERR_ARG);
+  CASE(ap_scene_body_visual, "body out of range",
+       ap_scene_body_visual(SC, 99, &(ap_scene_visual){0}) == AP_ERR_ARG);
 }
 
 static int eig_fn(double p_, int n, double *re, double *im, void *user) {

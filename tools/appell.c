@@ -16,6 +16,8 @@
 int cmd_bench(int argc, char **argv);   /* tools/bench.c */
 int cmd_linearize(int argc, char **argv);   /* tools/linearize.c */
 int cmd_sweep(int argc, char **argv);   /* tools/sweep.c */
+int cmd_view(int argc, char **argv);   /* tools/view.c */
+int cmd_export(int argc, char **argv);   /* tools/export_gltf.c */
 
 static const char usage[] =
     "usage: appell COMMAND [OPTIONS]\n"
@@ -29,6 +31,8 @@ static const char usage[] =
     "  bench SCENE   work-precision sweep of a scene against its own tight reference\n"
     "  linearize SCENE  operating point, linearization, eigenvalues, speed sweeps\n"
     "  sweep SCENE   run a scene over grids or random samples of its values, one CSV row a run\n"
+    "  view SCENE    write a self-contained HTML page that plays a run in 3-D, with plots\n"
+    "  export SCENE  write a run as a glTF 2.0 binary (.glb): meshes and their animation\n"
     "\n"
     "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
     "3 numerical failure, 1 internal error or failed write, 128 + N stopped by signal N.\n"
@@ -145,8 +149,11 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "bench") == 0) return finish(cmd_bench(argc - 1, argv + 1));
   if (strcmp(cmd, "linearize") == 0) return finish(cmd_linearize(argc - 1, argv + 1));
   if (strcmp(cmd, "sweep") == 0) return finish(cmd_sweep(argc - 1, argv + 1));
-  static const char *const cmds[] = {"run", "check", "plot", "bench", "linearize", "sweep"};
-  const char *s = cli_suggest(cmd, cmds, 6);
+  if (strcmp(cmd, "view") == 0) return finish(cmd_view(argc - 1, argv + 1));
+  if (strcmp(cmd, "export") == 0) return finish(cmd_export(argc - 1, argv + 1));
+  static const char *const cmds[] = {"run", "check", "plot", "bench", "linearize", "sweep", "view",
+                                     "export"};
+  const char *s = cli_suggest(cmd, cmds, 8);
   fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,
           s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
   return EXIT_INPUT;

@@ -373,6 +373,10 @@ AP_API int ap_model_body_count(const ap_model *m);
 AP_API int ap_model_find_body(const ap_model *m, const char *name);
 AP_API int ap_model_find_coord(const ap_model *m, const char *name);
 AP_API int ap_model_find_speed(const ap_model *m, const char *name);
+/* Body b's name (NULL for a bad id or a math-level model) and shape (AP_ERR_ARG likewise, or for
+ * a NULL out); ids in the order of creation. */
+AP_API const char *ap_model_body_name(const ap_model *m, int b);
+AP_API int ap_model_body_shape(const ap_model *m, int b, ap_shape *out);
 /* Index in q (v) of the joint's first free coordinate (speed); -1 when it has none. */
 AP_API int ap_joint_coord_index(const ap_model *m, int joint);
 AP_API int ap_joint_speed_index(const ap_model *m, int joint);

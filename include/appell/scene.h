@@ -152,6 +152,29 @@ typedef enum ap_scene_section {
 AP_API int ap_scene_count(const ap_scene *s, ap_scene_section sec);
 AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec, int i);
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
+/* A body's visual-only shape (bodies: NAME: visual:, docs/scenes.md): drawn by `appell view`
+ * and exported by `appell export`, never seen by the dynamics. */
+typedef enum ap_visual_kind {
+  AP_VISUAL_NONE = 0,      /* no visual (default) */
+  AP_VISUAL_BOX = 1,       /* box of edge lengths size[0..2] along body x, y, z */
+  AP_VISUAL_CAPSULE = 2,   /* cylinder of `radius` and `length` along body `axis`, capped by two
+                              half-spheres (total length length + 2 radius) */
+  AP_VISUAL_SPHERE = 3     /* sphere of `radius` */
+} ap_visual_kind;
+
+typedef struct ap_scene_visual {
+  ap_visual_kind kind;     /* default AP_VISUAL_NONE */
+  double size[3];          /* box edge lengths (m); default 0 */
+  double radius;           /* capsule, sphere (m); default 0 */
+  double length;           /* capsule cylinder length (m); default 0 */
+  int axis;                /* capsule axis in body axes: 0 x, 1 y, 2 z; default 2 */
+  double at[3];            /* centre in body axes (m); default 0 */
+} ap_scene_visual;
+
+/* Body `body`'s visual (ids as ap_scene_element_name(s, AP_SCENE_BODIES, i) and the model's
+ * ap_model_find_body). AP_ERR_ARG when s or out is NULL or body is out of range. */
+AP_API int ap_scene_body_visual(const ap_scene *s, int body, ap_scene_visual *out);
+
 /* The scene's name (name: key, default the file name without directory and extension); NULL
  * when s is NULL. */
 AP_API const char *ap_scene_name(const ap_scene *s);

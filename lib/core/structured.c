@@ -153,8 +153,8 @@ int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   int rc = st->ops->position(m, d, st->ws, select);
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;
-  if (rc != AP_OK) return rc;
-  return judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
+  if (rc != AP_OK || ((const ap_scratch *)d->internal)->judge_at_accepted) return rc;
+  return judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");   /* else judged at accepted states */
 }
 
 void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st) {
@@ -171,7 +171,7 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
-  if (rc == AP_OK)
+  if (rc == AP_OK && !((const ap_scratch *)d->internal)->judge_at_accepted)   /* as dense */
     rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2, "gamma");
   return rc;
 }

@@ -98,6 +98,14 @@ int ap_drv_stage_residual(ap_sim *s, double *t);
 int ap_drv_stage_redundant(ap_sim *s, double *t);
 /* 1 when the data still holds the successful evaluation at exactly (t, y) (sim_step.c). */
 int ap_drv_evaluated_at(const ap_sim *s, double t, const double *y);
+/* Before the step to t is accepted (its state in s->ytry): rows redundant for every q, when
+ * judged at accepted states (judge_at_accepted), judged here with v projected onto the
+ * constraints, so that an inconsistency leaves the state as it was; AP_OK when there is
+ * nothing to judge. */
+int ap_drv_judge_trial(ap_sim *s, double t);
+/* Every redundant row's consistency at (t, y), v projected onto the constraints first outside
+ * minimal mode; the failure with s->msg set. */
+int ap_drv_judge_state(ap_sim *s, double t, const double *y);
 /* IDA's first step from (q, v'): IDA's own guess from |y'| is far too small at tight
  * tolerances; the BDF1 local error h^2 |q''| / 2 = rtol |q| + atol at IDA's tolerances
  * (ap_dae_rtol) with q'' ~ N v' from the Appell solve gives it. 0 when v' = 0. */

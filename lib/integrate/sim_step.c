@@ -250,7 +250,11 @@ static int gn_project_q(ap_sim *s, double t, const double *q, double *dq, double
   double *Phi = s->gn, *PhiT = Phi + (size_t)np * n, *rhs = PhiT + (size_t)np * n;
   double *work = rhs + np, resid = 0.0;
   ap_basis basis = d->basis;
-  d->t = t, d->basis = AP_BASIS_NONE;
+  /* No basis is needed, but the tree path always factors, and with AP_BASIS_NONE it would
+   * choose a new partition: in minimal mode that changed the meaning of e' inside a step
+   * (tests/scenes/difftest/seed_17.yaml: energy drift 0.07 J of 0.16 with bdf). */
+  d->t = t;
+  if (!ap_core_st(d)) d->basis = AP_BASIS_NONE;
   memcpy(d->q, q, sizeof(double) * (size_t)n);
   memset(Phi, 0, sizeof(double) * (size_t)np * n);
   int rc = ap_fwd_position(m, d);
@@ -349,34 +353,52 @@ int ap_drv_stage_projection(ap_sim *s, double *tp) {
 
 /* Rows redundant only on the holonomic manifold are not judged at trial states (they lie off
  * it); here, at the accepted and projected state, their residuals must be within
- * manifold_rtol. With CVODE no redundant row is judged at trial states (judge_at_accepted):
- * its predictor, Newton iterates and difference-quotient Jacobian columns (v moved by
- * sqrt(eps) relative) lie off A v + a0 = 0, where the dropped rows' gamma differs from the
- * kept rows' combination by (d/dt of the combination) (A v + a0): 1.4e-8 relative on
- * diff_drive.yaml, over AP_CONSISTENCY_RTOL. Here the stages run with the check on, so rows
- * redundant for every q are judged at the accepted state as the explicit driver judges them
- * at every stage. Plain mode judges at the accepted q with v projected onto the constraints
+ * manifold_rtol. With CVODE, and in projected and plain mode with any method, no redundant
+ * row is judged at trial states (judge_at_accepted): CVODE's predictor, Newton iterates and
+ * difference-quotient Jacobian columns (v moved by sqrt(eps) relative), and the explicit
+ * stages of those modes (v projected after the step only) lie off A v + a0 = 0, where the
+ * dropped rows' gamma differs from the kept rows' combination by (d/dt of the combination)
+ * (A v + a0): 1.4e-8 relative on diff_drive.yaml, over AP_CONSISTENCY_RTOL; 1.6e-7 for a
+ * rolling disk with a wheel knife edge (tests/scenes/difftest/rolling_knife.yaml), whose
+ * combination turns with the disk. Here the stages run with the check on, so rows redundant
+ * for every q are judged at the accepted state (ap_drv_judge_trial, before the state is
+ * committed, so a failure keeps the last step's) as minimal mode judges them at every stage.
+ * Projected and plain mode judge at the accepted q with v projected onto the constraints
  * (the state itself is not changed): its speeds drift off A v + a0 = 0 by design, and judged
  * there the rows fail by that drift, not by their own disagreement (diff_drive.yaml, adams,
  * rtol 1e-8: gamma off by 2.4e-8 at t = 32.8). (Rows redundant only on the manifold are
  * refused in plain mode at the start, sim.c: the dropped row is not enforced off it, and
  * diff_drive_loops.yaml failed with every method even judged this way.) */
-int ap_drv_stage_redundant(ap_sim *s, double *tp) {
-  double t = *tp;
+int ap_drv_judge_state(ap_sim *s, double t, const double *y) {
   ap_data *d = s->d;
   ap_scratch *sc = d->internal;
-  if (!d->redundant_manifold && !(d->redundant > 0 && sc->judge_at_accepted)) return AP_OK;
   int later = sc->judge_at_accepted;
   sc->judge_at_accepted = 0;
-  ap_drv_load_state(s, t, s->y);
+  ap_drv_load_state(s, t, y);
   int rc = ap_fwd_position(s->m, d);
   double change = 0.0;
-  if (rc == AP_OK && s->def.mode == AP_MODE_PLAIN) rc = ap_core_project_here(s->m, d, d->v,
-                                                                             &change);
+  if (rc == AP_OK && s->def.mode != AP_MODE_MINIMAL) rc = ap_core_project_here(s->m, d, d->v,
+                                                                               &change);
   if (rc == AP_OK) rc = ap_fwd_velocity(s->m, d);
   if (rc == AP_OK) rc = ap_core_judge_redundant(s->m, d);
   sc->judge_at_accepted = later;
   return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SOLVER, "%s", d->msg);
+}
+
+int ap_drv_stage_redundant(ap_sim *s, double *tp) {
+  const ap_data *d = s->d;
+  if (!d->redundant_manifold &&
+      !(d->redundant > 0 && ((const ap_scratch *)d->internal)->judge_at_accepted))
+    return AP_OK;
+  return ap_drv_judge_state(s, *tp, s->y);
+}
+
+int ap_drv_judge_trial(ap_sim *s, double t) {
+  const ap_data *d = s->d;
+  if (d->redundant == 0 || d->redundant_manifold ||
+      !((const ap_scratch *)d->internal)->judge_at_accepted)
+    return AP_OK;
+  return ap_drv_judge_state(s, t, s->ytry);
 }
 
 /* Condition of the solves at an output: warn (once) when cond * eps exceeds rtol, since the

@@ -404,19 +404,11 @@ int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
   return AP_OK;
 }
 
-/* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T. */
-int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
-                            double *v) {
-  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q || !given || !v)
-    return AP_ERR_ARG;
+/* Minimum-norm free speeds: A_f x = -(a0 + A_g v_g) by lstsq on A_f^T, A (b x k) and a0 of
+ * the position stage at q (the data's on the dense path). */
+static int min_norm_speeds(const ap_model *m, ap_data *d, const double *A, const double *a0,
+                           const int *given, double *v) {
   int k = m->k, b = m->b, nf = 0;
-  memcpy(d->q, q, (size_t)m->n * sizeof *q);
-  if (m->ops) return ap_tree_complete_speeds(m, d, ap_tree_ws_of(d), given, v);
-  memset(d->g, 0, (size_t)k * k * sizeof *d->g);
-  memset(d->A, 0, (size_t)(b ? b : 1) * k * sizeof *d->A);
-  memset(d->a0, 0, (size_t)(b ? b : 1) * sizeof *d->a0);
-  int rc = ap_bm_position(m, d, ap_bm_scratch(d));
-  if (rc != AP_OK || b == 0) return rc;
   for (int c = 0; c < k; c++) nf += !given[c];
   size_t lw = ap_la_work_size(nf, b), liw = ap_la_iwork_size(nf, b);
   double *AfT = calloc((size_t)nf * b + b + nf + lw + 1, sizeof *AfT);
@@ -428,26 +420,73 @@ int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, cons
   }
   double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 1.0;
   for (int s = 0; s < b; s++) {
-    rhs[s] = -d->a0[s];
+    rhs[s] = -a0[s];
     for (int c = 0, f = 0; c < k; c++) {
-      double a = d->A[s + (size_t)c * b];
+      double a = A[s + (size_t)c * b];
       scale = fmax(scale, fabs(a * v[c]));
       if (given[c]) rhs[s] -= a * v[c];
       else AfT[f++ + (size_t)s * nf] = a;
     }
   }
-  rc = nf ? ap_la_lstsq_At(nf, b, AfT, rhs, 1e-12, x, &resid, work, iw) : AP_OK;
+  int rc = nf ? ap_la_lstsq_At(nf, b, AfT, rhs, 1e-12, x, &resid, work, iw) : AP_OK;
   for (int c = 0, f = 0; rc == AP_OK && c < k; c++)
     if (!given[c]) v[c] = x[f++];
   double res = rc == AP_OK ? ap_constraint_residual(d, v) : 0.0;
   free(AfT), free(iw);
   if (rc != AP_OK) return rc;
-  if (res > 1e-9 * fmax(scale, max_abs(d->a0, b))) {
+  if (res > 1e-9 * fmax(scale, max_abs(a0, b))) {
     AP_BM_MSG(d, "model '%s': the given speeds leave the constraints violated by %.3g",
               m->name, res);
     return AP_ERR_INCONSISTENT;
   }
   return AP_OK;
+}
+
+/* The tree path: its own completion (the free speeds of its partition 0) runs the position
+ * stage; then the minimum-norm completion as on the dense path, with A's columns from the
+ * tree's rows (A e_c), so that both paths start a scene from the same speeds (a sleigh on a
+ * turntable started with (-0.2454, 0, 0) instead of (-0.1745, 0.1067, -0.0315): found by
+ * tests/difftest, docs/testing.md). */
+static int tree_complete_speeds(const ap_model *m, ap_data *d, const int *given, double *v) {
+  ap_tree_ws *ws = ap_tree_ws_of(d);
+  int k = m->k, b = m->b;
+  double *A = calloc((size_t)b * k + 2 * (size_t)k, sizeof *A);
+  if (!A) {
+    AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
+    return AP_ERR_NOMEM;
+  }
+  double *unit = A + (size_t)b * k, *v_in = unit + k;
+  memcpy(v_in, v, (size_t)k * sizeof *v);
+  /* its partition may not avoid every given speed: then the least squares below decides */
+  int rc = ap_tree_complete_speeds(m, d, ws, given, v);
+  if ((rc != AP_OK && rc != AP_ERR_INCONSISTENT) || b == 0) {
+    free(A);
+    return rc;
+  }
+  for (int c = 0; c < k; c++) {
+    if (given[c]) v[c] = v_in[c];   /* as given, not as the tree's solve returned them */
+    unit[c] = 1.0;
+    ap_tree_amul(ws, d, unit, 0, A + (size_t)c * b, NULL);
+    unit[c] = 0.0;
+  }
+  rc = min_norm_speeds(m, d, A, d->a0, given, v);
+  free(A);
+  return rc;
+}
+
+int ap_body_complete_speeds(const ap_model *m, ap_data *d, const double *q, const int *given,
+                            double *v) {
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !q || !given || !v)
+    return AP_ERR_ARG;
+  int k = m->k, b = m->b;
+  memcpy(d->q, q, (size_t)m->n * sizeof *q);
+  if (m->ops) return tree_complete_speeds(m, d, given, v);
+  memset(d->g, 0, (size_t)k * k * sizeof *d->g);
+  memset(d->A, 0, (size_t)(b ? b : 1) * k * sizeof *d->A);
+  memset(d->a0, 0, (size_t)(b ? b : 1) * sizeof *d->a0);
+  int rc = ap_bm_position(m, d, ap_bm_scratch(d));
+  if (rc != AP_OK || b == 0) return rc;
+  return min_norm_speeds(m, d, d->A, d->a0, given, v);
 }
 
 /* ---- contact forces ------------------------------------------------------------------------ */

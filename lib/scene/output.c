@@ -4,7 +4,9 @@
  * Columns, in this order: t; coordinates (model names, e.g. disk.x, disk.qw); speeds
  * (disk.wx); angles (disk.heading, disk.tilt, disk.spin: Z-X-Z of each quaternion joint,
  * unwrapped from row to row so that a steady spin gives a straight line); com (disk.com.x);
- * contacts (disk.contact.x, .y); energy (kinetic, potential, energy, energy_error = E - E(t0));
+ * contacts (disk.contact.x, .y); poses (per body: disk.pos.x, .y, .z, the body origin, and
+ * disk.rot.w, .x, .y, .z, the unit quaternion of the body axes in world axes, w >= 0, from
+ * ap_quat_from_matrix of ap_body_get_state's R); energy (kinetic, potential, energy, energy_error = E - E(t0));
  * residual (max |A v + a0|); reactions (lambda.<row>); contact forces (per rolling constraint,
  * named by its body: disk.contact.Fx, .Fy, .Fz, .friction_ratio, from ap_body_contact_force
  * with the simulation's multipliers, IDA's own in DAE mode). Only the channels asked for are
@@ -60,6 +62,10 @@ static int body_cols(sc_out *o, const sc_scene *s, unsigned ch) {
       rc = push(o, bn, ".contact.x");
       if (rc == AP_OK) rc = push(o, bn, ".contact.y");
     }
+  static const char *const pose[] = {".pos.x", ".pos.y", ".pos.z", ".rot.w", ".rot.x", ".rot.y",
+                                     ".rot.z"};
+  for (int b = 0; rc == AP_OK && (ch & SC_OUT_POSES) && b < s->nb; b++)
+    for (int i = 0; rc == AP_OK && i < 7; i++) rc = push(o, s->bodies[b].name, pose[i]);
   return rc;
 }
 
@@ -117,6 +123,16 @@ static int body_vals(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d
     if (ap_body_get_state(m, d, s->joints[j].def.child, &st) != AP_OK) return AP_ERR_INTERNAL;
     row[(*c)++] = st.contact[0], row[(*c)++] = st.contact[1];
   }
+  for (int b = 0; (ch & SC_OUT_POSES) && b < s->nb; b++) {
+    ap_body_state st;
+    if (ap_body_get_state(m, d, b, &st) != AP_OK) return AP_ERR_INTERNAL;
+    double *p = row + *c;
+    memcpy(p, st.pos, sizeof st.pos);
+    ap_quat_from_matrix(st.R, p + 3);
+    if (p[3] < 0)
+      for (int i = 3; i < 7; i++) p[i] = -p[i];
+    *c += 7;
+  }
   return AP_OK;
 }
 
@@ -134,7 +150,7 @@ int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_s
   row[c++] = d->t;
   for (int i = 0; (ch & SC_OUT_COORDS) && i < n; i++) row[c++] = d->q[i];
   for (int i = 0; (ch & SC_OUT_SPEEDS) && i < k; i++) row[c++] = d->v[i];
-  if (ch & (SC_OUT_ANGLES | SC_OUT_COM | SC_OUT_CONTACTS)) {
+  if (ch & (SC_OUT_ANGLES | SC_OUT_COM | SC_OUT_CONTACTS | SC_OUT_POSES)) {
     if ((rc = ap_body_eval(m, d)) != AP_OK) return rc;
     if ((rc = body_vals(o, s, m, d, row, &c)) != AP_OK) return rc;
   }

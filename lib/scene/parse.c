@@ -16,7 +16,7 @@
 static const char *const top_keys[] = {"name", "description", "bodies", "joints", "constraints",
                                        "effects", "ground", "initial", "simulation", "output",
                                        "linearize", "events", NULL};
-static const char *const body_keys[] = {"mass", "com", "inertia", "shape", "collide", NULL};
+static const char *const body_keys[] = {"mass", "com", "inertia", "shape", "collide", "visual", NULL};
 static const char *const shape_keys[] = {"kind", "radius", "tube", "semi_axes", "flat_tol",
                                          NULL};
 static const char *const shape_kinds[] = {"none", "point", "sphere", "ellipsoid", "disk", "torus",
@@ -214,6 +214,8 @@ static int parse_body(sc_ctx *c, const sc_node *key, const sc_node *n, sc_body *
     return AP_ERR_ARG;
   const sc_node *sh = sc_map_get(n, "shape"), *in = sc_map_get(n, "inertia");
   if (sh && parse_shape(c, sh, &b->def.shape)) return AP_ERR_ARG;
+  if (sc_map_get(n, "visual") && sc_parse_visual(c, sc_map_get(n, "visual"), &b->visual))
+    return AP_ERR_ARG;
   if (in && parse_inertia(c, in, b)) return AP_ERR_ARG;
   if (!in) b->uniform = 1;
   int solid = b->def.shape.kind != AP_SHAPE_NONE && b->def.shape.kind != AP_SHAPE_POINT;

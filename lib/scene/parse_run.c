@@ -235,7 +235,7 @@ static int parse_channels(sc_ctx *c, sc_scene *s, const sc_node *ch) {
     if (k < 0) {
       const char *sug = sc_suggest(it->text, names);
       return sc_err(c, it, "unknown channel '%s'%s%s%s (channels: coordinates, speeds, angles, "
-                    "com, contacts, energy, residual, reactions, contact_forces)", it->text,
+                    "com, contacts, energy, residual, reactions, contact_forces, poses)", it->text,
                     sug ? " (did you mean '" : "", sug ? sug : "", sug ? "'?)" : "");
     }
     s->channels |= 1u << k;

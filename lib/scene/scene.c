@@ -192,6 +192,12 @@ const ap_data *sc_scene_output_data(const ap_scene *sc) { return sc ? sc->d : NU
 const sc_scene *sc_scene_parsed(const ap_scene *sc) { return sc ? &sc->s : NULL; }
 const char *ap_scene_name(const ap_scene *sc) { return sc ? sc->s.name : NULL; }
 
+int ap_scene_body_visual(const ap_scene *sc, int body, ap_scene_visual *out) {
+  if (!sc || !out || body < 0 || body >= sc->s.nb) return AP_ERR_ARG;
+  *out = sc->s.bodies[body].visual;
+  return AP_OK;
+}
+
 void ap_scene_get_run(const ap_scene *sc, ap_scene_run *run) {
   if (sc && run) *run = sc->s.run;
   else if (run) memset(run, 0, sizeof *run);

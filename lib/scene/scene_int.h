@@ -154,7 +154,11 @@ typedef struct sc_body {
   const sc_node *node;
   ap_body_def def;
   int uniform;             /* inertia from the shape */
+  ap_scene_visual visual;  /* drawn only (parse_visual.c); kind AP_VISUAL_NONE by default */
 } sc_body;
+
+/* bodies: NAME: visual: (parse_visual.c). */
+int sc_parse_visual(sc_ctx *c, const sc_node *n, ap_scene_visual *v);
 
 /* Initial state of one joint in people's coordinates (init.c converts). */
 typedef struct sc_init {
@@ -212,11 +216,12 @@ enum {
   SC_OUT_ENERGY = 1 << 5,
   SC_OUT_RESIDUAL = 1 << 6,
   SC_OUT_REACTIONS = 1 << 7,
-  SC_OUT_CONTACT_FORCES = 1 << 8
+  SC_OUT_CONTACT_FORCES = 1 << 8,
+  SC_OUT_POSES = 1 << 9
 };
 #define SC_OUT_NAMES                                                                     \
   { "coordinates", "speeds", "angles", "com", "contacts", "energy", "residual", "reactions", \
-    "contact_forces", NULL }
+    "contact_forces", "poses", NULL }
 
 typedef struct sc_scene {
   char *file;

@@ -28,7 +28,7 @@ import json as _json
 import math as _math
 import os as _os
 
-from . import _appell
+from . import _appell, _view
 from ._appell import Error, Model, SceneError
 from ._sweep import Table, sweep
 
@@ -141,6 +141,13 @@ class Result:
         return (f"<appell.Result: {len(self)} rows x {len(self.columns)} columns, "
                 f"status {self.status}>")
 
+    def view(self, path, plots=(), forces=False, title=None):
+        """Write the 3-D viewer page of this run (docs/viewer.md) to path; returns path."""
+        return _view.view(self, path, plots, forces, title)
+
+    def _repr_html_(self):
+        return _view.repr_html(self)
+
 
 def _run_events(sim):
     """The events a Simulation recorded (docs/python.md "Events"): dicts with name, t,
@@ -199,8 +206,10 @@ class Simulation(_appell.Simulation):
                                   status="failed" if failed else "interrupted",
                                   message=message, events=_run_events(self))
             raise
-        return Result(columns, table, q, v, m.coordinate_names, m.speed_names, status="ok",
-                      message=self.warning, events=_run_events(self))
+        res = Result(columns, table, q, v, m.coordinate_names, m.speed_names, status="ok",
+                     message=self.warning, events=_run_events(self))
+        res.model = m   # for res.view() (_view.py)
+        return res
 
 
 class Linearization:
