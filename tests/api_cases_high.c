@@ -410,6 +410,12 @@ static void cases_batch(void) {
        ap_batch_run_plan(BT, PL, 2, 5, vals, stat_, NULL) == AP_ERR_ARG);
   CASE(ap_batch_run_plan, "values NULL",
        ap_batch_run_plan(BT, PL, 0, 1, NULL, stat_, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan_events, "b NULL",
+       ap_batch_run_plan_events(NULL, PL, 0, 1, vals, stat_, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan_events, "p NULL",
+       ap_batch_run_plan_events(BT, NULL, 0, 1, vals, stat_, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_batch_run_plan_events, "status NULL",
+       ap_batch_run_plan_events(BT, PL, 0, 1, vals, NULL, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_batch_messages_free, "messages NULL", (ap_batch_messages_free(3, NULL), 1));
   CASE(ap_batch_messages_free, "count -1", (ap_batch_messages_free(-1, msgs), 1));
 }

@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "commit.h"
 #include "runrecord.h"
+#include "sweep.h"
 
 int cli_run_events(const ap_sim *sim, cli_event *out, int max) {
   static const char *const actions[] = {"stop", "log", "switch"};
@@ -26,13 +27,13 @@ int cli_run_events(const ap_sim *sim, cli_event *out, int max) {
 }
 
 const char *cli_outcome(int status) {
-  return status == AP_OK ? CLI_STATUS_OK : CLI_STATUS_FAILED;
+  return status == AP_OK ? CLI_STATUS_OK : status == AP_STOPPED ? CLI_STATUS_EVENT
+                                                                : CLI_STATUS_FAILED;
 }
 
-void sweep_outcome_cells(FILE *f, int status) {
-  /* The batch records no events yet: when lib/batch reports a run's events, write them here
-   * as "NAME@T;NAME@T" (T with %.17g), quoted like the message. */
-  fprintf(f, ",%s,\"\"", cli_outcome(status));
+void sweep_outcome_cells(FILE *f, int status, const char *events) {
+  fprintf(f, ",%s,", cli_outcome(status));
+  sweep_csv_quote(f, events ? events : "");
 }
 
 /* Length of the well-formed UTF-8 sequence at s (1 to 4), or 0 when there is none. */

@@ -64,9 +64,11 @@ typedef struct cli_record_info {
 } cli_record_info;
 int cli_record_read(const char *path, cli_record_info *info);
 
-/* A sweep row's outcome word for a run's status (AP_OK: ok; a failure: failed). */
+/* A sweep row's outcome word for a run's status (AP_OK: ok; AP_STOPPED: event; a failure:
+ * failed). */
 const char *cli_outcome(int status);
-/* A sweep row's outcome and events cells (",ok,\"\"") after its status. */
-void sweep_outcome_cells(FILE *f, int status);
+/* A sweep row's outcome and events cells (",ok,\"\"") after its status; events is the
+ * batch's "NAME@T;NAME@T" of the run (or NULL), quoted like the message. */
+void sweep_outcome_cells(FILE *f, int status, const char *events);
 
 #endif

@@ -232,6 +232,7 @@ typedef struct sweep_state {
   double *values;
   int *status;
   char **messages;
+  char **events;           /* each run's "NAME@T;..." or NULL */
   int bar;
   double t_start;
   char id[17];             /* the sweep's identity (ap_batch_plan_id), in every row */
@@ -368,7 +369,7 @@ static void write_row(const sweep_state *s, FILE *f, long i) {
     fprintf(f, ",%s", strchr(buf, '=') + 1);
   }
   fprintf(f, ",%d", s->status[i]);
-  sweep_outcome_cells(f, s->status[i]);
+  sweep_outcome_cells(f, s->status[i], s->events[i]);
   int nc = ap_batch_ncols(s->batch);
   for (int j = 0; j < nc; j++) fprintf(f, ",%.17g", s->values[(size_t)i * (size_t)nc + (size_t)j]);
   fputc(',', f);
@@ -441,13 +442,14 @@ static int open_checkpoint(sweep_state *s, const cli_out *out) {
 static int keep_batch(sweep_state *s, long n) {
   for (long i = 0; i < n; i++) {
     write_row(s, s->ck, i);
-    if (s->status[i] != AP_OK && s->failed++ == 0) {
+    if (s->status[i] != AP_OK && s->status[i] != AP_STOPPED && s->failed++ == 0) {
       s->first_bad = s->first + s->base + i, s->first_status = s->status[i];
       snprintf(s->first_msg, sizeof s->first_msg, "%s", s->messages[i] ? s->messages[i] : "");
     }
   }
   s->ran += n;
   ap_batch_messages_free(n, s->messages);
+  ap_batch_messages_free(n, s->events);
   if (fflush(s->ck) != 0 || ferror(s->ck) || fsync(fileno(s->ck)) != 0)
     return fprintf(stderr, "appell sweep: cannot write the checkpoint %s: %s\n",
                    s->ck_path[0] ? s->ck_path : "(temporary)", strerror(errno)), EXIT_INTERNAL;
@@ -477,19 +479,21 @@ static int run_sweep(sweep_state *s, cli_out *out) {
   s->values = malloc(sizeof *s->values * (size_t)(batch * nc + 1));
   s->status = malloc(sizeof *s->status * (size_t)batch);
   s->messages = calloc((size_t)batch, sizeof *s->messages);
+  s->events = calloc((size_t)batch, sizeof *s->events);
   s->first_bad = -1;
-  if (!s->values || !s->status || !s->messages)
+  if (!s->values || !s->status || !s->messages || !s->events)
     return fprintf(stderr, "appell sweep: out of memory\n"), EXIT_INTERNAL;
   int code = open_checkpoint(s, out);
   s->bar = !s->o->quiet && isatty(STDERR_FILENO);
   s->t_start = now();
   for (s->base = s->resumed; code == EXIT_OK && s->base < s->count; s->base += batch) {
     long n = s->count - s->base < batch ? s->count - s->base : batch;
-    int rc = ap_batch_run_plan(s->batch, s->plan, s->first + s->base, n, s->values, s->status,
-                               s->messages);
+    int rc = ap_batch_run_plan_events(s->batch, s->plan, s->first + s->base, n, s->values,
+                                      s->status, s->messages, s->events);
     int sig = cli_interrupted();
     if (rc == AP_BATCH_CANCELLED || sig) {
       ap_batch_messages_free(n, s->messages);
+      ap_batch_messages_free(n, s->events);
       fprintf(stderr, "%sappell sweep: interrupted by %s; no table written%s%s%s\n",
               s->bar ? "\r\033[K" : "", cli_signal_name(sig),
               s->ck_path[0] ? "; the finished runs are in " : "", s->ck_path,
@@ -527,6 +531,7 @@ int cmd_sweep(int argc, char **argv) {
   if (code == EXIT_OK) code = run_sweep(&s, &out);
   if (s.ck) fclose(s.ck);
   free(s.messages);
+  free(s.events);
   free(s.values);
   free(s.status);
   ap_batch_free(s.batch);

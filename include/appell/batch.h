@@ -133,8 +133,8 @@ AP_API int ap_batch_check(const ap_batch *b, const char *const *sets, int nsets,
 AP_API int ap_batch_check_plan(const ap_batch *b, const ap_plan *p, char *msg, size_t msg_len);
 
 /* Run count variants: variant i applies sets[i * nper + j], j < nper, after the batch's own
- * overrides. Row i goes to values + i * ncols, status[i] (AP_OK, the failure's status, or
- * AP_BATCH_NOT_RUN) and messages[i] (may be NULL: then no messages): NULL, or a malloc'd
+ * overrides. Row i goes to values + i * ncols, status[i] (AP_OK, AP_STOPPED when a stop event
+ * of the scene ended the run, the failure's status, or AP_BATCH_NOT_RUN) and messages[i] (may be NULL: then no messages): NULL, or a malloc'd
  * text for a failed run (the scene's message with file:line:column, or the simulation's) or
  * a successful run with a warning; free them with ap_batch_messages_free. Returns AP_OK when
  * every run was attempted, AP_BATCH_CANCELLED, AP_ERR_NOMEM when a worker thread could not
@@ -146,6 +146,16 @@ AP_API int ap_batch_run(ap_batch *b, long count, int nper, const char *const *se
 /* Runs first .. first + count - 1 of a plan (its overrides generated in the workers). */
 AP_API int ap_batch_run_plan(ap_batch *b, const ap_plan *p, long first, long count,
                              double *values, int *status, char **messages);
+/* The same, with each run's events: the scene's events (its events: section, the bodies'
+ * collide: keys, and the implicit kink and saturation events) are added to every run, a run
+ * that a stop event ended has status AP_STOPPED (its row ends at the event time, its message
+ * names the event), and events[i] (events may be NULL) gets NULL when run i recorded no event,
+ * else a malloc'd "NAME@T;NAME@T" (T with %.17g; the last 64 events of the run, in the order
+ * they happened); free them with ap_batch_messages_free. ap_batch_run and ap_batch_run_plan
+ * add the scene's events too and return the same statuses. */
+AP_API int ap_batch_run_plan_events(ap_batch *b, const ap_plan *p, long first, long count,
+                                    double *values, int *status, char **messages,
+                                    char **events);
 AP_API void ap_batch_messages_free(long count, char **messages);
 
 #ifdef __cplusplus

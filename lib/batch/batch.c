@@ -256,11 +256,16 @@ int ap_batch_run(ap_batch *b, long count, int nper, const char *const *sets, dou
   if (!b || count < 0 || nper < 0 || (count && nper && !sets) || (count && (!values || !status)))
     return AP_ERR_ARG;
   ap_bat_source src = {sets, nper, NULL, 0};
-  return ap_bat_pool(b, &src, count, values, status, messages);
+  return ap_bat_pool(b, &src, count, values, status, messages, NULL);
 }
 
 int ap_batch_run_plan(ap_batch *b, const ap_plan *p, long first, long count, double *values,
                       int *status, char **messages) {
+  return ap_batch_run_plan_events(b, p, first, count, values, status, messages, NULL);
+}
+
+int ap_batch_run_plan_events(ap_batch *b, const ap_plan *p, long first, long count,
+                             double *values, int *status, char **messages, char **events) {
   if (!b || !p || first < 0 || count < 0 || first + count > ap_plan_count(p) ||
       (count && (!values || !status)))
     return AP_ERR_ARG;
@@ -268,7 +273,7 @@ int ap_batch_run_plan(ap_batch *b, const ap_plan *p, long first, long count, dou
   for (int r = 0; count && r < ap_plan_nparams(p); r++)   /* e.g. random values need samples */
     if (ap_plan_value(p, first, r, NULL, buf, sizeof buf) != AP_OK) return AP_ERR_ARG;
   ap_bat_source src = {NULL, ap_plan_nparams(p), p, first};
-  return ap_bat_pool(b, &src, count, values, status, messages);
+  return ap_bat_pool(b, &src, count, values, status, messages, events);
 }
 
 void ap_batch_messages_free(long count, char **messages) {

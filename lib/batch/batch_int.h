@@ -34,11 +34,14 @@ struct ap_batch {
 };
 
 /* One run with the overrides vsets (nv) after the batch's own: row (ncols values, NaN where
- * nothing was reached) and the status; msg gets the failure's message or the run's warning.
+ * nothing was reached) and the status (AP_STOPPED when a stop event of the scene ended it);
+ * msg gets the failure's message, the stop event or the run's warning, and ev (may be NULL)
+ * the run's events as "NAME@T;NAME@T" (the last AP_BAT_MAX_EVENTS of them, "" for none).
  * The simulation stops (AP_ERR_INTERRUPTED) at its next internal step once *stop is non-zero
  * (stop may be NULL). */
+#define AP_BAT_MAX_EVENTS 64
 int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *row, char *msg,
-                   size_t msg_len, const atomic_int *stop);
+                   size_t msg_len, char *ev, size_t ev_len, const atomic_int *stop);
 
 /* Load the batch's scene with its overrides and vsets (nv). */
 int ap_bat_load(const ap_batch *b, const char *const *vsets, int nv, ap_scene **out, char *msg,
@@ -59,6 +62,6 @@ uint64_t ap_bat_hash(uint64_t h, const void *data, size_t n);
 uint64_t ap_bat_plan_hash(const ap_plan *p, uint64_t h);
 
 int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
-                char **messages);
+                char **messages, char **events);
 
 #endif

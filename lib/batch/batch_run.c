@@ -7,6 +7,8 @@
  * energy E(t) enters the drift max |E(t) - E(t0)|; when channels are asked for, the scene's
  * output row is evaluated there as well (angles are unwrapped from row to row, as in the
  * CLI's CSV), and at each sample time the channels are copied into the row.
+ * The scene's events are added to the simulation: a stop event ends the run (AP_STOPPED) with
+ * a last energy and sample at the event time, as appell run's last row.
  * Row layout (batch_int.h, ap_batch_col_name): t, steps, rhs_evals, err_fails, max_residual,
  * energy_drift, [q@end, v@end], [channel@time, times outer]; NaN where nothing was reached. */
 #include <math.h>
@@ -14,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "appell/event.h"
 #include "appell/scene.h"
 #include "appell/sim.h"
 #include "batch/batch_int.h"
@@ -70,6 +73,8 @@ static int start(one_run *r) {
   rc = ap_sim_create(ap_scene_model(r->sc), &r->run.sim, r->run.t0, q0, v0, &r->sim, why,
                      sizeof why);
   if (rc != AP_OK) return fail(r, rc, "cannot start the simulation: ", why);
+  rc = ap_scene_add_events(r->sc, r->sim, why, sizeof why);
+  if (rc != AP_OK) return fail(r, rc, "cannot add the scene's events: ", why);
   return AP_OK;
 }
 
@@ -97,9 +102,19 @@ static int record(one_run *r, double t, int grid, double tol) {
   return AP_OK;
 }
 
+/* The stop event that ended the run, as its message. */
+static int stopped(one_run *r) {
+  ap_event_record ev;
+  int n = ap_sim_event_count(r->sim);
+  if (n > 0 && ap_sim_event_get(r->sim, n - 1, &ev) == AP_OK && r->msg && r->msg_len)
+    snprintf(r->msg, r->msg_len, "stopped by event '%s' at t = %.10g", ev.name, ev.t);
+  return AP_STOPPED;
+}
+
 static int advance(one_run *r, double t) {
   int rc = ap_sim_advance(r->sim, t);
   if (rc == AP_OK) return AP_OK;
+  if (rc == AP_STOPPED) return stopped(r);
   char what[1200];   /* the scene expression at fault first, when there is one */
   int n = ap_scene_locate_failure(r->sc, r->sim, t, what, sizeof what - 100) != AP_OK && what[0]
               ? (int)strlen(what) : 0;
@@ -126,6 +141,10 @@ static int loop(one_run *r) {
     if (rc == AP_OK) rc = advance(r, t);
     if (rc == AP_OK) rc = record(r, t, 1, tol);
   }
+  if (rc == AP_STOPPED) {   /* the last row of appell run is at the event: its energy too */
+    int rec = record(r, ap_sim_time(r->sim), 1, tol);
+    if (rec != AP_OK) rc = rec;
+  }
   return rc;
 }
 
@@ -144,6 +163,24 @@ static void summarize(one_run *r) {
   memcpy(row + AP_BAT_FIXED_COLS + b->n, ap_sim_v(r->sim), sizeof(double) * (size_t)b->k);
 }
 
+/* The run's events as "NAME@T;NAME@T" into ev (the last AP_BAT_MAX_EVENTS; cut at a whole
+ * event when ev is too short). */
+static void event_text(const ap_sim *sim, char *ev, size_t len) {
+  int n = ap_sim_event_count(sim);
+  size_t used = 0;
+  ev[0] = '\0';
+  for (int i = n > AP_BAT_MAX_EVENTS ? n - AP_BAT_MAX_EVENTS : 0; i < n; i++) {
+    ap_event_record r;
+    if (ap_sim_event_get(sim, i, &r) != AP_OK) continue;
+    int w = snprintf(ev + used, len - used, "%s%s@%.17g", used ? ";" : "", r.name, r.t);
+    if (w < 0 || (size_t)w >= len - used) {
+      ev[used] = '\0';
+      return;
+    }
+    used += (size_t)w;
+  }
+}
+
 /* ap_sim_poll_fn: stop once the batch is cancelled. */
 static int poll_stop(double t, void *user) {
   (void)t;
@@ -151,7 +188,7 @@ static int poll_stop(double t, void *user) {
 }
 
 int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *row, char *msg,
-                   size_t msg_len, const atomic_int *stop) {
+                   size_t msg_len, char *ev, size_t ev_len, const atomic_int *stop) {
   one_run r;
   memset(&r, 0, sizeof r);
   r.b = b, r.row = row, r.msg = msg, r.msg_len = msg_len;
@@ -163,6 +200,7 @@ int ap_bat_run_one(const ap_batch *b, const char *const *vsets, int nv, double *
   if (rc == AP_OK && stop) ap_sim_set_poll(r.sim, poll_stop, (void *)stop);
   if (rc == AP_OK) rc = loop(&r);
   if (r.sim) summarize(&r);
+  if (r.sim && ev && ev_len) event_text(r.sim, ev, ev_len);
   if (rc == AP_OK && r.sim && ap_sim_warning(r.sim)[0] && msg && msg_len)
     snprintf(msg, msg_len, "warning: %s", ap_sim_warning(r.sim));
   ap_sim_free(r.sim);

@@ -1,5 +1,6 @@
 /* The batch's thread pool: `threads` POSIX threads take run indices from a shared counter in
- * increasing order, run them (batch_run.c) and write row i, status[i] and messages[i] only;
+ * increasing order, run them (batch_run.c) and write row i, status[i], messages[i] and events[i]
+ * only;
  * the calling thread waits, reporting progress about every 0.2 s. Rows are therefore the same
  * whatever the number of threads and the order in which runs finish.
  * Cancelling (the progress callback returns non-zero) stops the handing out of indices and
@@ -23,6 +24,7 @@
 #define POOL_MAX_THREADS 256
 #define POOL_MSG 1024
 #define POOL_SET 512
+#define POOL_EVENTS (AP_BAT_MAX_EVENTS * 160)   /* names of up to 127 bytes, times */
 
 typedef struct pool {
   const ap_batch *b;
@@ -31,6 +33,7 @@ typedef struct pool {
   double *values;
   int *status;
   char **messages;
+  char **events;           /* may be NULL */
   pthread_mutex_t mu;
   pthread_cond_t cv;
   long next, done;         /* next index to hand out; runs finished */
@@ -56,7 +59,7 @@ static const char *const *run_sets(const pool *p, long i, char (*buf)[POOL_SET],
 static void *worker(void *arg) {
   pool *p = arg;
   int nper = p->src->nper;
-  char msg[POOL_MSG], (*buf)[POOL_SET] = calloc((size_t)nper + 1, sizeof *buf);
+  char msg[POOL_MSG], ev[POOL_EVENTS], (*buf)[POOL_SET] = calloc((size_t)nper + 1, sizeof *buf);
   const char **sets = calloc((size_t)nper + 1, sizeof *sets);
   for (;;) {
     pthread_mutex_lock(&p->mu);
@@ -66,6 +69,7 @@ static void *worker(void *arg) {
     pthread_mutex_unlock(&p->mu);
     if (i >= p->count) break;
     int rc;
+    ev[0] = '\0';
     if (!buf || !sets) {   /* the run is reported, as out of memory, not left "not run" */
       rc = AP_ERR_NOMEM;
       snprintf(msg, sizeof msg, "out of memory: the batch worker could not allocate the "
@@ -73,10 +77,11 @@ static void *worker(void *arg) {
     } else {
       const char *const *vs = run_sets(p, i, buf, sets);
       rc = ap_bat_run_one(p->b, vs, nper, p->values + (size_t)i * (size_t)p->b->ncols, msg,
-                          sizeof msg, &p->stop);
+                          sizeof msg, p->events ? ev : NULL, sizeof ev, &p->stop);
     }
     p->status[i] = rc;
     if (p->messages) p->messages[i] = msg[0] ? strdup(msg) : NULL;
+    if (p->events) p->events[i] = ev[0] ? strdup(ev) : NULL;
     pthread_mutex_lock(&p->mu);
     p->done++;
     pthread_cond_signal(&p->cv);
@@ -144,14 +149,15 @@ static int pool_init(pool *p) {
 }
 
 int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *values, int *status,
-                char **messages) {
+                char **messages, char **events) {
   pool p;
   memset(&p, 0, sizeof p);
   p.b = b, p.src = src, p.count = count, p.values = values, p.status = status;
-  p.messages = messages;
+  p.messages = messages, p.events = events;
   for (long i = 0; i < count; i++) {
     status[i] = AP_BATCH_NOT_RUN;
     if (messages) messages[i] = NULL;
+    if (events) events[i] = NULL;
     for (int j = 0; j < b->ncols; j++) values[(size_t)i * (size_t)b->ncols + (size_t)j] = NAN;
   }
   if (pool_init(&p) != AP_OK) return AP_ERR_NOMEM;

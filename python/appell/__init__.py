@@ -27,6 +27,8 @@ the linearization.
 import json as _json
 import math as _math
 import os as _os
+import re as _re
+from collections.abc import Mapping
 
 from . import _appell, _view
 from ._appell import Error, Model, SceneError
@@ -178,14 +180,55 @@ def read_run(path):
                   message=rec.get("message", ""), events=rec.get("events", ()), record=record)
 
 
+def _event_sets(events):
+    """Simulation(events=[{name, when, direction, action}, ...]) -> overrides
+    "events.NAME={...}" (JSON is YAML flow syntax), checked by the scene's parser."""
+    if isinstance(events, (str, bytes, Mapping)) or not hasattr(events, "__iter__"):
+        raise TypeError(f"events must be a list of dicts, got {type(events).__name__}")
+    sets = []
+    for i, ev in enumerate(events):
+        if not isinstance(ev, Mapping):
+            raise TypeError(f"events[{i}] must be a dict, got {type(ev).__name__}")
+        body = dict(ev)
+        name = body.pop("name", None)
+        if not isinstance(name, str) or not _re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+            raise ValueError(f"events[{i}]: name must be a word of letters, digits and _ "
+                             f"(not starting with a digit), got {name!r}")
+        for key, v in body.items():
+            if not isinstance(key, str) or isinstance(v, bool) or not isinstance(v, (str, int, float)):
+                raise TypeError(f"events[{i}] ({name}): {key!r} must be a string or a number, "
+                                f"got {type(v).__name__}")
+            if isinstance(v, str) and "\0" in v:
+                raise ValueError(f"events[{i}] ({name}): {key!r} contains a NUL character")
+        sets.append(f"events.{name}={_json.dumps(body, allow_nan=False)}")
+    return tuple(sets)
+
+
 class Simulation(_appell.Simulation):
     """Simulation(model, mode=None, method=None, rtol=None, atol=None, h_fixed=None,
-    h_init=None, h_max=None, max_steps=None, t0=None, q0=None, v0=None)
+    h_init=None, h_max=None, max_steps=None, t0=None, q0=None, v0=None, events=None)
 
     One run of a Model from its initial state (or q0, v0), with the scene's settings unless
     given here. run() records rows; advance() integrates without recording; state, stats,
     warning and report tell where it is. Simulations of one Model may run in parallel
-    threads (the GIL is released while integrating)."""
+    threads (the GIL is released while integrating).
+
+    events adds events to the scene's own (docs/python.md "Events"): a list of dicts with the
+    keys of a scene's events: entry and its name, e.g. {"name": "lean", "when":
+    "hinge.angle - 60*deg", "direction": "rising", "action": "stop"} (or "kind": "collide",
+    "lift_off", "joint_range" with body, constraint, joint, min, max). One with the name of
+    a scene event replaces it. The simulation then runs a copy of the model loaded with these
+    events (sim.model is that copy); a bad entry raises SceneError naming it."""
+
+    def __new__(cls, model, *args, events=None, **kw):
+        if events is not None:
+            if not isinstance(model, Model):
+                raise TypeError(f"model must be an appell.Model, got {type(model).__name__}")
+            sets = _event_sets(events)
+            if sets:
+                text, name, old = model.source
+                model = loads(text, name=name, set=tuple(old) + sets)
+        return super().__new__(cls, model, *args, **kw)
 
     def run(self, t_end=None, dt=None):
         """Integrate from the current time to t_end (default: the scene's), recording a row
@@ -206,8 +249,13 @@ class Simulation(_appell.Simulation):
                                   status="failed" if failed else "interrupted",
                                   message=message, events=_run_events(self))
             raise
-        res = Result(columns, table, q, v, m.coordinate_names, m.speed_names, status="ok",
-                     message=self.warning, events=_run_events(self))
+        events = _run_events(self)
+        stop = events[-1] if events and events[-1]["action"] == "stop" else None
+        stopped = stop is not None and len(table) > 0 and stop["t"] == table[-1, 0]
+        res = Result(columns, table, q, v, m.coordinate_names, m.speed_names,
+                     status="event" if stopped else "ok",
+                     message=(f"stopped by event '{stop['name']}' at t = {stop['t']:.10g}"
+                              if stopped else self.warning), events=events)
         res.model = m   # for res.view() (_view.py)
         return res
 

@@ -141,11 +141,13 @@ static PyObject *run(ap_batch *b, const ap_plan *p, long first, long count, py_p
   PyArrayObject *values = (PyArrayObject *)PyArray_ZEROS(2, dv, NPY_DOUBLE, 0);
   PyArrayObject *status = (PyArrayObject *)PyArray_ZEROS(1, &ds, NPY_INT32, 0);
   char **msgs = PyMem_Calloc((size_t)count + 1, sizeof *msgs);
+  char **evs = PyMem_Calloc((size_t)count + 1, sizeof *evs);
   PyObject *out = NULL;
-  if (values && status && msgs) {
+  if (values && status && msgs && evs) {
     int rc;
     Py_BEGIN_ALLOW_THREADS
-    rc = ap_batch_run_plan(b, p, first, count, PyArray_DATA(values), PyArray_DATA(status), msgs);
+    rc = ap_batch_run_plan_events(b, p, first, count, PyArray_DATA(values),
+                                  PyArray_DATA(status), msgs, evs);
     Py_END_ALLOW_THREADS
     if (pp->type) PyErr_Restore(pp->type, pp->value, pp->tb);
     else if (rc == AP_BATCH_CANCELLED) PyErr_SetString(PyExc_KeyboardInterrupt, "sweep cancelled");
@@ -154,18 +156,21 @@ static PyObject *run(ap_batch *b, const ap_plan *p, long first, long count, py_p
       PyObject *params = param_table(p, first, count);
       char id[17] = "";
       ap_batch_plan_id(b, p, id, sizeof id);
-      out = params ? Py_BuildValue("{s:N,s:N,s:N,s:O,s:O,s:N,s:l,s:s}", "paths", paths(p),
-                                   "params", params, "columns", batch_columns(b), "values",
-                                   values, "status", status, "messages",
-                                   messages_list(msgs, count), "runs", ap_plan_count(p),
+      out = params ? Py_BuildValue("{s:N,s:N,s:N,s:O,s:O,s:N,s:N,s:l,s:s}", "paths",
+                                   paths(p), "params", params, "columns", batch_columns(b),
+                                   "values", values, "status", status, "messages",
+                                   messages_list(msgs, count), "events",
+                                   messages_list(evs, count), "runs", ap_plan_count(p),
                                    "plan", id)
                    : NULL;
     }
     ap_batch_messages_free(count, msgs);
+    ap_batch_messages_free(count, evs);
   } else if (!PyErr_Occurred()) {
     PyErr_NoMemory();
   }
   PyMem_Free(msgs);
+  PyMem_Free(evs);
   Py_XDECREF(values);
   Py_XDECREF(status);
   return out;

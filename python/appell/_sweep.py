@@ -40,8 +40,8 @@ class Table(dict):
 
     @property
     def failed(self):
-        """Indices (rows) of the runs that failed."""
-        return np.nonzero(self["status"] != 0)[0]
+        """Indices (rows) of the runs that failed (not those a stop event ended)."""
+        return np.nonzero((self["status"] != 0) & (self["status"] != _STOPPED))[0]
 
     def to_csv(self, path):
         """Write the table as `appell sweep --out` does (same bytes for the same runs), by the
@@ -141,15 +141,19 @@ def _assemble(parts, first):
     return out
 
 
+_STOPPED = 2   # AP_STOPPED (include/appell/status.h): a stop event ended the run
+
+
 def _outcome(status):
     """A run's outcome word from its status, as appell sweep writes it (tools/runrecord.c)."""
-    return "ok" if status == 0 else "failed"
+    return "ok" if status == 0 else "event" if status == _STOPPED else "failed"
 
 
 def _run_events(parts, count):
-    """Each run's events as "NAME@T;..." (the sweep's events column). The batch records no
-    events yet: connect the runs' events here when lib/batch reports them."""
-    return [""] * count
+    """Each run's events as "NAME@T;..." (the sweep's events column, from the batch: the last
+    64 events of the run, T with 17 significant digits)."""
+    out = sum((list(p.get("events", [None] * len(p["status"]))) for p in parts), [])
+    return [e or "" for e in out[:count]]
 
 
 MAX_SAMPLES = 10 ** 9   # as a grid's N: `appell sweep --samples` keeps the same limit
