@@ -12,7 +12,12 @@
  * 4. tests/scenes/motor_saturation.yaml: a rate motor saturating and desaturating at the
  *    closed-form times of its saturated PD law (1e-10 relative).
  * 5. examples/scenes/bicycle_falling.yaml: collide: stop in minimal, projected and DAE modes,
- *    the event times agreeing to 10 rtol. */
+ *    the event times agreeing to 10 rtol.
+ * 6. Built-in events against closed forms, in minimal, projected and DAE modes, 1e-10
+ *    relative at rtol 1e-12: tests/scenes/pendulum_floor.yaml, a pendulum's ball touching the
+ *    floor (collide) at the elliptic time of its angle; tests/scenes/disk_events.yaml, a
+ *    rolling disk pushed along x reaching x = 2.5 at sqrt(3.5) - 1 s and lifting off
+ *    (lift_off: F_n = m g - c t) at 1.2 s. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -209,6 +214,52 @@ static void test_builtins(const char *pend, const char *disk) {
   ap_scene_free(sc);
 }
 
+static const char *mode_name(ap_mode mode) {
+  return mode == AP_MODE_MINIMAL ? "minimal" : mode == AP_MODE_DAE ? "dae" : "projected";
+}
+
+/* tests/scenes/pendulum_floor.yaml: collide: stop of the ball on the floor when the angle
+ * falls through 0.25 rad, at (K(k) - F(phi, k)) / omega. */
+static void test_floor(const char *path, ap_mode mode) {
+  ap_scene *sc = NULL;
+  ap_sim *s = scene_sim(path, NULL, 0, mode, 1, &sc);
+  if (!s) return ap_scene_free(sc);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 5.0), AP_STOPPED);
+  double k = sin(0.25), omega = sqrt(9.81 / 1.001);
+  double t_hit = (ell_f(RS_PI / 2, k) - ell_f(asin(sin(0.125) / k), k)) / omega;
+  ap_event_record r;
+  AP_CHECK(ap_sim_event_get(s, 0, &r) == AP_OK && strcmp(r.name, "bob.collide") == 0);
+  printf("collide %-9s ball on the floor at %.15f (exact %.15f, %.1e)\n", mode_name(mode),
+         r.t, t_hit, fabs(r.t / t_hit - 1));
+  AP_CHECK_LE(fabs(r.t / t_hit - 1), 1e-10);
+  AP_CHECK_NEAR(ap_sim_q(s)[0], 0.25, 1e-10);
+  ap_sim_free(s);
+  ap_scene_free(sc);
+}
+
+/* tests/scenes/disk_events.yaml: a rolling disk pushed along x reaches x = 2.5 at
+ * sqrt(3.5) - 1 (logged) and lifts off (F_n = m g - c t) at t = 1.2 (stop). */
+static void test_disk(const char *path, ap_mode mode) {
+  ap_scene *sc = NULL;
+  ap_sim *s = scene_sim(path, NULL, 0, mode, 1, &sc);
+  if (!s) return ap_scene_free(sc);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 2.0), AP_STOPPED);
+  ap_event_record far, lift;
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 2);
+  AP_CHECK(ap_sim_event_get(s, 0, &far) == AP_OK && ap_sim_event_get(s, 1, &lift) == AP_OK);
+  AP_CHECK(strcmp(far.name, "far") == 0 && strcmp(lift.name, "lift") == 0);
+  double t_far = sqrt(3.5) - 1.0, t_lift = 1.2;
+  printf("disk %-9s x = 2.5 at %.15f (exact %.15f, %.1e), lift-off at %.15f (exact 1.2, "
+         "%.1e)\n", mode_name(mode), far.t, t_far, fabs(far.t / t_far - 1), lift.t,
+         fabs(lift.t / t_lift - 1));
+  AP_CHECK_LE(fabs(far.t / t_far - 1), 1e-10);
+  AP_CHECK_LE(fabs(lift.t / t_lift - 1), 1e-10);
+  AP_CHECK_NEAR(ap_sim_time(s), lift.t, 0.0);
+  AP_CHECK_NEAR(ap_sim_q(s)[0], 2.0 * 1.2 + 1.2 * 1.2, 1e-10);   /* x = v0 t + t^2 */
+  ap_sim_free(s);
+  ap_scene_free(sc);
+}
+
 static double last_time(const char *csv) {
   FILE *f = fopen(csv, "r");
   char line[4096];
@@ -264,6 +315,13 @@ int main(void) {
   test_saturation(path, AP_MODE_DAE);
   ct_source(path, sizeof path, "examples/scenes", "bicycle_falling.yaml");
   test_bicycle(path);
+  const ap_mode modes[3] = {AP_MODE_MINIMAL, AP_MODE_PROJECTED, AP_MODE_DAE};
+  for (int i = 0; i < 3; i++) {
+    ct_source(path, sizeof path, "tests/scenes", "pendulum_floor.yaml");
+    test_floor(path, modes[i]);
+    ct_source(path, sizeof path, "tests/scenes", "disk_events.yaml");
+    test_disk(path, modes[i]);
+  }
   ct_finish();
   return ap_check_finish("scene_events");
 }
