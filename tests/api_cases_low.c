@@ -292,6 +292,9 @@ static void cases_sim(void) {
        (ap_sim_set_poll(S, NULL, NULL), ap_sim_advance(S, ap_sim_time(S) + 1e-3) == AP_OK));
   CASE(ap_sim_message, "NULL", is_empty(ap_sim_message(NULL)));
   CASE(ap_sim_warning, "NULL", is_empty(ap_sim_warning(NULL)));
+  CASE(ap_sim_failed_state, "s NULL", ap_sim_failed_state(NULL, NULL, NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_sim_failed_state, "no failure",
+       ap_sim_failed_state(S, NULL, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_sim_free, "NULL", (ap_sim_free(NULL), 1));
   ap_event_def ev = ap_event_def_default();
   CASE(ap_event_def_default, "defaults", strcmp(ev.name, "event") == 0 && !ev.fn &&

@@ -13,6 +13,8 @@
  *    closed-form times of its saturated PD law (1e-10 relative).
  * 5. examples/scenes/bicycle_falling.yaml: collide: stop in minimal, projected and DAE modes,
  *    the event times agreeing to 10 rtol.
+ * 7. A run failing mid-way: ap_sim_time, ap_sim_q, ap_sim_v and ap_sim_data describe the
+ *    last accepted state (against the pendulum's closed form), the failure still located.
  * 6. Built-in events against closed forms, in minimal, projected and DAE modes, 1e-10
  *    relative at rtol 1e-12: tests/scenes/pendulum_floor.yaml, a pendulum's ball touching the
  *    floor (collide) at the elliptic time of its angle; tests/scenes/disk_events.yaml, a
@@ -260,6 +262,46 @@ static void test_disk(const char *path, ap_mode mode) {
   ap_scene_free(sc);
 }
 
+/* A run that fails mid-way (a torque sqrt(angle) of the pendulum, not finite once the angle
+ * is negative, first after K(k) / omega): ap_sim_time, ap_sim_q and ap_sim_v describe the
+ * same last accepted state (the angle there is the closed form's at that time to the run's
+ * tolerance, v consistent with the data), and the failure is still located at the failing
+ * evaluation (ap_sim_failed_state: a negative angle), in every mode. */
+static void test_failure_state(const char *path, ap_mode mode) {
+  const char *set[] = {"effects={gravity: {kind: gravity}, push: {kind: joint_torque, joint: "
+                       "hinge, torque: \"1e-12*sqrt(hinge.angle)\"}}", "events={}"};
+  ap_scene *sc = NULL;
+  ap_sim *s = scene_sim(path, set, 2, mode, 1, &sc);
+  if (!s) return ap_scene_free(sc);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 0.4), AP_OK);
+  int rc = ap_sim_advance(s, 1.0);
+  AP_CHECK(rc != AP_OK && rc != AP_STOPPED);
+  double k = sin(0.25), omega = sqrt(9.81 / 1.001), t = ap_sim_time(s);
+  double t_down = ell_f(RS_PI / 2, k) / omega;
+  const ap_data *d = ap_sim_data(s);
+  /* theta(t) = 2 asin(k sn(K - omega t)): from the angle at t, the time back to the vertical */
+  double q = ap_sim_q(s)[0], v = ap_sim_v(s)[0];
+  double t_of_q = (ell_f(RS_PI / 2, k) - ell_f(asin(sin(q / 2) / k), k)) / omega;
+  printf("failure %-9s at t = %.15f (last output 0.4), q = %.3e (time of that angle %.15f), "
+         "v = %.6f\n", mode_name(mode), t, q, t_of_q, v);
+  AP_CHECK(t > 0.4 && t <= t_down + 1e-9);
+  AP_CHECK_NEAR(t_of_q, t, 1e-8);
+  AP_CHECK_NEAR(d->t, t, 0.0);
+  AP_CHECK_NEAR(d->q[0], q, 0.0);
+  AP_CHECK_NEAR(d->v[0], v, 0.0);
+  /* the speed: energy 0.5 J v^2 = m g l (cos q - cos 0.5) */
+  AP_CHECK_NEAR(v, -sqrt(2 * 9.81 * (cos(q) - cos(0.5)) / 1.001), 1e-8);
+  double tf = NAN;
+  const double *qf = NULL;
+  AP_CHECK_EQ_INT(ap_sim_failed_state(s, &tf, &qf, NULL), AP_OK);
+  if (qf) AP_CHECK(qf[0] < 0 && tf >= t);
+  char msg[1024];
+  AP_CHECK_EQ_INT(ap_scene_locate_failure(sc, s, NAN, msg, sizeof msg), AP_ERR_ARG);
+  AP_CHECK(strstr(msg, "sqrt(hinge.angle)") != NULL);
+  ap_sim_free(s);
+  ap_scene_free(sc);
+}
+
 static double last_time(const char *csv) {
   FILE *f = fopen(csv, "r");
   char line[4096];
@@ -301,6 +343,9 @@ int main(void) {
   test_pendulum(path, AP_MODE_PROJECTED);
   test_pendulum(path, AP_MODE_DAE);
   test_cli(path);
+  test_failure_state(path, AP_MODE_MINIMAL);
+  test_failure_state(path, AP_MODE_PROJECTED);
+  test_failure_state(path, AP_MODE_DAE);
   char disk[1200];
   ct_source(disk, sizeof disk, "examples/scenes", "rolling_disk.yaml");
   test_builtins(path, disk);

@@ -91,7 +91,8 @@ AP_API int ap_scene_check_time(const ap_scene *s, double t, char *msg, size_t ms
 /* After a run of this scene failed mid-run (ap_sim_advance to tout returned an error, whatever
  * the method or mode): the scene expression that is not finite where it failed, if any.
  * Checks every expression of t and every expression of the state at the failing evaluation
- * (ap_sim_data(sim): its t, q and v, when they are finite), then the expressions of t at tout
+ * (ap_sim_failed_state(sim) after a failed advance, else ap_sim_data(sim): its t, q and v,
+ * when they are finite), then the expressions of t at tout
  * (a drive with a pole at tout makes the integrator give up short of it). AP_ERR_ARG and msg
  * "FILE:LINE:COLUMN: key.path: 'EXPR' is not finite at t = T: OPERATION (column C of the
  * expression)" when one is found; AP_OK and msg "" otherwise (the cause is not a scene

@@ -90,9 +90,15 @@ AP_API int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, co
                          const double *v0, ap_sim **out, char *msg, size_t msg_len);
 
 /* Integrate to tout (finite, >= current time; AP_ERR_ARG otherwise or when s is NULL). The
- * stepper stops exactly at tout. On failure the state is left at the last time reached and
- * ap_sim_message says what failed. */
+ * stepper stops exactly at tout. On failure the state is left at the last accepted step
+ * (ap_sim_time, ap_sim_q, ap_sim_v and ap_sim_data all describe it) and ap_sim_message says
+ * what failed. */
 AP_API int ap_sim_advance(ap_sim *s, double tout);
+/* After an advance that failed: the state at which the model was last evaluated (t, q (n),
+ * v (k): the trial state of the failing step, where a force or drive may have stopped being
+ * finite), owned by s and valid until the next advance. AP_ERR_ARG when s is NULL or the
+ * last advance did not fail; any of t, q, v may be NULL. */
+AP_API int ap_sim_failed_state(const ap_sim *s, double *t, const double **q, const double **v);
 
 /* Queries; with s NULL: NaN, NULL, NULL, NULL. */
 AP_API double ap_sim_time(const ap_sim *s);

@@ -323,7 +323,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   ap_sim *s = calloc(1, sizeof *s);
   size_t nk = (size_t)(m->n + m->k + m->b + (m->ev.phi ? m->nphi : 0));
   size_t nphi = (size_t)(m->ev.phi ? m->nphi : 0);
-  double *buf = s ? calloc(4 * nk + (size_t)m->n + (size_t)m->k + nphi, sizeof *buf) : NULL;
+  double *buf = s ? calloc(4 * nk + 2 * (size_t)(m->n + m->k) + 1 + nphi, sizeof *buf) : NULL;
   if (!buf) {
     free(s);
     if (msg && msg_len) snprintf(msg, msg_len, "system '%s': out of memory", m->name);
@@ -335,6 +335,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
   s->q = buf + 4 * nk, s->v = s->q + m->n, s->ev_stamp = -1, s->growth_cap = INFINITY;
   s->t_ahead = INFINITY;
   s->phi = s->v + m->k;
+  s->fail_state = s->phi + nphi;
   int rc = check_def(s, def);
   if (rc == AP_OK) {
     s->def = *def;
@@ -473,11 +474,37 @@ static int max_steps_failure(ap_sim *s, double t_start, double tout, double h_mi
                                    t_start, s->t, tout));
 }
 
+/* A failed advance: keep the state of the model's last evaluation (where an expression may
+ * be at fault: ap_sim_failed_state), then evaluate the last accepted state so that
+ * ap_sim_time, ap_sim_q, ap_sim_v and ap_sim_data describe one state. The failure's message
+ * stays; so does its status when that evaluation fails too. */
+static int advance_failed(ap_sim *s, int rc) {
+  const ap_data *d = s->d;
+  s->fail_state[0] = d->t;
+  memcpy(s->fail_state + 1, d->q, sizeof(double) * (size_t)s->n);
+  memcpy(s->fail_state + 1 + s->n, d->v, sizeof(double) * (size_t)s->k);
+  s->has_fail = 1;
+  char msg[sizeof s->msg];
+  memcpy(msg, s->msg, sizeof msg);
+  ap_drv_evaluate_current(s);
+  memcpy(s->msg, msg, sizeof msg);
+  return rc;
+}
+
+int ap_sim_failed_state(const ap_sim *s, double *t, const double **q, const double **v) {
+  if (!s || !s->has_fail) return AP_ERR_ARG;
+  if (t) *t = s->fail_state[0];
+  if (q) *q = s->fail_state + 1;
+  if (v) *v = s->fail_state + 1 + s->n;
+  return AP_OK;
+}
+
 int ap_sim_advance(ap_sim *s, double tout) {
   if (!s) return AP_ERR_ARG;
   if (s->failed) return s->failed;              /* s->msg still says why */
   int rc = check_tout(s, tout);
   if (rc != AP_OK) return rc;
+  s->has_fail = 0;
   double t_start = s->t, h_mid = 0.0;
   for (long steps = 0; s->t < tout; steps++) {
     int stop = s->poll ? s->poll(s->t, s->poll_user) : 0;
@@ -487,10 +514,11 @@ int ap_sim_advance(ap_sim *s, double tout) {
                                             "(the poll function returned %d)", s->t, stop);
     }
     if (steps == s->def.max_steps / 2) h_mid = last_h(s);
-    if (steps >= s->def.max_steps) return max_steps_failure(s, t_start, tout, h_mid);
+    if (steps >= s->def.max_steps)
+      return advance_failed(s, max_steps_failure(s, t_start, tout, h_mid));
     rc = advance_one(s, tout);
     if (rc == AP_STOPPED) break;
-    if (rc != AP_OK) return rc;
+    if (rc != AP_OK) return advance_failed(s, rc);
   }
   int ev = ap_drv_evaluate_current(s);
   return ev != AP_OK ? ev : rc;

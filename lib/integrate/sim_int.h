@@ -42,6 +42,9 @@ struct ap_sim {
   double growth_cap;        /* minimal mode: a stage whose basis growth exceeds this fails
                                (recoverably): the step went too far on a frozen partition */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */
+  double *fail_state;       /* (1 + n + k) t, q, v of the model's last evaluation when an
+                               advance failed (ap_sim_failed_state); valid when has_fail */
+  int has_fail;
   double *phi;              /* (nphi) DAE mode: scratch for phi(q) after a step */
   int rhs_status;           /* last failure of the right-hand side */
   int rhs_diverged;         /* 1 when that failure was a trial state that is not finite (the

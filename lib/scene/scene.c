@@ -237,10 +237,13 @@ int ap_scene_locate_failure(const ap_scene *sc, const ap_sim *sim, double tout, 
   if (!sc || !d) return AP_ERR_ARG;
   sc_ctx c = {sc->s.file, "", AP_OK};
   int n = ap_model_n(sc->m), k = ap_model_k(sc->m), rc = AP_OK;
-  if (isfinite(d->t)) rc = sc_check_exprs(&c, &sc->s, d->t);
-  if (rc == AP_OK && isfinite(d->t) && d->n == n && d->k == k && all_finite(d->q, n) &&
-      all_finite(d->v, k))
-    rc = sc_check_state_exprs(&c, &sc->s, sc->m, d->t, d->q, d->v);
+  double t = d->t;   /* where the model was evaluated last: the failing state if any */
+  const double *q = d->q, *v = d->v;
+  ap_sim_failed_state(sim, &t, &q, &v);
+  if (isfinite(t)) rc = sc_check_exprs(&c, &sc->s, t);
+  if (rc == AP_OK && isfinite(t) && d->n == n && d->k == k && all_finite(q, n) &&
+      all_finite(v, k))
+    rc = sc_check_state_exprs(&c, &sc->s, sc->m, t, q, v);
   if (rc == AP_OK && isfinite(tout)) rc = sc_check_exprs(&c, &sc->s, tout);
   if (rc == AP_OK) return AP_OK;
   if (msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);
