@@ -78,6 +78,7 @@
 #include <string.h>
 
 #include "integrate/dae_int.h"
+#include "integrate/nvpool.h"
 #include "linalg/linalg.h"
 
 /* ---- creation ------------------------------------------------------------------------------ */
@@ -256,9 +257,9 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
   if (!(s->qtyp > 0)) s->qtyp = 1.0;
   if (!(s->vtyp > 0)) s->vtyp = 1.0;
   int ok = SUNContext_Create(NULL, &s->ctx) == 0;
+  if (ok) ok = ap_nvp_create(s->ny, AP_DAE_POOL, s->ctx, &s->pool) == AP_OK;
   if (ok) {
-    s->yy = N_VNew_Serial(s->ny, s->ctx), s->yp = N_VNew_Serial(s->ny, s->ctx);
-    s->id = N_VNew_Serial(s->ny, s->ctx);
+    s->yy = ap_nvp_take(s->pool), s->yp = ap_nvp_take(s->pool), s->id = ap_nvp_take(s->pool);
     ok = s->yy && s->yp && s->id;
   }
   if (ok) {
@@ -270,7 +271,7 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     memcpy(y1, yp0, sizeof(double) * (size_t)nd);
     for (int i = 0; i < s->ny; i++) id[i] = i < nd ? 1.0 : 0.0;
     rc = initial_multipliers(s, t0);
-    ok = rc == AP_OK && setup_ida(s, t0, o);
+    ok = rc == AP_OK && setup_ida(s, t0, o) && !ap_nvp_nomem(s->pool);
   }
   if (!ok) {   /* no message from IDA: an object could not be allocated */
     if (rc == AP_OK) rc = s->nomem || !s->msg[0] ? AP_ERR_NOMEM : AP_ERR_SOLVER;
@@ -359,6 +360,10 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
     return AP_ERR_SOLVER;
   double tret = *t;
   int flag = IDASolve(s->mem, stop, &tret, s->yy, s->yp, IDA_ONE_STEP);
+  if (ap_nvp_nomem(s->pool)) {   /* IDA ran with the pool's spare vector: void */
+    snprintf(s->msg, sizeof s->msg, "IDA: out of memory (work vectors) at t = %.17g", *t);
+    return AP_ERR_NOMEM;
+  }
   if (flag < 0) {
     int rc = step_failed(s, tret, tout, hmin);
     return flag == IDA_MEM_FAIL && rc == AP_ERR_SOLVER ? AP_ERR_NOMEM : rc;
@@ -476,6 +481,7 @@ void ap_dae_free(ap_dae *s) {
   if (s->yp) N_VDestroy(s->yp);
   if (s->id) N_VDestroy(s->id);
   if (s->dk) N_VDestroy(s->dk);
+  ap_nvp_free(s->pool);
   if (s->ctx) SUNContext_Free(&s->ctx);
   free(s->Phi_q);
   free(s->rows);

@@ -13,6 +13,8 @@
 #include "core/core.h"
 #include "integrate/dae.h"
 
+#define AP_DAE_POOL 48   /* vectors of the pool (nvpool.c): every clone IDA makes */
+
 /* atol's floor for IDA, in ulps of the typical |q| or |v| (see "Tolerances" above). */
 #define AP_DAE_ATOL_EPS 10.0
 
@@ -21,7 +23,8 @@ struct ap_dae {
   ap_data *d;
   SUNContext ctx;
   void *mem;
-  N_Vector yy, yp, id;
+  N_Vector yy, yp, id;      /* from pool, with every vector IDA clones (nvpool.c) */
+  struct ap_nvpool *pool;
   N_Vector dk;              /* dense output for events (ap_dae_dky), made at the first use */
   SUNMatrix J;
   SUNLinearSolver LS;

@@ -21,6 +21,7 @@
 #include <sundials/sundials_context.h>
 
 #include "appell/status.h"
+#include "integrate/nvpool.h"
 #include "integrate/stepper.h"
 
 #define AP_STEP_RTOL 1e-6
@@ -113,14 +114,29 @@ int ap_step_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, d
                meth->name);
   if (!isfinite(t0) || !all_finite(n, y0))
     return say(msg, msg_len, AP_ERR_ARG, "%s: the initial state is not finite", meth->name);
-  return meth->backend->create(meth, n, f, user, t0, y0, o, out, msg, msg_len);
+  rc = meth->backend->create(meth, n, f, user, t0, y0, o, out, msg, msg_len);
+  if (rc == AP_OK && ap_nvp_nomem((*out)->pool)) {
+    ap_step_free(*out);
+    *out = NULL;
+    return say(msg, msg_len, AP_ERR_NOMEM, "%s: out of memory (SUNDIALS work vectors)",
+               meth->name);
+  }
+  return rc;
+}
+
+/* A SUNDIALS call that was handed the pool's spare vector: its results are void. */
+static int pool_failed(ap_stepper *s, int rc) {
+  if (rc == AP_OK && ap_nvp_nomem(s->pool))
+    rc = say(s->msg, sizeof s->msg, AP_ERR_NOMEM, "%s: out of memory (SUNDIALS work vectors)",
+             s->meth->name);
+  return rc;
 }
 
 int ap_step_reset(ap_stepper *s, double t, const double *y) {
   if (!isfinite(t) || !all_finite(s->n, y))
     return say(s->msg, sizeof s->msg, AP_ERR_ARG, "%s: reset to a non-finite state at t = %g",
                s->meth->name, t);
-  return s->meth->backend->reset(s, t, y);
+  return pool_failed(s, s->meth->backend->reset(s, t, y));
 }
 
 int ap_step_restart(ap_stepper *s, double t, const double *y, const double *ydot) {
@@ -148,7 +164,7 @@ int ap_step_one(ap_stepper *s, double tstop, double *t, double *y) {
              s->t, tstop);
   if (rc == AP_OK) {
     s->rhs_neg = s->rhs_pos = s->rhs_nan = 0;
-    rc = s->meth->backend->one(s, tstop, t, y);
+    rc = pool_failed(s, s->meth->backend->one(s, tstop, t, y));
     if (rc == AP_OK) s->nto++;
   }
   copy_out(s, t, y);
@@ -183,11 +199,15 @@ int ap_step_alloc(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, do
   if (s->o.atol == 0) s->o.atol = AP_STEP_ATOL;
   if (s->o.max_steps == 0) s->o.max_steps = AP_STEP_MAX_STEPS;
   SUNContext ctx = NULL;
+  ap_nvpool *pool = NULL;
   s->yacc = malloc(sizeof(double) * (size_t)n);
   if (s->yacc && SUNContext_Create(NULL, &ctx) == 0) {
     s->ctx = ctx;
-    s->y = N_VNew_Serial(n, ctx);
-    s->tmp = N_VNew_Serial(n, ctx);
+    if (ap_nvp_create(n, AP_STEP_POOL, ctx, &pool) == AP_OK) {
+      s->pool = pool;
+      s->y = ap_nvp_take(pool);
+      s->tmp = ap_nvp_take(pool);
+    }
   }
   if (!s->y || !s->tmp) {
     ap_step_release(s);
@@ -204,6 +224,7 @@ void ap_step_release(ap_stepper *s) {
   if (!s) return;
   if (s->y) N_VDestroy((N_Vector)s->y);
   if (s->tmp) N_VDestroy((N_Vector)s->tmp);
+  ap_nvp_free(s->pool);
   if (s->ctx) {
     SUNContext ctx = s->ctx;
     SUNContext_Free(&ctx);

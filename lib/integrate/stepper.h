@@ -146,6 +146,7 @@ struct ap_stepper {
   void *mem;             /* ERKStep or CVODE memory */
   void *y;               /* N_Vector (n): the state SUNDIALS advances */
   void *tmp;             /* N_Vector (n): dense output */
+  void *pool;            /* ap_nvpool (nvpool.c): y, tmp and every vector SUNDIALS clones */
   void *obj[3];          /* backend objects (CVODE: SUNMatrix, SUNLinearSolver, SUNNonlinSol) */
   double t;              /* time of the last accepted state */
   double *yacc;          /* (n) the last accepted state: returned and restored on failure */
@@ -161,6 +162,8 @@ struct ap_stepper {
 };
 
 /* Allocate a stepper with its SUNContext and vectors y = y0, tmp; options defaulted. */
+/* Vectors of a stepper's pool (nvpool.c): enough for every clone ARKODE and CVODE make. */
+#define AP_STEP_POOL 48
 int ap_step_alloc(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, double t0,
                   const double *y0, const ap_step_opts *o, ap_stepper **out, char *msg,
                   size_t msg_len);
