@@ -18,6 +18,7 @@
  * (ARK_UNREC_RHSFUNC_ERR), so the retry is done here: restart from the last accepted state
  * with a step 4 times smaller, at most AP_ARK_RETRIES times. */
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -70,10 +71,26 @@ static ARKodeButcherTable make_fsal(ARKodeButcherTable B) {
   return F;
 }
 
+/* ARKODE's tables, loaded once per process and then copied: SUNDIALS 6.4's
+ * ARKodeButcherTable_LoadERK crashes when one of its allocations fails, whereas
+ * ARKodeButcherTable_Copy checks them, so after the first ERK stepper of a process (a sweep's
+ * first run) creating one cannot crash there. The loaded tables are constants, kept for the
+ * life of the process; the mutex makes the first load safe from several threads. */
+static pthread_mutex_t tables_mu = PTHREAD_MUTEX_INITIALIZER;
+static ARKodeButcherTable tables[ARKODE_MAX_ERK_NUM - ARKODE_MIN_ERK_NUM + 1];
+
+static ARKodeButcherTable load_table(int id) {
+  if (id < ARKODE_MIN_ERK_NUM || id > ARKODE_MAX_ERK_NUM) return NULL;
+  pthread_mutex_lock(&tables_mu);
+  ARKodeButcherTable *t = &tables[id - ARKODE_MIN_ERK_NUM];
+  if (!*t) *t = ARKodeButcherTable_LoadERK((ARKODE_ERKTableID)id);
+  ARKodeButcherTable B = *t ? ARKodeButcherTable_Copy(*t) : NULL;
+  pthread_mutex_unlock(&tables_mu);
+  return B;
+}
+
 static ARKodeButcherTable method_table(const ap_step_method *meth) {
-  ARKodeButcherTable B = meth->table == ARKODE_ERK_NONE
-                             ? rk4_table()
-                             : ARKodeButcherTable_LoadERK((ARKODE_ERKTableID)meth->table);
+  ARKodeButcherTable B = meth->table == ARKODE_ERK_NONE ? rk4_table() : load_table(meth->table);
   return B ? make_fsal(B) : NULL;
 }
 

@@ -52,13 +52,50 @@ static int cv_flag_fail(ap_stepper *s, int flag) {
 /* ---- creation ------------------------------------------------------------------------ */
 
 /* The nonlinear solver: fixed point for Adams, dense Newton for BDF. */
+/* CVODE clones A (its saved Jacobian) at the first step, and SUNDIALS 6.4's SUNMatClone
+ * crashes when that allocation fails: the clone is made here, at creation, and A's clone
+ * operation hands it over. The table is A's ops (its first member), freed with A. */
+typedef struct cv_mat_ops {
+  struct _generic_SUNMatrix_Ops ops;
+  SUNMatrix spare;         /* the clone, until CVODE takes it */
+} cv_mat_ops;
+
+static SUNMatrix cv_mat_clone(SUNMatrix A) {
+  cv_mat_ops *o = (cv_mat_ops *)(void *)A->ops;
+  SUNMatrix B = o->spare;
+  o->spare = NULL;
+  return B ? B : SUNDenseMatrix(SUNDenseMatrix_Rows(A), SUNDenseMatrix_Columns(A), A->sunctx);
+}
+
+/* A dense n x n matrix with its clone made now; NULL when out of memory. */
+static SUNMatrix cv_matrix(ap_stepper *s) {
+  SUNMatrix A = SUNDenseMatrix(s->n, s->n, s->ctx);
+  SUNMatrix B = A ? SUNDenseMatrix(s->n, s->n, s->ctx) : NULL;   /* SUNMatClone would crash */
+  cv_mat_ops *o = B ? malloc(sizeof *o) : NULL;
+  if (!o) {
+    if (B) SUNMatDestroy(B);
+    if (A) SUNMatDestroy(A);
+    return NULL;
+  }
+  o->ops = *A->ops, o->ops.clone = cv_mat_clone, o->spare = B;
+  free(A->ops);
+  A->ops = &o->ops;
+  return A;
+}
+
+static void cv_matrix_free(SUNMatrix A) {
+  cv_mat_ops *o = (cv_mat_ops *)(void *)A->ops;
+  if (o->spare) SUNMatDestroy(o->spare);
+  SUNMatDestroy(A);
+}
+
 static int cv_solver(ap_stepper *s) {
   if (s->meth->table == CV_ADAMS) {
     SUNNonlinearSolver nls = SUNNonlinSol_FixedPoint(s->y, 0, s->ctx);
     s->obj[2] = nls;
     return nls ? CVodeSetNonlinearSolver(s->mem, nls) : CV_MEM_FAIL;
   }
-  SUNMatrix A = SUNDenseMatrix(s->n, s->n, s->ctx);
+  SUNMatrix A = cv_matrix(s);
   SUNLinearSolver ls = A ? SUNLinSol_Dense(s->y, A, s->ctx) : NULL;
   s->obj[0] = A, s->obj[1] = ls;
   int flag = ls ? CVodeSetLinearSolver(s->mem, ls, A) : CV_MEM_FAIL;
@@ -91,7 +128,7 @@ static void cv_destroy(ap_stepper *s) {
   if (s->mem) CVodeFree(&s->mem);
   if (s->obj[2]) SUNNonlinSolFree((SUNNonlinearSolver)s->obj[2]);
   if (s->obj[1]) SUNLinSolFree((SUNLinearSolver)s->obj[1]);
-  if (s->obj[0]) SUNMatDestroy((SUNMatrix)s->obj[0]);
+  if (s->obj[0]) cv_matrix_free((SUNMatrix)s->obj[0]);
   ap_step_release(s);
 }
 
