@@ -12,6 +12,8 @@
  *              scene loaded before the phase
  *   bdf        the same in minimal mode with CVODE's BDF, over 4 ms (its difference-quotient
  *              Jacobian allocates at every evaluation)
+ *   sweep      ap_batch_create and a plan of two runs (ap_batch_run_plan_events): a run that
+ *              cannot allocate is a row with status AP_ERR_NOMEM and a message
  * A phase's allocations are counted once (N); then for i = 1 .. N a child process (fork)
  * runs the phase with allocation i failing and reports how it ended:
  *   nomem   a call returned AP_ERR_NOMEM with a message (the required outcome)
@@ -89,6 +91,7 @@ static const phase PHASES[] = {
     {"plain", AP_MODE_PLAIN, "dopri5", 0.05},
     {"dae", AP_MODE_DAE, "dopri5", 0.05},
     {"bdf", AP_MODE_MINIMAL, "bdf", 0.001},
+    {"sweep", AP_MODE_MINIMAL, "sweep", 0.0},
 };
 enum { NPHASE = sizeof PHASES / sizeof PHASES[0] };
 
@@ -137,12 +140,49 @@ static void run_sim(const phase *p, ap_scene *sc, const double *q0, const double
   ap_sim_free(s);
 }
 
+/* The sweep phase: a batch of the scene and a plan of two runs (ap_batch_run_plan_events, one
+ * worker thread). A failed allocation inside a run must leave that run a row with status
+ * AP_ERR_NOMEM and a message, the batch going on. */
+static void run_sweep(outcome *o) {
+  static const char *const sets[] = {"simulation.t_end=0.1"};
+  ap_batch_def def = ap_batch_def_default();
+  ap_batch *b = NULL;
+  ap_plan *p = NULL;
+  double vals[2 * 64];
+  int status[2] = {0, 0};
+  char *msgs[2] = {NULL, NULL}, *evs[2] = {NULL, NULL};
+  o->call = "ap_batch_create";
+  o->rc = ap_batch_create(SCENE, sizeof SCENE - 1, "alloc.yaml", sets, 1, &def, &b, o->msg,
+                          sizeof o->msg);
+  if (o->rc == AP_OK && (o->call = "ap_plan_create", o->rc = ap_plan_create(&p)) != AP_OK)
+    snprintf(o->msg, sizeof o->msg, "out of memory (ap_plan_create has no message)");
+  if (o->rc == AP_OK)
+    o->call = "ap_plan_add_grid",
+    o->rc = ap_plan_add_grid(p, "bodies.disk.mass=1:2:2", o->msg, sizeof o->msg);
+  if (o->rc == AP_OK && ap_batch_ncols(b) > 64) o->rc = AP_ERR_INTERNAL;
+  if (o->rc == AP_OK) {
+    o->call = "ap_batch_run_plan_events";
+    o->rc = ap_batch_run_plan_events(b, p, 0, 2, vals, status, msgs, evs);
+    if (o->rc == AP_ERR_NOMEM) snprintf(o->msg, sizeof o->msg, "%s", msgs[0] ? msgs[0] : "");
+    for (int i = 0; i < 2 && o->rc == AP_OK; i++)
+      if (status[i] != AP_OK) {
+        o->call = "a run of the batch", o->rc = status[i];
+        snprintf(o->msg, sizeof o->msg, "%s", msgs[i] ? msgs[i] : "");
+      }
+  }
+  ap_batch_messages_free(2, msgs);
+  ap_batch_messages_free(2, evs);
+  ap_plan_free(p);
+  ap_batch_free(b);
+}
+
 /* Runs phase p with allocation fail (1-based; -1: none) failing; returns the count. */
 static long run_phase(const phase *p, long fail, outcome *o) {
   ap_scene *sc = NULL;
   double q0[16], v0[16];
   memset(o, 0, sizeof *o);
-  if (p->method) {   /* load outside the count */
+  int sweep = p->method && strcmp(p->method, "sweep") == 0;
+  if (p->method && !sweep) {   /* load outside the count */
     if (load(&sc, o) != AP_OK ||
         ap_scene_initial_state(sc, q0, v0, NULL, 0, o->msg, sizeof o->msg) != AP_OK) {
       o->call = "setup";
@@ -154,7 +194,8 @@ static long run_phase(const phase *p, long fail, outcome *o) {
   long before = n_alloc;
   ap_alloc_on_fail = at_failure;
   ap_alloc_fail_at(fail > 0 ? fail - 1 : -1);
-  if (p->method) run_sim(p, sc, q0, v0, o);
+  if (sweep) run_sweep(o);
+  else if (p->method) run_sim(p, sc, q0, v0, o);
   else run_load(o);
   ap_alloc_fail_at(-1);
   long n = n_alloc - before;

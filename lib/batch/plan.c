@@ -190,6 +190,12 @@ static int unique_path(const ap_plan *p, const plan_param *q, char *msg, size_t 
   return AP_OK;
 }
 
+/* A failed allocation says so (the parsers leave msg alone then). */
+static int nomem_said(int rc, const char *spec, char *msg, size_t len) {
+  if (rc == AP_ERR_NOMEM) say(msg, len, "'%s': out of memory%s", spec, "");
+  return rc;
+}
+
 int ap_plan_add_grid(ap_plan *p, const char *spec, char *msg, size_t len) {
   if (!p || !spec) return say(msg, len, "NULL argument%s%s", "", "");
   plan_param *q = new_param(p, 1, msg, len);
@@ -202,7 +208,7 @@ int ap_plan_add_grid(ap_plan *p, const char *spec, char *msg, size_t len) {
   if (rc == AP_OK && ap_plan_count(p) < 0)
     rc = say(msg, len, "'%s': the plan would have more than 2^53 runs%s", spec, "");
   if (rc != AP_OK) drop_param(p, q, 1);
-  return rc;
+  return nomem_said(rc, spec, msg, len);
 }
 
 /* "name(ARG1,ARG2)": two constant expressions (commas inside parentheses do not split). */
@@ -245,7 +251,7 @@ int ap_plan_add_random(ap_plan *p, const char *spec, char *msg, size_t len) {
   if (rc == AP_OK && q->kind == PL_UNIFORM && !(q->a <= q->b))
     rc = say(msg, len, "'%s': uniform(A,B) needs A <= B%s", spec, "");
   if (rc != AP_OK) drop_param(p, q, 0);
-  return rc;
+  return nomem_said(rc, spec, msg, len);
 }
 
 int ap_plan_set_samples(ap_plan *p, long samples, uint64_t seed) {
