@@ -184,6 +184,18 @@ def _check_args(grid, random, samples, seed, shard, chunk_size, client):
         raise ValueError("chunk_size needs a Dask client (client=...)")
 
 
+def _check_checkpoint(checkpoint, client):
+    if checkpoint is None:
+        return None
+    if client is None:
+        raise ValueError("checkpoint needs a Dask client (client=...); appell sweep --resume "
+                         "resumes a local sweep")
+    try:
+        return os.fspath(checkpoint)
+    except TypeError:
+        raise TypeError(f"checkpoint must be a path, got {type(checkpoint).__name__}") from None
+
+
 def _channels(channels):
     if isinstance(channels, str):
         return (channels,)
@@ -209,7 +221,7 @@ def _times(times):
 
 def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channels=(),
           times=None, final_state=True, jobs=1, shard=None, client=None, chunk_size=None,
-          progress=None):
+          progress=None, checkpoint=None):
     """Run a scene once per point of a grid or random sample of its values; returns a Table.
 
     scene      a scene file's path or a Model (its text and overrides are used)
@@ -222,11 +234,15 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
     shard      (i, n): only the i-th of n equal slices of the runs (1 <= i <= n)
     client     a dask.distributed.Client: run chunks of chunk_size runs on its workers
     progress   callable(done, total), called about every 0.2 s
+    checkpoint with a client: a directory where each finished chunk is kept; the same call
+               after an interruption (a lost client, Ctrl-C) runs only the runs not kept
+               there and returns the same table; the directory is removed at the end
     A failed run is a row with its status (non-zero) and message.
     """
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
         raise ValueError(f"jobs must be a whole number >= 0 (0: one per processor), got {jobs!r}")
     _check_args(grid, random, samples, seed, shard, chunk_size, client)
+    checkpoint = _check_checkpoint(checkpoint, client)
     text, name, sets = _source(scene, set)
     grids = tuple(_grid_spec(p, v) for p, v in (grid or {}).items())
     randoms = tuple(_random_spec(p, v) for p, v in (random or {}).items())
@@ -252,8 +268,11 @@ def sweep(scene, grid=None, random=None, samples=None, seed=1, set=None, channel
         # The plan checked here, as a local sweep checks it, before any chunk goes to a
         # worker (the chunks skip the check): a misspelt path raises instead of failing
         # every run.
-        _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
-        table = _assemble(run_on_dask(client, args, first, count, chunk_size, progress), first)
+        head = _appell.run_plan(first=first, count=0, jobs=1, check=True, **args)
+        identity = {"plan": head["plan"], "first": first, "count": count,
+                    "columns": list(head["columns"])}
+        table = _assemble(run_on_dask(client, args, first, count, chunk_size, progress,
+                                      checkpoint, identity), first)
     table.scene = name if os.path.isfile(name) else None
     return table
 

@@ -1,5 +1,6 @@
 """Sweeps on a Dask cluster: a LocalCluster of 2 worker processes gives the table of the local
-run; killing a worker in the middle of a sweep loses no run (Dask reschedules its chunks)."""
+run; killing a worker in the middle of a sweep loses no run (Dask reschedules its chunks); a
+sweep whose client is lost resumes from its checkpoint with the same table."""
 
 import os
 import signal
@@ -80,3 +81,47 @@ def test_killed_worker_loses_no_run(client, disk):
             break
         time.sleep(0.1)
     assert killed["pid"] not in client.run(os.getpid).values()
+
+
+class _Lost(Exception):
+    """The client lost in the middle of a sweep (raised from the progress callback)."""
+
+
+def test_checkpoint_resumes_after_a_lost_client(client, disk, tmp_path):
+    args = _args(1.0)                      # 36 runs, chunks of 4: 9 chunks
+    local = appell.sweep(disk, jobs=2, **args)
+    ck = tmp_path / "ck"
+    seen = []
+
+    def lose(done, total):
+        seen.append(done)
+        if len(seen) == 3:                 # three chunks on file, then the client is gone
+            raise _Lost()
+
+    with pytest.raises(_Lost):
+        appell.sweep(disk, client=client, chunk_size=4, progress=lose, checkpoint=ck, **args)
+    kept = sorted(p.name for p in ck.iterdir() if p.name != "sweep.json")
+    assert len(kept) == 3 and all(p.endswith(".json") for p in kept)
+    calls = []
+    resumed = appell.sweep(disk, client=client, chunk_size=5, checkpoint=ck,
+                           progress=lambda d, t: calls.append((d, t)), **args)
+    _same(local, resumed)
+    # only the 24 runs not on file ran again: the first report already counts the 12 kept
+    assert calls[0][0] >= 12 + 1 and calls[-1] == (36, 36) and len(calls) <= 6
+    assert not ck.exists()
+
+
+def test_checkpoint_of_another_sweep_is_refused(client, disk, tmp_path):
+    ck = tmp_path / "ck"
+    args = _args(1.0)
+
+    def stop(done, total):
+        raise _Lost()
+
+    with pytest.raises(_Lost):
+        appell.sweep(disk, client=client, chunk_size=4, progress=stop, checkpoint=ck, **args)
+    other = dict(args, seed=6)
+    with pytest.raises(ValueError, match="holds another sweep"):
+        appell.sweep(disk, client=client, checkpoint=ck, **other)
+    with pytest.raises(ValueError, match="needs a Dask client"):
+        appell.sweep(disk, checkpoint=ck, **args)
