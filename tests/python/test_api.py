@@ -327,3 +327,20 @@ def test_state_read_from_another_thread_during_a_run_is_one_step():
     t, q, v = sim.state                                             # after the runs: live
     z_ref = z0 + v0 * t_end - 0.5 * g * t_end**2
     assert t == t_end and abs(q[0] - z_ref) < 1e-9 * max(1.0, abs(z_ref))
+
+
+def test_parameters_dict_and_override():
+    """model.parameters (docs/scenes.md "Parameters"): Meijaard's Table 1 names of the bicycle
+    scene; set= changes one and every value derived from it (the run moves); a parameter the
+    scene does not have is refused with its name."""
+    base = appell.load(SCENES / "bicycle.yaml")
+    p = base.parameters
+    assert p["w"] == 1.02 and p["c"] == 0.08 and p["lambda"] == np.pi / 10 and len(p) == 26
+    moved = appell.load(SCENES / "bicycle.yaml", set={"parameters.c": 0.1})
+    assert moved.parameters["c"] == 0.1 and moved.parameters["w"] == 1.02
+    r0 = appell.Simulation(base).run(t_end=0.5, dt=0.5)
+    r1 = appell.Simulation(moved).run(t_end=0.5, dt=0.5)
+    assert abs(r0["rear_frame.wx"][-1] - r1["rear_frame.wx"][-1]) > 1e-4
+    assert appell.load(SCENES / "rolling_disk.yaml").parameters == {}
+    with pytest.raises(appell.SceneError, match="no parameter 'cc' .did you mean 'c'"):
+        appell.load(SCENES / "bicycle.yaml", set={"parameters.cc": 0.1})
