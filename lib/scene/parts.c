@@ -20,7 +20,9 @@
  * Every copied node keeps the line and column (and file) of the part's text and carries the
  * note "part 'P' as 'I' (FILE:LINE:COL of the instance)", so messages about it name both. A
  * name the copy defines that the scene (or another instance) defines already is an error.
- * Runs after the --set overrides, so `--set instances.rl.parameters.y=0.5` works. */
+ * Runs after the --set overrides, so `--set instances.rl.parameters.y=0.5` works. The copies
+ * of all instances together are at most SC_MAX_NODES nodes (the reader's limit: a few lines
+ * of instances of a large part must not grow without bound). */
 #include <ctype.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,6 +39,7 @@ static const char *const inst_keys[] = {"part", "prefix", "parameters", NULL};
 
 typedef struct inst_ctx {
   sc_ctx *c;
+  long *nodes;               /* nodes copied by every instance so far (SC_MAX_NODES at most) */
   const sc_node *defaults;   /* the part's parameters: (or NULL) */
   const sc_node *given;      /* the instance's parameters: (or NULL) */
   const char *name, *prefix, *note, *part;
@@ -114,6 +117,10 @@ static int subst(inst_ctx *x, const sc_node *at, const char *text, char *out, si
 
 /* A copy of part node n at path (taken) with the placeholders replaced and the note set. */
 static sc_node *instantiate(inst_ctx *x, const sc_node *n, char *path) {
+  if (++*x->nodes > SC_MAX_NODES) {
+    sc_err(x->c, n, "the instances of parts copy more than %d nodes", SC_MAX_NODES);
+    return free(path), NULL;
+  }
   sc_node *m = sc_node_new(n->kind, n->line, n->col, path);
   if (!m) return sc_nomem(x->c), NULL;
   m->quoted = n->quoted, m->origin = n->origin, m->file = n->file, m->inst = x->note;
@@ -208,7 +215,7 @@ static int check_given(inst_ctx *x) {
 }
 
 static int one_instance(sc_ctx *c, sc_node *root, const sc_node *parts, const sc_node *key,
-                        const sc_node *inst, sc_strings *pool) {
+                        const sc_node *inst, sc_strings *pool, long *nodes) {
   if (sc_check_keys(c, inst, inst_keys)) return AP_ERR_ARG;
   const sc_node *part = find_part(c, parts, inst);
   if (!part || sc_check_keys(c, part, part_keys)) return AP_ERR_ARG;
@@ -220,7 +227,7 @@ static int one_instance(sc_ctx *c, sc_node *root, const sc_node *parts, const sc
   const char *pname = sc_map_get(inst, "part")->text;
   snprintf(note, sizeof note, "part '%.100s' as '%.100s', %s:%d:%d", pname, key->text,
            key->file ? key->file : c->file, key->line, key->col);
-  inst_ctx x = {c, sc_map_get(part, "parameters"), sc_map_get(inst, "parameters"), key->text,
+  inst_ctx x = {c, nodes, sc_map_get(part, "parameters"), sc_map_get(inst, "parameters"), key->text,
                 NULL, sc_strings_add(pool, note), pname};
   x.prefix = sc_strings_add(pool, prefix);
   if (!x.prefix || !x.note) return sc_nomem(c);
@@ -238,7 +245,9 @@ int sc_parts_expand(sc_ctx *c, sc_node *root, sc_strings *pool) {
   if (parts && sc_expect(c, parts, SC_MAP)) return AP_ERR_ARG;
   if (!inst) return AP_OK;
   if (sc_expect(c, inst, SC_MAP)) return AP_ERR_ARG;
+  long nodes = 0;
   for (int i = 0; i < inst->n; i++)
-    if (one_instance(c, root, parts, inst->keys[i], inst->kids[i], pool)) return AP_ERR_ARG;
+    if (one_instance(c, root, parts, inst->keys[i], inst->kids[i], pool, &nodes))
+      return AP_ERR_ARG;
   return AP_OK;
 }

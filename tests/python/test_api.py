@@ -344,3 +344,19 @@ def test_parameters_dict_and_override():
     assert appell.load(SCENES / "rolling_disk.yaml").parameters == {}
     with pytest.raises(appell.SceneError, match="no parameter 'cc' .did you mean 'c'"):
         appell.load(SCENES / "bicycle.yaml", set={"parameters.cc": 0.1})
+
+
+def test_parameters_sweep_grid_random_and_linearize(tmp_path):
+    """A parameter is a sweep path like any other (--grid, --random), and appell linearize
+    --sweep takes its bare name: the bicycle's trail c."""
+    out = tmp_path / "trail.csv"
+    run_cli("sweep", SCENES / "bicycle.yaml", "--grid", "parameters.c=0.06:0.1:3", "--random",
+            "parameters.w=uniform(1,1.05)", "--samples", "2", "--t-end", "0.2", "--out", out)
+    rows = out.read_text().splitlines()
+    head = rows[0].split(",")
+    ic, iw = head.index("parameters.c"), head.index("parameters.w")
+    cs = sorted({float(r.split(",")[ic]) for r in rows[1:]})
+    ws = [float(r.split(",")[iw]) for r in rows[1:]]
+    assert len(rows) == 7 and cs == [0.06, 0.08, 0.1] and all(1 <= w <= 1.05 for w in ws)
+    r = run_cli("linearize", SCENES / "bicycle.yaml", "--sweep", "c=0.05:0.15:3")
+    assert "sweep        parameters.c from 0.05 to 0.15, 3 values" in r.stdout
