@@ -19,7 +19,10 @@
  *    (2) The equilibrium (Newton on grad V) and the small-oscillation frequencies from
  *    det(K - w^2 M) = 0 (K the Hessian of V by central differences of the complex-step
  *    gradient, error ~1e-10) against the linearizer's operating point and eigenvalues of the
- *    scene: within 1e-9 relative. */
+ *    scene: within 1e-9 relative.
+ *  - Running out of memory: loading the Kron scene (an include, two instances, parameters)
+ *    with each of its allocations failing in turn gives AP_ERR_NOMEM or a message saying
+ *    memory ran out, and leaks nothing (tests/alloc.h counts the live blocks). */
 #include <complex.h>
 #include <math.h>
 #include <stdio.h>
@@ -29,6 +32,7 @@
 
 #include <appell/appell.h>
 
+#include "alloc.h"
 #include "check.h"
 #include "clitest.h"
 #include "scene/scene_int.h"
@@ -331,8 +335,35 @@ static void test_kron_modes(void) {
   ap_scene_free(sc);
 }
 
+static void test_nomem(void) {
+  char file[1200], msg[1024];
+  snprintf(file, sizeof file, "%s/examples/scenes/kron_two_pendulums.yaml", srcdir);
+  int tried = 0, failed = 0, bad = 0;
+  for (long i = 0; i < 100000; i++) {
+    ap_scene *sc = NULL;
+    long live = n_live;
+    ap_alloc_fail_at(i);
+    int rc = ap_scene_load(file, NULL, 0, &sc, msg, sizeof msg), hit = ap_alloc_failed;
+    ap_alloc_fail_at(-1);
+    ap_scene_free(sc);
+    tried++;
+    if (rc != AP_OK) failed++;
+    if ((rc != AP_OK && rc != AP_ERR_NOMEM && !strstr(msg, "memory")) || n_live != live ||
+        (rc == AP_OK && !sc)) {
+      if (bad++ < 5) fprintf(stderr, "  allocation %ld: rc %d, %ld blocks leaked: %s\n", i, rc,
+                             n_live - live, msg);
+    }
+    if (!hit) break;   /* every allocation of the load has been made to fail */
+  }
+  printf("Kron scene load with each allocation failing in turn: %d loads, %d failed, %d wrong\n",
+         tried, failed, bad);
+  AP_CHECK(tried > 100);
+  AP_CHECK_EQ_INT(bad, 0);
+}
+
 int main(void) {
   ct_find_source(srcdir, sizeof srcdir);
+  test_nomem();
   snprintf(tmp, sizeof tmp, "/tmp/appell_parts_XXXXXX");
   AP_CHECK(mkdtemp(tmp) != NULL);
   test_errors();

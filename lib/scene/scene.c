@@ -109,9 +109,10 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
     return sc ? AP_ERR_ARG : AP_ERR_NOMEM;
   }
   sc->s.file = strdup(c.file);
+  if (!sc->s.file) sc_nomem(&c);   /* includes are found from the file's name: no guessing */
   c.file = sc->s.file ? sc->s.file : "scene";
   stem(c.file, sc->name, sizeof sc->name);
-  sc->s.root = sc_tree_load(&c, text, len);
+  if (c.status == AP_OK) sc->s.root = sc_tree_load(&c, text, len);
   if (sc->s.root && sc->s.root->kind != SC_MAP)
     sc_err(&c, sc->s.root, "a scene is a mapping of sections (bodies:, joints:, ...)");
   if (c.status == AP_OK) sc_include_expand(&c, sc->s.root, c.file, &sc->s.strings);
