@@ -219,6 +219,13 @@ static void cases_scene(void) {
   CASE(ap_scene_body_visual, "out NULL", ap_scene_body_visual(SC, 0, NULL) == AP_ERR_ARG);
   CASE(ap_scene_body_visual, "body out of range",
        ap_scene_body_visual(SC, 99, &(ap_scene_visual){0}) == AP_ERR_ARG);
+  CASE(ap_scene_parameter_count, "s NULL", ap_scene_parameter_count(NULL) == 0);
+  const char *pname = NULL;
+  double pvalue = 0.0;
+  CASE(ap_scene_parameter, "s NULL", ap_scene_parameter(NULL, 0, &pname, &pvalue) == AP_ERR_ARG);
+  CASE(ap_scene_parameter, "i -1", ap_scene_parameter(SC, -1, &pname, &pvalue) == AP_ERR_ARG);
+  CASE(ap_scene_parameter, "i 99", ap_scene_parameter(SC, 99, &pname, &pvalue) == AP_ERR_ARG);
+  CASE(ap_scene_parameter, "name NULL", ap_scene_parameter(SC, 0, NULL, &pvalue) == AP_ERR_ARG);
 }
 
 static int eig_fn(double p_, int n, double *re, double *im, void *user) {

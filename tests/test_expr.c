@@ -214,7 +214,7 @@ static void test_composites(void) {
       {"8-2-2", 4}};
   for (size_t i = 0; i < sizeof values / sizeof values[0]; i++) {
     double x = NAN;
-    sc_symtab constant = {0, NULL, NULL};
+    sc_symtab constant = {0, NULL, NULL, NULL, NULL, NULL};
     p = compile(values[i].text, &constant);
     AP_CHECK(p && sc_prog_constant(p, &x));
     AP_CHECK_NEAR(x, values[i].value, 4 * EPS * fabs(values[i].value));
@@ -240,7 +240,7 @@ static void test_locale(void) {
 static void test_variables(void) {
   static const char *const names[] = {"wl.angle", "wl.rate", "chassis.heading", NULL};
   static const int slots[] = {3, 5, 0};
-  sc_symtab sym = {1, names, slots};
+  sc_symtab sym = {1, names, slots, NULL, NULL, NULL};
   sc_prog *p = compile("wl.rate*t + sin(wl.angle) - chassis.heading^2 + 0*wl.rate", &sym);
   if (!p) return;
   AP_CHECK_EQ_INT(sc_prog_uses_t(p), 1);
@@ -278,7 +278,7 @@ static void test_variables(void) {
   sc_prog_free(p);
   /* slots NULL: names[i] is slot i; a table with only constants used folds to a number. */
   static const char *const ab[] = {"a", "b", NULL};
-  sc_symtab plain = {0, ab, NULL};
+  sc_symtab plain = {0, ab, NULL, NULL, NULL, NULL};
   p = compile("2*b", &plain);
   if (p) AP_CHECK(sc_prog_nvars(p) == 1 && sc_prog_vars(p)[0] == 1 && !sc_prog_uses_t(p));
   sc_prog_free(p);
@@ -331,7 +331,7 @@ static void test_errors(void) {
   FILE *sink = tmpfile();
   if (sink) dup2(fileno(sink), 1);
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    sc_symtab sym = {bad[i].allow_t, names, NULL};
+    sc_symtab sym = {bad[i].allow_t, names, NULL, NULL, NULL, NULL};
     sc_prog *p = (sc_prog *)&sym;
     sc_prog_err err;
     AP_CHECK_EQ_INT(sc_prog_compile(bad[i].text, &sym, &p, &err), AP_ERR_ARG);
@@ -486,7 +486,7 @@ static void test_threads(void) {
 
 static void test_no_allocation(void) {
   static const char *const names[] = {"x", NULL};
-  sc_symtab sym = {1, names, NULL};
+  sc_symtab sym = {1, names, NULL, NULL, NULL, NULL};
   sc_prog *p = compile("0.2*exp(-t/4)*cos(3*t + x) + log(t)", &sym);
   sc_ctx c = {"expr", "", AP_OK};
   sc_node at = {.kind = SC_SCALAR, .text = "2*tanh(t) + t^2", .line = 1, .col = 1, .path = "x"};
@@ -517,7 +517,7 @@ static void test_no_allocation(void) {
 static void test_allocation_failures(void) {
   if (!AP_COUNT_ALLOC) return (void)printf("allocation failures not injected (AddressSanitizer)\n");
   static const char *const names[] = {"wl.rate", NULL};
-  sc_symtab sym = {1, names, NULL};
+  sc_symtab sym = {1, names, NULL, NULL, NULL, NULL};
   static const char *const texts[] = {"0.2*exp(-t/4)*cos(3*t + pi/3)", "wl.rate*t", "1/0",
                                       "sinn(t)", "2*pi"};
   int injected = 0;

@@ -109,6 +109,20 @@ static void settings(const ap_scene *sc, const ap_scene_run *r) {
   printf("\n");
 }
 
+/* parameters   3: w = 1.02, c = 0.08, lambda = 0.314159 (as evaluated, after --set) */
+static void list_parameters(const ap_scene *sc) {
+  int np = ap_scene_parameter_count(sc);
+  if (np == 0) return;
+  printf("parameters   %d:", np);
+  for (int i = 0; i < np; i++) {
+    const char *name = NULL;
+    double value = 0.0;
+    if (ap_scene_parameter(sc, i, &name, &value) == AP_OK)
+      printf("%s %s = %.10g", i ? "," : "", name, value);
+  }
+  printf("\n");
+}
+
 static int report(ap_scene *sc, const char *file) {
   const ap_model *m = ap_scene_model(sc);
   int n = ap_model_n(m), k = ap_model_k(m), b = ap_model_b(m);
@@ -124,6 +138,7 @@ static int report(ap_scene *sc, const char *file) {
   ap_scene_run run;
   ap_scene_get_run(sc, &run);
   printf("scene        %s (%s)\n", ap_scene_name(sc), file);
+  list_parameters(sc);
   list_section(sc, AP_SCENE_BODIES, "bodies");
   list_section(sc, AP_SCENE_JOINTS, "joints");
   printf("n = %-8d ", n), list_names("coordinates", n, ap_model_coord_name, m);

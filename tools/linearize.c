@@ -34,6 +34,7 @@ static const char help[] =
     "  --speed V           the speed parameter (needs linearize.speed in the scene)\n"
     "  --sweep speed=A:B:N sweep the speed over N values from A to B (inclusive)\n"
     "  --sweep PATH=A:B:N  sweep a scalar of the scene instead, e.g. bodies.disk.mass=1:2:11\n"
+    "  --sweep NAME=A:B:N  sweep a parameter of the scene (parameters.NAME), e.g. trail=0.05:0.15:21\n"
     "  --states A,B,...    report the subsystem of these states (it must be closed)\n"
     "  --free A,B,...      state variables the Newton may move (steady motions)\n"
     "  --inputs A,B,...    model speeds receiving an input force or torque (columns of B)\n"
@@ -66,9 +67,11 @@ static int parse_sweep(const char *v, lin_opts *o) {
   const char *eq = strchr(v, '=');
   if (!eq || eq == v) return -1;
   size_t len = (size_t)(eq - v);
-  if (len >= sizeof o->sweep_path) return -1;
-  memcpy(o->sweep_path, v, len);
-  o->sweep_path[len] = '\0';
+  /* A bare name other than speed is a parameter: trail=A:B:N sweeps parameters.trail. */
+  const char *pre = memchr(v, '.', len) || (len == 5 && !strncmp(v, "speed", 5))
+                        ? "" : "parameters.";
+  if (strlen(pre) + len >= sizeof o->sweep_path) return -1;
+  snprintf(o->sweep_path, sizeof o->sweep_path, "%s%.*s", pre, (int)len, v);
   char *end = NULL;
   o->from = strtod(eq + 1, &end);
   if (*end != ':') return -1;

@@ -153,6 +153,11 @@ typedef enum ap_scene_section {
 AP_API int ap_scene_count(const ap_scene *s, ap_scene_section sec);
 AP_API const char *ap_scene_element_name(const ap_scene *s, ap_scene_section sec, int i);
 AP_API const char *ap_scene_element_kind(const ap_scene *s, ap_scene_section sec, int i);
+/* The scene's parameters (its parameters: section, docs/scenes.md "Parameters"), in file
+ * order: how many, and entry i's name (points into the scene) and value as evaluated at load
+ * (after --set). 0 parameters when s is NULL; AP_ERR_ARG for i out of range or NULL outputs. */
+AP_API int ap_scene_parameter_count(const ap_scene *s);
+AP_API int ap_scene_parameter(const ap_scene *s, int i, const char **name, double *value);
 /* A body's visual-only shape (bodies: NAME: visual:, docs/scenes.md): drawn by `appell view`
  * and exported by `appell export`, never seen by the dynamics. */
 typedef enum ap_visual_kind {

@@ -92,7 +92,7 @@ static int read_when(sc_ctx *c, sc_scene *s, const sc_node *n, sc_event *e) {
   if (sc_expect(c, w, SC_SCALAR)) return AP_ERR_ARG;
   sc_state_names t;
   if (sc_state_names_build(s, &t) != AP_OK) return sc_nomem(c);
-  sc_symtab sym = {1, (const char *const *)t.names, NULL};
+  sc_symtab sym = {1, (const char *const *)t.names, NULL, NULL, NULL, NULL};
   int rc = sc_expr_compile_sym(c, w, w->text, &sym, &e->when);
   if (rc == AP_OK && !e->when.timed)
     rc = sc_err(c, w, "'%s' is a constant: an event's when: must depend on t or the state",

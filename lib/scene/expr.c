@@ -35,7 +35,9 @@ int sc_expr_compile_sym(sc_ctx *c, const sc_node *at, const char *text, const sc
   e->node = at;
   sc_prog_err err;
   sc_prog *p = NULL;
-  int rc = sc_prog_compile(text, sym, &p, &err);
+  sc_symtab named = *sym;   /* the scene's parameters, unless the caller has its own lookup */
+  if (at && at->params && !named.lookup) sc_params_symtab(at->params, &named);
+  int rc = sc_prog_compile(text, &named, &p, &err);
   if (rc == AP_ERR_NOMEM) return nomem(c, at, text);
   if (rc != AP_OK) return sc_err(c, at, "%s", err.msg);
   if (sc_prog_constant(p, &e->value)) {
@@ -55,7 +57,7 @@ int sc_expr_compile_sym(sc_ctx *c, const sc_node *at, const char *text, const sc
 }
 
 int sc_expr_compile(sc_ctx *c, const sc_node *at, const char *text, int allow_t, sc_expr *e) {
-  sc_symtab sym = {allow_t, NULL, NULL};
+  sc_symtab sym = {allow_t, NULL, NULL, NULL, NULL, NULL};
   return sc_expr_compile_sym(c, at, text, &sym, e);
 }
 

@@ -47,6 +47,12 @@ typedef struct sc_symtab {
   int allow_t;                /* 1: the time t may appear */
   const char *const *names;   /* NULL-terminated variable names, or NULL for none */
   const int *slots;           /* slot in x of names[i] (>= 0); NULL: slot i */
+  /* Named constants (the scene's parameters, params.c), asked after the variables: returns 1
+   * and *value for a name it knows, 0 for one it does not, -1 when the name's own value
+   * failed (the caller has the message; the compile then fails). NULL: none. */
+  int (*lookup)(void *user, const char *name, size_t len, double *value);
+  void *user;                 /* passed to lookup */
+  const char *const *constants;   /* lookup's names, for "did you mean" (NULL-terminated) */
 } sc_symtab;
 
 typedef struct sc_prog sc_prog;   /* immutable after sc_prog_compile */

@@ -258,7 +258,9 @@ static const char *closest(const parser *p, const char *word, int call) {
   if (call) return sc_suggest(word, sc_fn_names);
   best[0] = sc_suggest(word, consts + (p->sym->allow_t ? 0 : 1));
   best[1] = p->sym->names ? sc_suggest(word, p->sym->names) : NULL;
-  if (!best[0]) best[0] = best[1], best[1] = NULL;
+  best[2] = p->sym->constants ? sc_suggest(word, p->sym->constants) : NULL;
+  if (!best[1]) best[1] = best[2], best[2] = NULL;
+  if (!best[0]) best[0] = best[1], best[1] = best[2], best[2] = NULL;
   return best[0] ? sc_suggest(word, best) : NULL;
 }
 
@@ -275,9 +277,10 @@ static int unknown_name(parser *p, size_t at, size_t len, int call) {
                     "value; the functions are listed in docs/scenes.md)", word, p->shown, at + 1);
   int vars = p->sym->names && p->sym->names[0];
   return name_err(p, at, "unknown name '%.60s' in expression '%s' (column %zu of the value; "
-                  "allowed: %snumbers, pi, e, deg, %sand functions such as sin, cos, exp, sqrt)",
+                  "allowed: %snumbers, pi, e, deg, %s%sand functions such as sin, cos, exp, sqrt)",
                   word, p->shown, at + 1, p->sym->allow_t ? "t, " : "",
-                  vars ? "the variable names, " : "");
+                  vars ? "the variable names, " : "",
+                  p->sym->lookup ? "the parameters, " : "");
 }
 
 /* A name that is not a call: t, a constant or a variable. */
@@ -295,6 +298,10 @@ static int variable(parser *p, size_t at, size_t len) {
   int c = find(consts, w, len);
   if (c >= 0) return emit_k(p, values[c], at);
   int v = find(p->sym->names, w, len);
+  double named = 0.0;
+  int known = v < 0 && p->sym->lookup ? p->sym->lookup(p->sym->user, w, len, &named) : 0;
+  if (known < 0) return set_err(p, AP_ERR_ARG, at, "the parameter '%.*s' has no value", (int)len, w);
+  if (known > 0) return emit_k(p, named, at);
   if (v < 0 && find(sc_fn_names, w, len) >= 0) return expected(p, "'(' after the function name");
   if (v < 0) return unknown_name(p, at, len, 0);
   int slot = p->sym->slots ? p->sym->slots[v] : v;
@@ -451,7 +458,7 @@ static int compile(parser *p, sc_prog **out) {
 }
 
 int sc_prog_compile(const char *text, const sc_symtab *sym, sc_prog **out, sc_prog_err *err) {
-  static const sc_symtab time_only = {1, NULL, NULL};
+  static const sc_symtab time_only = {1, NULL, NULL, NULL, NULL, NULL};
   sc_prog_err dummy;
   if (!err) err = &dummy;
   err->status = AP_OK, err->col = 0, err->msg[0] = '\0';

@@ -30,15 +30,18 @@ int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...) {
   char path[128];
   const char *full = at && at->path && at->path[0] ? at->path : "(top level)";
   snprintf(path, sizeof path, "%.100s%s", full, strlen(full) > 100 ? "..." : "");
+  const char *file = at && at->file ? at->file : c->file;
+  char inst[300] = "";
+  if (at && at->inst) snprintf(inst, sizeof inst, " (in %s)", at->inst);
   if (at && at->line == 0)
-    snprintf(c->msg, sizeof c->msg, "%s: --set %s: %s: %s", c->file,
-             at->origin ? at->origin : "?", path, what);
+    snprintf(c->msg, sizeof c->msg, "%s: --set %s: %s%s: %s", file,
+             at->origin ? at->origin : "?", path, inst, what);
   else if (at && at->origin)
-    snprintf(c->msg, sizeof c->msg, "%s:%d:%d: %s (set by --set %s): %s", c->file, at->line,
-             at->col, path, at->origin, what);
+    snprintf(c->msg, sizeof c->msg, "%s:%d:%d: %s (set by --set %s)%s: %s", file, at->line,
+             at->col, path, at->origin, inst, what);
   else
-    snprintf(c->msg, sizeof c->msg, "%s:%d:%d: %s: %s", c->file, at ? at->line : 1,
-             at ? at->col : 1, path, what);
+    snprintf(c->msg, sizeof c->msg, "%s:%d:%d: %s%s: %s", file, at ? at->line : 1,
+             at ? at->col : 1, path, inst, what);
   c->status = AP_ERR_ARG;
   return AP_ERR_ARG;
 }

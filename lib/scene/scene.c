@@ -43,6 +43,8 @@ void sc_scene_clear(sc_scene *s) {
   sc_expr_free(&s->ground.omega);
   for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
   sc_events_free(s);
+  sc_params_free(s->params);
+  sc_strings_free(&s->strings);
   free(s->bodies);
   free(s->joints);
   free(s->cons);
@@ -107,12 +109,16 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
     return sc ? AP_ERR_ARG : AP_ERR_NOMEM;
   }
   sc->s.file = strdup(c.file);
+  if (!sc->s.file) sc_nomem(&c);   /* includes are found from the file's name: no guessing */
   c.file = sc->s.file ? sc->s.file : "scene";
   stem(c.file, sc->name, sizeof sc->name);
-  sc->s.root = sc_tree_load(&c, text, len);
+  if (c.status == AP_OK) sc->s.root = sc_tree_load(&c, text, len);
   if (sc->s.root && sc->s.root->kind != SC_MAP)
     sc_err(&c, sc->s.root, "a scene is a mapping of sections (bodies:, joints:, ...)");
+  if (c.status == AP_OK) sc_include_expand(&c, sc->s.root, c.file, &sc->s.strings);
   for (int i = 0; c.status == AP_OK && i < nsets; i++) sc_tree_set(&c, sc->s.root, sets[i]);
+  if (c.status == AP_OK) sc_parts_expand(&c, sc->s.root, &sc->s.strings);
+  if (c.status == AP_OK) sc_params_read(&c, sc->s.root, &sc->s.params);
   if (c.status == AP_OK) load_parsed(&c, sc);
   if (c.status != AP_OK) {
     if (msg && msg_len) snprintf(msg, msg_len, "%s", c.msg);

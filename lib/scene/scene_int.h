@@ -14,6 +14,8 @@
  *   init.c    initial state in people's coordinates -> consistent (q0, v0)
  *   output.c  output channels: names and values of a CSV row
  *   scene.c   the public entry points (include/appell/scene.h)
+ *   params.c  the parameters: section, named numbers that every expression may use
+ *   include.c parts.c  include: of other files; parts: instantiated by instances:
  *
  * Invariant: every message the layer produces for bad input names the file, line and column
  * of the offending node and its key path, and at most one message is produced per load. */
@@ -41,6 +43,9 @@ typedef struct sc_node {
   int n, cap;              /* children */
   struct sc_node **keys;   /* map: the key scalars (n) */
   struct sc_node **kids;   /* map values or sequence items (n) */
+  const char *file;        /* the included file it was read from, or NULL: the scene's own */
+  const char *inst;        /* "part 'P' as 'I' (FILE:LINE:COL)" for nodes of a part, or NULL */
+  const struct sc_params *params;   /* the scene's parameters its expressions may name */
 } sc_node;
 
 /* Limits that keep hostile input (alias bombs, long keys above wide aliases, deep nesting)
@@ -147,6 +152,31 @@ int sc_expr_check_jet(sc_ctx *c, const sc_expr *e, const sc_jet *t, const sc_jet
  * variables are skipped: they need the state). */
 int sc_expr_check(sc_ctx *c, const sc_expr *e, double t);
 
+/* ---- parameters, includes and parts (params.c, include.c, parts.c) ---------------------- */
+
+/* The parameters of a scene: names and values in file order, evaluated once at load. */
+typedef struct sc_params sc_params;
+/* Read root's parameters: section (cycles and unknown names refused at their node) and point
+ * every node of the tree at the table; *out is NULL when there is none. */
+/* The symbol table's lookup of expressions naming parameters (expr.c uses it). */
+void sc_params_symtab(const sc_params *p, sc_symtab *sym);
+int sc_params_read(sc_ctx *c, sc_node *root, sc_params **out);
+void sc_params_free(sc_params *p);
+int sc_params_count(const sc_params *p);
+const char *sc_params_name(const sc_params *p, int i);
+double sc_params_value(const sc_params *p, int i);
+/* Strings that nodes point to (file names, instance notes): owned here, freed with the scene. */
+typedef struct sc_strings {
+  int n, cap;
+  char **s;
+} sc_strings;
+const char *sc_strings_add(sc_strings *pool, const char *text);
+void sc_strings_free(sc_strings *pool);
+/* Expand include: (file names relative to dir, the including file's folder) into root. */
+int sc_include_expand(sc_ctx *c, sc_node *root, const char *file, sc_strings *pool);
+/* Expand instances: of parts: into the sections of root. */
+int sc_parts_expand(sc_ctx *c, sc_node *root, sc_strings *pool);
+
 /* ---- the parsed scene (parse.c, parse_run.c) ------------------------------------------- */
 
 typedef struct sc_body {
@@ -244,6 +274,8 @@ typedef struct sc_scene {
   int nkink, nsat;
   struct sc_kink *kinks;   /* kinks of its expressions: implicit events (events.c) */
   struct sc_sat *sats;     /* saturation switching of its motors: implicit events too */
+  sc_params *params;       /* the parameters: section (params.c), or NULL */
+  sc_strings strings;      /* file names and instance notes the tree's nodes point to */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);

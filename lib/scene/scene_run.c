@@ -72,7 +72,7 @@ int ap_scene_constant(const char *text, double *x, char *msg, size_t msg_len) {
   }
   /* A one-node tree at 1:1 with an empty key path: sc_number's messages then start with the
    * fixed prefix below, which is dropped (the caller names the text's origin). */
-  sc_node n = {SC_SCALAR, (char *)text, 0, 1, 1, NULL, "", 0, 0, NULL, NULL};
+  sc_node n = {.kind = SC_SCALAR, .text = (char *)text, .line = 1, .col = 1, .path = ""};
   sc_ctx c = {"", "", AP_OK};
   double v = 0.0;
   int rc = sc_number(&c, &n, &v);

@@ -144,7 +144,7 @@ static int compact(sc_ctx *c, const sc_node *v, const sc_state_names *t, const i
                    int count, sc_expr *e) {
   const char *names[AP_STATE_MAX_INPUTS + 1] = {NULL};
   for (int i = 0; i < count; i++) names[i] = t->names[vars[i]];
-  sc_symtab sym = {1, names, NULL};
+  sc_symtab sym = {1, names, NULL, NULL, NULL, NULL};
   char *text = e->text;
   e->text = NULL;
   sc_expr_free(e);
@@ -190,7 +190,7 @@ int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effec
   }
   sc_state_names t;
   if (sc_state_names_build(s, &t) != AP_OK) return sc_err(c, v, "out of memory");
-  sc_symtab sym = {1, (const char *const *)t.names, NULL};
+  sc_symtab sym = {1, (const char *const *)t.names, NULL, NULL, NULL, NULL};
   int rc = sc_expr_compile_sym(c, v, v->text, &sym, e);
   if (rc == AP_OK && e->timed && sc_prog_nvars(e->prog) > 0) rc = bind(c, v, &t, e, d);
   else if (rc == AP_OK && e->timed) d->value_fn = sc_expr_time_fn;

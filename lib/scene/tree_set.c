@@ -43,7 +43,8 @@ static int set_fail(sc_ctx *c, const char *arg, const char *fmt, ...) {
 
 /* Sections keyed by element names, and what one element is called. */
 static const char *const element_sections[][2] = {
-    {"bodies", "body"}, {"joints", "joint"}, {"constraints", "constraint"}, {"effects", "effect"}};
+    {"bodies", "body"}, {"joints", "joint"}, {"constraints", "constraint"}, {"effects", "effect"},
+    {"parameters", "parameter"}};
 
 static const char *element_word(const char *section) {
   for (size_t i = 0; i < sizeof element_sections / sizeof element_sections[0]; i++)

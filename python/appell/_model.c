@@ -152,6 +152,20 @@ static PyObject *elements(apx_model *m, void *c) {
   return d;
 }
 
+static PyObject *get_parameters(apx_model *m, void *c) {
+  (void)c;
+  PyObject *d = PyDict_New();
+  for (int i = 0; d && i < ap_scene_parameter_count(m->sc); i++) {
+    const char *name = NULL;
+    double value = 0.0;
+    ap_scene_parameter(m->sc, i, &name, &value);
+    PyObject *v = PyFloat_FromDouble(value);
+    if (!v || PyDict_SetItemString(d, name, v)) Py_CLEAR(d);
+    Py_XDECREF(v);
+  }
+  return d;
+}
+
 static PyObject *get_settings(apx_model *m, void *c) {
   (void)c;
   static const char *const modes[] = {"minimal", "projected", "dae", "plain"};
@@ -215,6 +229,8 @@ static PyGetSetDef model_getset[] = {
     {"joints", (getter)elements, NULL, "{name: kind}", (void *)AP_SCENE_JOINTS},
     {"constraints", (getter)elements, NULL, "{name: kind}", (void *)AP_SCENE_CONSTRAINTS},
     {"effects", (getter)elements, NULL, "{name: kind}", (void *)AP_SCENE_EFFECTS},
+    {"parameters", (getter)get_parameters, NULL,
+     "{name: value} of the scene's parameters: section, as evaluated (after set=)", NULL},
     {"settings", (getter)get_settings, NULL,
      "simulation and output settings (mode, method, rtol, atol, t0, t_end, interval, ...)", NULL},
     {"conserves_energy", (getter)get_conserves, NULL,

@@ -20,7 +20,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   memcpy(text, data, n);
   text[n] = '\0';
   static const char *const names[] = {"a", "b.rate", NULL};
-  sc_symtab sym = {1, names, NULL};
+  sc_symtab sym = {1, names, NULL, NULL, NULL, NULL};
   sc_prog *p = NULL;
   sc_prog_err err;
   if (sc_prog_compile(text, &sym, &p, &err) != AP_OK) {

@@ -327,3 +327,36 @@ def test_state_read_from_another_thread_during_a_run_is_one_step():
     t, q, v = sim.state                                             # after the runs: live
     z_ref = z0 + v0 * t_end - 0.5 * g * t_end**2
     assert t == t_end and abs(q[0] - z_ref) < 1e-9 * max(1.0, abs(z_ref))
+
+
+def test_parameters_dict_and_override():
+    """model.parameters (docs/scenes.md "Parameters"): Meijaard's Table 1 names of the bicycle
+    scene; set= changes one and every value derived from it (the run moves); a parameter the
+    scene does not have is refused with its name."""
+    base = appell.load(SCENES / "bicycle.yaml")
+    p = base.parameters
+    assert p["w"] == 1.02 and p["c"] == 0.08 and p["lambda"] == np.pi / 10 and len(p) == 26
+    moved = appell.load(SCENES / "bicycle.yaml", set={"parameters.c": 0.1})
+    assert moved.parameters["c"] == 0.1 and moved.parameters["w"] == 1.02
+    r0 = appell.Simulation(base).run(t_end=0.5, dt=0.5)
+    r1 = appell.Simulation(moved).run(t_end=0.5, dt=0.5)
+    assert abs(r0["rear_frame.wx"][-1] - r1["rear_frame.wx"][-1]) > 1e-4
+    assert appell.load(SCENES / "rolling_disk.yaml").parameters == {}
+    with pytest.raises(appell.SceneError, match="no parameter 'cc' .did you mean 'c'"):
+        appell.load(SCENES / "bicycle.yaml", set={"parameters.cc": 0.1})
+
+
+def test_parameters_sweep_grid_random_and_linearize(tmp_path):
+    """A parameter is a sweep path like any other (--grid, --random), and appell linearize
+    --sweep takes its bare name: the bicycle's trail c."""
+    out = tmp_path / "trail.csv"
+    run_cli("sweep", SCENES / "bicycle.yaml", "--grid", "parameters.c=0.06:0.1:3", "--random",
+            "parameters.w=uniform(1,1.05)", "--samples", "2", "--t-end", "0.2", "--out", out)
+    rows = out.read_text().splitlines()
+    head = rows[0].split(",")
+    ic, iw = head.index("parameters.c"), head.index("parameters.w")
+    cs = sorted({float(r.split(",")[ic]) for r in rows[1:]})
+    ws = [float(r.split(",")[iw]) for r in rows[1:]]
+    assert len(rows) == 7 and cs == [0.06, 0.08, 0.1] and all(1 <= w <= 1.05 for w in ws)
+    r = run_cli("linearize", SCENES / "bicycle.yaml", "--sweep", "c=0.05:0.15:3")
+    assert "sweep        parameters.c from 0.05 to 0.15, 3 values" in r.stdout
