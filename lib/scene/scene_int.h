@@ -282,6 +282,15 @@ int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
 /* Every expression of the state finite at (t, q, v); else a message at its node. */
 int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
                          const double *q, const double *v);
+/* Body quantities in expressions (expr_body.c): BODY.x ... BODY.wz appended to t (names it
+ * has already are kept); does any of in[nin] read one; the inputs x at (q, v), body quantities
+ * from d's kinematics at that state (index: global q or v index of the others); the
+ * kinematics of (t, q, v) into d (ap_body_eval). */
+int sc_state_names_add_bodies(const sc_scene *s, sc_state_names *t);
+int sc_inputs_read_bodies(const ap_state_input *in, int nin);
+int sc_state_gather(const ap_model *m, const ap_data *d, const ap_state_input *in,
+                    const int *index, int nin, const double *q, const double *v, double *x);
+int sc_state_at(const ap_model *m, ap_data *d, double t, const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
