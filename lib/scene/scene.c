@@ -43,6 +43,7 @@ void sc_scene_clear(sc_scene *s) {
   sc_expr_free(&s->ground.omega);
   for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
   sc_events_free(s);
+  sc_named_free(s);
   free(s->bodies);
   free(s->joints);
   free(s->cons);

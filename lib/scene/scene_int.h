@@ -217,11 +217,12 @@ enum {
   SC_OUT_RESIDUAL = 1 << 6,
   SC_OUT_REACTIONS = 1 << 7,
   SC_OUT_CONTACT_FORCES = 1 << 8,
-  SC_OUT_POSES = 1 << 9
+  SC_OUT_POSES = 1 << 9,
+  SC_OUT_DRIVEN = 1 << 10
 };
 #define SC_OUT_NAMES                                                                     \
   { "coordinates", "speeds", "angles", "com", "contacts", "energy", "residual", "reactions", \
-    "contact_forces", "poses", NULL }
+    "contact_forces", "poses", "driven", NULL }
 
 typedef struct sc_scene {
   char *file;
@@ -244,6 +245,8 @@ typedef struct sc_scene {
   int nkink, nsat;
   struct sc_kink *kinks;   /* kinks of its expressions: implicit events (events.c) */
   struct sc_sat *sats;     /* saturation switching of its motors: implicit events too */
+  int nnamed;
+  struct sc_named *named;  /* named output channels, NAME: EXPRESSION (channels.c) */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
@@ -331,6 +334,15 @@ void sc_out_free(sc_out *o);
 int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_sim *sim,
                double *row);
 int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
+/* Named channels and the driven channel (channels.c): read a mapping item of
+ * output.channels; free them; the number of their columns, the name of column i (buf: room
+ * for a driven column's name), and their values at the data's (t, q, v) into row (returns the
+ * count written, or a negative status). */
+int sc_parse_named_channels(sc_ctx *c, sc_scene *s, const sc_node *map);
+void sc_named_free(sc_scene *s);
+int sc_named_count(const sc_scene *s, const ap_model *m);
+const char *sc_named_column(const sc_scene *s, int i, char *buf, size_t len);
+int sc_named_values(const sc_scene *s, const ap_model *m, ap_data *d, double *row);
 /* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
  * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
 const ap_data *sc_scene_output_data(const ap_scene *sc);
