@@ -13,7 +13,12 @@
  *    equals the roll computed here from the quaternion columns of its free joint (R of the joint
  *    times the child frame's Rx(90 deg)^T) to 1e-12; `appell plot --y lean` accepts the name
  *    and `--y leen` suggests it; the car's `driven` channel gives the Ackermann steer angles and
- *    its `contacts` channel the wheel contact points, under the upright wheels' centres. */
+ *    its `contacts` channel the wheel contact points, under the upright wheels' centres.
+ * 4. A lean controller written with atan2 at upright: the benchmark bicycle with a steer torque
+ *    T = k1 (2 atan2(qx, qw) - pi/2) + k2 wx (the lean from its free joint's quaternion, and the
+ *    roll rate), linearized at 3 m/s upright by `appell linearize` (complex step): its A equals
+ *    the uncontrolled bicycle's A plus k1 and k2 times the steer column of the uncontrolled B
+ *    in the roll and roll-rate columns, to the 6 digits the command prints. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -248,6 +253,78 @@ static void test_channels(const char *src) {
   remove(rec);
 }
 
+/* ---- 4. the atan2 lean controller at upright -------------------------------------------------- */
+
+#define NX 10
+/* The rows of A (nx x nx) and of B (nx x 2) printed by appell linearize into file; 0 when
+ * both have NX rows. */
+static int read_lin(const char *file, double A[NX][NX], double B[NX][2]) {
+  FILE *f = fopen(file, "r");
+  char line[4096];
+  int block = 0, na = 0, nb = 0;
+  while (f && fgets(line, sizeof line, f)) {
+    if (strncmp(line, "state matrix A", 14) == 0) block = 1;
+    else if (strncmp(line, "input matrix B", 14) == 0) block = 2;
+    else if (strncmp(line, "  ", 2) != 0 || line[2] == ' ') block = 0;
+    else if (block) {
+      char *p = line + 2;
+      while (*p && *p != ' ') p++;   /* the row's name */
+      for (int j = 0; j < (block == 1 ? NX : 2); j++) {
+        double x = strtod(p, &p);
+        if (block == 1 && na < NX) A[na][j] = x;
+        if (block == 2 && nb < NX) B[nb][j] = x;
+      }
+      block == 1 ? na++ : nb++;
+    }
+  }
+  if (f) fclose(f);
+  return na == NX && nb == NX ? 0 : -1;
+}
+
+static void test_lean_controller(const char *src) {
+  char scene[1200], ctl[200], out[2][200];
+  snprintf(scene, sizeof scene, "%s/examples/scenes/bicycle.yaml", src);
+  snprintf(ctl, sizeof ctl, "%s/bicycle_ctl.yaml", ct_tmp);
+  const double k1 = 100, k2 = 20;
+  FILE *in = fopen(scene, "r"), *o = fopen(ctl, "w");
+  char line[1024];
+  AP_CHECK(in && o);
+  while (in && o && fgets(line, sizeof line, in)) {
+    fputs(line, o);
+    if (strstr(line, "gravity: {kind: gravity"))
+      fprintf(o, "  steer: {kind: joint_torque, joint: front_frame, torque: \"%g*(2*atan2("
+              "rear_frame.qx, rear_frame.qw) - pi/2) + %g*rear_frame.wx\"}\n", k1, k2);
+  }
+  if (in) fclose(in);
+  if (o) fclose(o);
+  static double A[2][NX][NX], B[2][NX][2];
+  for (int i = 0; i < 2; i++) {
+    snprintf(out[i], sizeof out[i], "%s/lin%d.txt", ct_tmp, i);
+    FILE *touch = fopen(out[i], "w");   /* ct_spawn opens it without creating it */
+    if (touch) fclose(touch);
+    const char *argv[] = {ct_bin, "linearize", i ? ctl : scene, "--speed", "3", NULL};
+    AP_CHECK_EQ_INT(ct_wait(ct_spawn(argv, out[i], NULL, NULL)), 0);
+    AP_CHECK_EQ_INT(read_lin(out[i], A[i], B[i]), 0);
+  }
+  /* states: x y tilt heading rear_wheel front_frame front_wheel wx rear_rate steer_rate */
+  /* the text has 6 significant digits (%g): each number is off by up to 5e-6 of itself */
+  double worst = 0, amax = 0;
+  for (int r = 0; r < NX; r++)
+    for (int c = 0; c < NX; c++) amax = fmax(amax, fabs(A[1][r][c]));
+  for (int r = 0; r < NX; r++)
+    for (int c = 0; c < NX; c++) {
+      double k = c == 2 ? k1 : c == 7 ? k2 : 0, want = A[0][r][c] + k * B[0][r][1];
+      double tol = 5e-6 * (fabs(A[1][r][c]) + fabs(A[0][r][c]) + k * fabs(B[0][r][1])) +
+                 1e-12 * amax;   /* entries of round-off (the error estimates are 4e-13 max |A|) */
+      AP_CHECK_LE(fabs(A[1][r][c] - want), tol);
+      worst = fmax(worst, fabs(A[1][r][c] - want) / tol);
+    }
+  printf("atan2 lean controller at upright, 3 m/s: |A - (A_open + B K)| within %.2f of the "
+         "printed digits' rounding\n", worst);
+  AP_CHECK(fabs(A[1][7][2] - A[0][7][2]) > 10);   /* the controller does act */
+  remove(out[0]), remove(out[1]), remove(ctl);
+}
+
 int main(void) {
   char src[1024], path[1200];
   if (ct_init("expr_scene") != 0) return 1;
@@ -257,6 +334,7 @@ int main(void) {
   snprintf(path, sizeof path, "%s/tests/scenes/act_body.yaml", src);
   test_body_quantities(path);
   test_channels(src);
+  test_lean_controller(src);
   ct_finish();
   return ap_check_finish("test_expr_scene");
 }
