@@ -18,7 +18,9 @@
  *    T = k1 (2 atan2(qx, qw) - pi/2) + k2 wx (the lean from its free joint's quaternion, and the
  *    roll rate), linearized at 3 m/s upright by `appell linearize` (complex step): its A equals
  *    the uncontrolled bicycle's A plus k1 and k2 times the steer column of the uncontrolled B
- *    in the roll and roll-rate columns, to the 6 digits the command prints. */
+ *    in the roll and roll-rate columns, to the 6 digits the command prints.
+ * 5. An event on a body quantity: the falling bicycle's `when: rear_frame.roll - 0.5` fires at
+ *    the same time as the same roll written from its free joint's quaternion coordinates. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -325,6 +327,40 @@ static void test_lean_controller(const char *src) {
   remove(out[0]), remove(out[1]), remove(ctl);
 }
 
+/* ---- 5. events on body quantities -------------------------------------------------------- */
+
+static void test_body_event(const char *src) {
+  char scene[1200], ev[200], line[1024];
+  snprintf(scene, sizeof scene, "%s/examples/scenes/bicycle_falling.yaml", src);
+  snprintf(ev, sizeof ev, "%s/bicycle_events.yaml", ct_tmp);
+  FILE *in = fopen(scene, "r"), *o = fopen(ev, "w");
+  AP_CHECK(in && o);
+  while (in && o && fgets(line, sizeof line, in)) fputs(line, o);
+  if (o)   /* roll = atan2(B32, B33) of the body axes B = R(q) Rx(90 deg)^T */
+    fputs("events:\n  body: {when: \"rear_frame.roll - 0.5\", action: log}\n"
+          "  quat: {when: \"atan2(2*(rear_frame.qx*rear_frame.qx + rear_frame.qy*rear_frame.qy)"
+          " - 1, 2*(rear_frame.qy*rear_frame.qz + rear_frame.qw*rear_frame.qx)) - 0.5\", "
+          "action: log}\n", o);
+  if (in) fclose(in);
+  if (o) fclose(o);
+  ap_scene *sc = NULL;
+  ap_sim *s = load_sim(ev, &sc);
+  if (s) AP_CHECK_EQ_INT(ap_sim_advance(s, 10.0), AP_STOPPED);
+  double t[2] = {NAN, NAN};
+  for (int i = 0; s && i < ap_sim_event_count(s); i++) {
+    ap_event_record r;
+    AP_CHECK_EQ_INT(ap_sim_event_get(s, i, &r), AP_OK);
+    if (strcmp(r.name, "body") == 0) t[0] = r.t;
+    if (strcmp(r.name, "quat") == 0) t[1] = r.t;
+  }
+  printf("event on rear_frame.roll at t = %.15f, on the quaternion's roll at %.15f\n", t[0], t[1]);
+  AP_CHECK(t[0] > 1.0 && t[0] < 1.6);
+  AP_CHECK_NEAR(t[0], t[1], 1e-12);
+  ap_sim_free(s);
+  ap_scene_free(sc);
+  remove(ev);
+}
+
 int main(void) {
   char src[1024], path[1200];
   if (ct_init("expr_scene") != 0) return 1;
@@ -335,6 +371,7 @@ int main(void) {
   test_body_quantities(path);
   test_channels(src);
   test_lean_controller(src);
+  test_body_event(src);
   ct_finish();
   return ap_check_finish("test_expr_scene");
 }
