@@ -326,6 +326,10 @@ static void test_errors(void) {
       {"wl.rate.x", 1, 1, "unknown name 'wl.rate.x'"},
       {"wl.rate(2)", 1, 1, "unknown function 'wl.rate'"},
       {"t*(2 + q", 1, 9, "expected ')' at column 9"},   /* grammar errors before names */
+      {"atan2(t)", 1, 1, "atan2 takes 2 arguments, not 1"}, {"max", 1, 4, "'(' after the function"},
+      {"sin(t, 1)", 1, 1, "sin takes 1 argument, not 2"}, {"min(t,)", 1, 7, "expected a number"},
+      {"clamp(t, 1)", 1, 1, "clamp takes 3 arguments, not 2"}, {"mix(t, 1)", 1, 1, "mean 'min'?"},
+      {"min(t 1)", 1, 7, "expected ')' or ','"},
   };
   /* Nothing is printed (libmatheval echoed stray characters to standard output). */
   fflush(stdout);
@@ -451,13 +455,10 @@ static void test_fn2(void) {
   /* the kinks' event arguments: b - a for min and max, the argument of sign, sin(pi u) of floor */
   sc_prog *p = compile("clamp(t, 0, 1) + sign(t - 3) + floor(2*t)", NULL);
   double args[4] = {0, 0, 0, 0}, v = 0;
-  if (p) {
-    AP_CHECK_EQ_INT(sc_prog_nkinks(p), 4);
-    AP_CHECK_EQ_INT(sc_prog_kinks(p, 0.25, NULL, args), 4);
-    AP_CHECK(args[0] == 0.25 && args[1] == 0.25 - 1 && args[2] == 0.25 - 3);
-    AP_CHECK_NEAR(args[3], 1.0, 1e-16);   /* sin(pi * 0.5) */
-    AP_CHECK(sc_prog_value(p, 0.25, NULL, &v) == 0 && v == 0.25 - 1 + 0);
-  }
+  AP_CHECK(p && sc_prog_nkinks(p) == 4 && sc_prog_kinks(p, 0.25, NULL, args) == 4);
+  AP_CHECK(args[0] == 0.25 && args[1] == 0.25 - 1 && args[2] == 0.25 - 3);
+  AP_CHECK_NEAR(args[3], 1.0, 1e-16);   /* sin(pi * 0.5) */
+  AP_CHECK(p && sc_prog_value(p, 0.25, NULL, &v) == 0 && v == 0.25 - 1 + 0);
   sc_prog_free(p);
   /* constant arguments fold; a value at a jump on the value path */
   double k = 0;
@@ -467,17 +468,6 @@ static void test_fn2(void) {
   p = compile("sign(t) + floor(t)", NULL);
   AP_CHECK(p && sc_prog_value(p, 0.0, NULL, &v) == 0 && v == 0.0);
   sc_prog_free(p);
-  static const char *const bad[][2] = {
-      {"atan2(t)", "atan2 takes 2 arguments, not 1"}, {"sin(t, 1)", "sin takes 1 argument, not 2"},
-      {"clamp(t, 1)", "clamp takes 3 arguments, not 2"}, {"mix(t, 1)", "did you mean 'min'?"},
-      {"max", "expected '(' after the function name"}, {"min(t,)", "expected a number"}};
-  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    sc_prog_err err;
-    sc_prog *q = NULL;
-    AP_CHECK_EQ_INT(sc_prog_compile(bad[i][0], NULL, &q, &err), AP_ERR_ARG);
-    if (!strstr(err.msg, bad[i][1])) printf("'%s': %s\n", bad[i][0], err.msg);
-    AP_CHECK(strstr(err.msg, bad[i][1]) != NULL);
-  }
 }
 
 static void test_explain(void) {
