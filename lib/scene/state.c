@@ -7,7 +7,8 @@
  * A joint's child body lends its name too (BODY.NAME, as in the output columns) when no joint
  * has that name. Entry i is slot i of the expression evaluator's variable vector; what it
  * reads is refs[i] (joint id, coordinate or speed, local index), or driven[i] = 1 when the
- * coordinate is driven (a function of t, not part of the state: an error to read).
+ * coordinate is driven (a function of t, not part of the state: an error to read). After the
+ * joints come the bodies' quantities, BODY.x ... BODY.wz (expr_body.c).
  * Invariant: names[count] == NULL; the strings are owned by the table. */
 #include <math.h>
 #include <stdio.h>
