@@ -169,8 +169,9 @@ int sc_prog_nkinks(const sc_prog *p) {
 }
 
 int sc_prog_kinks(const sc_prog *p, double t, const double *x, double *args) {
-  double st[SC_PROG_STACK + 1] = {0.0}, *top = st;
+  double st[SC_PROG_STACK + 1], *top = st;
   int n = 0;
+  st[0] = 0.0;   /* the b of a one-operand kink at the bottom (unused by sc_kink_arg) */
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
     if (sc_is_kink(in)) args[n++] = sc_kink_arg(in, top[-1], top[0]);
     top = step_value(in, p->k, t, x, top);
