@@ -51,6 +51,12 @@ static void cases_body_queries(void) {
   CASE(ap_body_get_state, "body 99", ap_body_get_state(BM, BD, 99, &bst) == AP_ERR_ARG);
   CASE(ap_body_get_state, "out NULL", ap_body_get_state(BM, BD, 0, NULL) == AP_ERR_ARG);
   CASE(ap_body_get_state, "d of another model", ap_body_get_state(BM, TD, 0, &bst) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "m NULL", ap_body_quantity(NULL, BD, 0, 0, &T) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "d NULL", ap_body_quantity(BM, NULL, 0, 0, &T) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "body -1", ap_body_quantity(BM, BD, -1, 0, &T) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "which -1", ap_body_quantity(BM, BD, 0, -1, &T) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "which 99", ap_body_quantity(BM, BD, 0, 99, &T) == AP_ERR_ARG);
+  CASE(ap_body_quantity, "value NULL", ap_body_quantity(BM, BD, 0, 0, NULL) == AP_ERR_ARG);
   CASE(ap_body_point_jacobian, "m NULL",
        ap_body_point_jacobian(NULL, BD, 0, axis, w, w, NULL, NULL, NULL, NULL) == AP_ERR_ARG);
   CASE(ap_body_point_jacobian, "d NULL",

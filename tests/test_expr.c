@@ -92,6 +92,8 @@ static ref3 ref_fn(int fn, long double u) {
     case SC_FN_ABS: return (ref3){fabsl(u), u > 0 ? 1 : -1, 0};
     case SC_FN_STEP: return (ref3){u < 0 ? 0 : 1, 0, 0};
     case SC_FN_DELTA: return (ref3){0, 0, 0};
+    case SC_FN_SIGN: return (ref3){u > 0 ? 1 : -1, 0, 0};
+    case SC_FN_FLOOR: return (ref3){floorl(u), 0, 0};
     case SC_FN_COUNT: break;
   }
   return (ref3){NAN, NAN, NAN};
@@ -324,6 +326,10 @@ static void test_errors(void) {
       {"wl.rate.x", 1, 1, "unknown name 'wl.rate.x'"},
       {"wl.rate(2)", 1, 1, "unknown function 'wl.rate'"},
       {"t*(2 + q", 1, 9, "expected ')' at column 9"},   /* grammar errors before names */
+      {"atan2(t)", 1, 1, "atan2 takes 2 arguments, not 1"}, {"max", 1, 4, "'(' after the function"},
+      {"sin(t, 1)", 1, 1, "sin takes 1 argument, not 2"}, {"min(t,)", 1, 7, "expected a number"},
+      {"clamp(t, 1)", 1, 1, "clamp takes 3 arguments, not 2"}, {"mix(t, 1)", 1, 1, "mean 'min'?"},
+      {"min(t 1)", 1, 7, "expected ')' or ','"},
   };
   /* Nothing is printed (libmatheval echoed stray characters to standard output). */
   fflush(stdout);
@@ -418,6 +424,49 @@ static void test_kinks(void) {
     AP_CHECK(sc_prog_value(p, 0.0, NULL, &v) == 0 && v == 1.0);
     AP_CHECK(sc_prog_value(p, NAN, NULL, &v) == -1 && isnan(v));
   }
+  sc_prog_free(p);
+}
+
+/* The functions of two and three arguments against closed forms (long double), their kinks
+ * (the side being entered), their event arguments, folding and the argument counts. */
+static void test_fn2(void) {
+  static const struct { const char *text; double t; long double f[3]; } cases[] = {
+      {"atan2(t, 2)", 0.7, {0, 0, 0}}, {"atan2(sin(t), cos(t))", 2.5, {2.5L, 1, 0}},
+      {"atan2(sin(t), cos(t))", -0.3, {-0.3L, 1, 0}}, {"hypot(3*t, 4*t)", -0.4, {2, -5, 0}},
+      {"hypot(t, 1)", 0.6, {0, 0, 0}}, {"min(t, 1)", 0.5, {0.5L, 1, 0}},
+      {"max(t*t, 1)", 2, {4, 4, 2}}, {"clamp(t*t, -1, 2)", 1.5, {2, 0, 0}},
+      {"clamp(-t*t, -1, 2)", 0.5, {-0.25L, -1, -2}},
+      /* at the kinks: the side being entered */
+      {"max(0, t - 1)", 1, {0, 1, 0}}, {"min(t, 2 - t)", 1, {1, -1, 0}},
+      {"clamp(t, 0, 1)", 1, {1, 0, 0}}, {"clamp(t, 0, 1)", 0, {0, 1, 0}},
+      {"sign(t)", 0, {1, 0, 0}}, {"sign(-t)", 0, {-1, 0, 0}}, {"floor(-t)", 0, {-1, 0, 0}},
+      {"floor(t)", 2, {2, 0, 0}}};
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    long double t = cases[i].t, w[3] = {cases[i].f[0], cases[i].f[1], cases[i].f[2]};
+    if (i == 0) w[0] = atanl(t / 2), w[1] = 2 / (4 + t * t), w[2] = -4 * t / ((4 + t * t) * (4 + t * t));
+    if (i == 4) w[0] = sqrtl(1 + t * t), w[1] = t / w[0], w[2] = 1 / (w[0] * w[0] * w[0]);
+    sc_prog *p = compile(cases[i].text, NULL);
+    double f[3];
+    if (!p) continue;
+    AP_CHECK_EQ_INT(sc_prog_time(p, cases[i].t, f), 0);
+    for (int k = 0; k < 3; k++) CHECK_ULPS(f[k], w[k], fmaxl(fabsl(w[k]), 1), 4);
+    sc_prog_free(p);
+  }
+  /* the kinks' event arguments: b - a for min and max, the argument of sign, sin(pi u) of floor */
+  sc_prog *p = compile("clamp(t, 0, 1) + sign(t - 3) + floor(2*t)", NULL);
+  double args[4] = {0, 0, 0, 0}, v = 0;
+  AP_CHECK(p && sc_prog_nkinks(p) == 4 && sc_prog_kinks(p, 0.25, NULL, args) == 4);
+  AP_CHECK(args[0] == 0.25 && args[1] == 0.25 - 1 && args[2] == 0.25 - 3);
+  AP_CHECK_NEAR(args[3], 1.0, 1e-16);   /* sin(pi * 0.5) */
+  AP_CHECK(p && sc_prog_value(p, 0.25, NULL, &v) == 0 && v == 0.25 - 1 + 0);
+  sc_prog_free(p);
+  /* constant arguments fold; a value at a jump on the value path */
+  double k = 0;
+  p = compile("clamp(5, 0, 1) + max(1, 2) + atan2(0, -1)", NULL);
+  AP_CHECK(p && sc_prog_constant(p, &k) && k == 3 + atan2(0.0, -1.0));
+  sc_prog_free(p);
+  p = compile("sign(t) + floor(t)", NULL);
+  AP_CHECK(p && sc_prog_value(p, 0.0, NULL, &v) == 0 && v == 0.0);
   sc_prog_free(p);
 }
 
@@ -559,6 +608,7 @@ int main(void) {
   test_errors();
   test_nesting();
   test_kinks();
+  test_fn2();
   test_explain();
   test_threads();
   test_no_allocation();

@@ -427,7 +427,8 @@ int main(int argc, char **argv) {
   qsort(names, (size_t)count, sizeof *names, by_name);
   AP_CHECK(count >= 15);
   for (int i = 0; i < count; i++) scene("examples/scenes", names[i], -1), free(names[i]);
-  static const char *const act[] = {"act_spring.yaml", "act_slider.yaml", "act_follow.yaml"};
+  static const char *const act[] = {"act_spring.yaml", "act_slider.yaml", "act_follow.yaml",
+                                    "act_body.yaml"};
   for (size_t i = 0; i < sizeof act / sizeof *act; i++)
     scene("tests/scenes", act[i], AP_LIN_EQUILIBRIUM);
   printf("largest |A_cs - A_R| / (E_R + E_cs) over every scene: %.3g\n", worst_all);

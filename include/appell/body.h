@@ -50,18 +50,42 @@ typedef int (*ap_wrench_fn)(double t, double force[3], double torque[3], void *u
 /* Most inputs one state function may declare. */
 #define AP_STATE_MAX_INPUTS 16
 
+/* Quantities of a body, functions of the whole state through the kinematics: what
+ * ap_body_quantity returns and what a state function may read (ap_state_input with speed =
+ * AP_STATE_BODY). Angles in rad, in (-pi, pi] (tilt and pitch in [0, pi] and [-pi/2, pi/2]),
+ * from the body axes R (world axes):
+ *   roll, pitch, yaw: R = Rz(yaw) Ry(pitch) Rx(roll) (Z-Y-X, about the world's z then the
+ *     rotated y then the body's x): roll = atan2(R32, R33), pitch = atan2(-R31, hypot(R11,
+ *     R21)), yaw = atan2(R21, R11);
+ *   heading, tilt, spin: R = Rz(heading) Rx(tilt) Rz(spin) (Z-X-Z, as the output's `angles`
+ *     channel): tilt = atan2(hypot(R13, R23), R33), heading = atan2(R13, -R23), spin =
+ *     atan2(R31, R32) (at tilt 0: heading = atan2(R21, R11), spin = 0).
+ * Their partial derivatives are exact (the complex-step build carries them). */
+typedef enum ap_body_qty {
+  AP_BODY_X = 0, AP_BODY_Y, AP_BODY_Z,          /* body origin, world axes (m) */
+  AP_BODY_VX, AP_BODY_VY, AP_BODY_VZ,           /* velocity of the body origin, world (m/s) */
+  AP_BODY_ROLL, AP_BODY_PITCH, AP_BODY_YAW,     /* Z-Y-X angles of the body axes (rad) */
+  AP_BODY_HEADING, AP_BODY_TILT, AP_BODY_SPIN,  /* Z-X-Z angles of the body axes (rad) */
+  AP_BODY_WX, AP_BODY_WY, AP_BODY_WZ,           /* angular velocity, world axes (rad/s) */
+  AP_BODY_QTY_COUNT
+} ap_body_qty;
+
+/* ap_state_input.speed for a body quantity. */
+#define AP_STATE_BODY 2
+
 /* One scalar of the state that a state function reads: coordinate `index` (speed = 0) or speed
  * `index` (speed = 1) of joint `joint`, in the joint kind's local order (table under "Joints"
- * below: a revolute joint's angle is coordinate 0, its rate speed 0). Driven coordinates and
- * speeds are not in the state and cannot be inputs. */
+ * below: a revolute joint's angle is coordinate 0, its rate speed 0); or (speed =
+ * AP_STATE_BODY) quantity `index` (ap_body_qty) of the body whose id is `joint`. Driven
+ * coordinates and speeds are not in the state and cannot be inputs. */
 typedef struct ap_state_input {
-  int joint;               /* joint id */
-  int speed;               /* 0: a coordinate, 1: a speed */
-  int index;               /* local index within the joint */
+  int joint;               /* joint id (body id for AP_STATE_BODY) */
+  int speed;               /* 0: a coordinate, 1: a speed, AP_STATE_BODY: a body quantity */
+  int index;               /* local index within the joint, or an ap_body_qty */
 } ap_state_input;
 
-/* What a state function receives. x holds the declared inputs, gathered from q and v in the
- * order declared; q and v are the whole state, but the function must read only what it
+/* What a state function receives. x holds the declared inputs, gathered from q and v (body
+ * quantities from the kinematics of the same state) in the order declared; q and v are the whole state, but the function must read only what it
  * declared (the partial derivatives, and what the model evaluates for it, cover only that). */
 typedef struct ap_state_args {
   double t;
@@ -398,6 +422,10 @@ typedef struct ap_body_state {
 } ap_body_state;
 
 AP_API int ap_body_get_state(const ap_model *m, const ap_data *d, int body, ap_body_state *out);
+/* Quantity `which` (ap_body_qty) of body `body` from what the last ap_body_eval or pipeline run
+ * left, into *value. AP_ERR_ARG for a bad id or quantity or a NULL value. */
+AP_API int ap_body_quantity(const ap_model *m, const ap_data *d, int body, int which,
+                            double *value);
 /* Jacobians of a body point p (body axes): angular Jw and linear Jv (each 3 x k, ld 3) with
  * w = Jw v + rw, v_p = Jv v + rv (rw, rv: rheonomic parts from driven coordinates), and the
  * bias accelerations aw = Jw' v + rw', av = Jv' v + rv' (after a velocity stage). Any output
@@ -414,7 +442,9 @@ AP_API long ap_body_effect_count(const ap_model *m, const ap_data *d, int effect
  * partial derivatives of tau (each output may be NULL): dtau_dq (n entries), dtau_dv (k),
  * dtau_dt, from the state function's df (it is called with df), the value function's f[1] and
  * f[2] and the PD law; while the motor saturates they are zero. Runs no kinematics (these effects
- * read q and v only). AP_ERR_ARG for another kind of effect; a failing callback's code. */
+ * read q and v only). AP_ERR_UNSUPPORTED, with the message, for a state function that reads a
+ * body quantity (AP_STATE_BODY): its partials reach a linearization through the complex-step
+ * evaluation instead. AP_ERR_ARG for another kind of effect; a failing callback's code. */
 AP_API int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *col,
                                      double *tau, double *dtau_dq, double *dtau_dv,
                                      double *dtau_dt);

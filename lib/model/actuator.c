@@ -14,7 +14,10 @@
  * The inputs x of a state function are gathered from q and v through indices resolved at
  * compile time (in_idx, in_v), in the order declared. Partial derivatives of tau follow by the
  * chain rule from the function's own partials df; while saturated they vanish.
- * Invariant: ap_act_force reads only t, q and v; it runs no kinematics.
+ * An input may also be a body quantity (AP_STATE_BODY: position, velocity, angles, angular
+ * velocity; body_qty.c), read from the kinematics the stages left in the scratch (both paths
+ * run the velocity stage before the effects).
+ * Invariant: ap_act_force reads only t, q, v and those kinematics; it runs none itself.
  * Generic in the scalar (model/model.h; actuator_cs.c): in the complex-step build a state
  * function is called at the real parts of its inputs with df asked for, and its value becomes
  * F + sum_i dF/dx_i (x_i - Re x_i), the exact first-order continuation (the imaginary parts of
@@ -24,6 +27,9 @@
 #include <string.h>
 
 #include "model/builder.h"
+#ifndef AP_SC_COMPLEX
+#include "model/tree_model.h"
+#endif
 
 /* ---- compile ------------------------------------------------------------------------------ */
 #ifndef AP_SC_COMPLEX
@@ -38,6 +44,16 @@ static const char *what(const ap_effect_def *d) {
 static int resolve_input(ap_builder *b, const ap_bmodel *M, ap_meff *ef, int i) {
   const ap_state_input *in = &ef->def.inputs[i];
   const char *nm = ef->name;
+  if (in->speed == AP_STATE_BODY) {
+    if (in->joint < 0 || in->joint >= M->nb || in->index < 0 || in->index >= AP_BODY_QTY_COUNT)
+      FAIL("effect '%s': input %d reads quantity %d of body %d (%d bodies, %d quantities)", nm,
+           i, in->index, in->joint, M->nb, AP_BODY_QTY_COUNT);
+    ef->in_idx[i] = in->joint * AP_BODY_QTY_COUNT + in->index, ef->in_v[i] = AP_STATE_BODY;
+    return AP_OK;
+  }
+  if (in->speed != 0 && in->speed != 1)
+    FAIL("effect '%s': input %d has speed = %d (0: a coordinate, 1: a speed, %d: a body "
+         "quantity)", nm, i, in->speed, AP_STATE_BODY);
   if (in->joint < 0 || in->joint >= M->nj)
     FAIL("effect '%s': input %d reads joint %d, which does not exist (%d joints)", nm, i,
          in->joint, M->nj);
@@ -128,6 +144,19 @@ static int not_finite(const ap_model *m, ap_data *d, const ap_meff *ef, const ch
   return AP_ERR_NAN;
 }
 
+/* Input i of the state function at (q, v): a coordinate, a speed or a body quantity. */
+static ap_sc input(const ap_model *m, ap_data *d, const ap_meff *ef, int i, const ap_sc *q,
+                   const ap_sc *v) {
+  int g = ef->in_idx[i];
+  if (ef->in_v[i] != AP_STATE_BODY) return ef->in_v[i] ? v[g] : q[g];
+#ifdef AP_SC_COMPLEX
+  const ap_bmodel *M = ap_bm(m);
+#else
+  const ap_bmodel *M = ap_tree_layout(m);
+#endif
+  return ap_bq_value(M, ap_bm_scratch(d), g / AP_BODY_QTY_COUNT, g % AP_BODY_QTY_COUNT);
+}
+
 #ifdef AP_SC_COMPLEX
 /* The state function's q and v: the real parts, in the data's n-vector scratch (2n doubles,
  * which the complex-step stages leave unused; n >= k for a body model). */
@@ -146,8 +175,8 @@ static int state_cs(const ap_model *m, ap_data *d, const ap_meff *ef, double t, 
   const ap_effect_def *e = &ef->def;
   double x[AP_STATE_MAX_INPUTS], df[1 + AP_STATE_MAX_INPUTS], f0 = 0.0;
   const double *qr, *vr;
-  for (int i = 0; i < e->ninputs; i++)
-    x[i] = SC_RE(ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]]);
+  ap_sc xc[AP_STATE_MAX_INPUTS];
+  for (int i = 0; i < e->ninputs; i++) xc[i] = input(m, d, ef, i, q, v), x[i] = SC_RE(xc[i]);
   for (int i = 0; i <= e->ninputs; i++) df[i] = NAN;
   real_state(m, d, q, v, &qr, &vr);
   ap_state_args a = {t, x, e->ninputs, qr, vr};
@@ -162,8 +191,7 @@ static int state_cs(const ap_model *m, ap_data *d, const ap_meff *ef, double t, 
                 m->name, ef->name, 1 + i, df[1 + i], t);
       return AP_ERR_UNSUPPORTED;
     }
-    const ap_sc xi = ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]];
-    *f += df[1 + i] * (xi - SC_RE(xi));
+    *f += df[1 + i] * (xc[i] - SC_RE(xc[i]));
   }
   return AP_OK;
 }
@@ -183,7 +211,7 @@ static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, co
     return state_cs(m, d, ef, t, q, v, f);
 #else
     double x[AP_STATE_MAX_INPUTS];
-    for (int i = 0; i < e->ninputs; i++) x[i] = ef->in_v[i] ? v[ef->in_idx[i]] : q[ef->in_idx[i]];
+    for (int i = 0; i < e->ninputs; i++) x[i] = input(m, d, ef, i, q, v);
     ap_state_args a = {t, x, e->ninputs, q, v};
     int rc = e->state_fn(&a, &f[0], df, e->user);
     if (rc != 0) return callback_fail(m, d, ef, "state function", rc, t);
@@ -249,6 +277,13 @@ int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *co
   const ap_bmodel *M = ap_bm(m);
   const ap_meff *ef = &M->effs[effect];
   if (ef->def.kind != AP_EFFECT_JOINT_FORCE && ef->def.kind != AP_EFFECT_MOTOR) return AP_ERR_ARG;
+  for (int i = 0; i < ef->def.ninputs; i++)
+    if (ef->in_v[i] == AP_STATE_BODY) {
+      AP_BM_MSG(d, "model '%s': effect '%s' reads a body quantity (input %d): its partial "
+                "derivatives come from the complex-step evaluation (ap_linearize), not from "
+                "this function", m->name, ef->name, i);
+      return AP_ERR_UNSUPPORTED;
+    }
   double f[3], df[1 + AP_STATE_MAX_INPUTS], *dq = calloc((size_t)M->n + (size_t)M->k + 1,
                                                         sizeof *dq);
   if (!dq) return AP_ERR_NOMEM;

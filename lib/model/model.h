@@ -75,6 +75,7 @@
 #define ap_con_contact_gamma ap_con_contact_gamma_cs
 #define ap_eff_forces ap_eff_forces_cs
 #define ap_act_force ap_act_force_cs
+#define ap_bq_value ap_bq_value_cs
 #define ap_bm_position ap_bm_position_cs
 #define ap_bm_velocity ap_bm_velocity_cs
 #define ap_bm_phi ap_bm_phi_cs
@@ -145,7 +146,8 @@ typedef struct ap_meff {
   int col;                    /* global index of the speed acted on */
   int qcol;                   /* AP_MOTOR_ANGLE: global index of its coordinate; else -1 */
   int in_idx[AP_STATE_MAX_INPUTS];  /* state_fn inputs: global index in q or v ... */
-  int in_v[AP_STATE_MAX_INPUTS];    /* ... of v when 1 */
+  int in_v[AP_STATE_MAX_INPUTS];    /* ... of v when 1; AP_STATE_BODY: in_idx is body *
+                                       AP_BODY_QTY_COUNT + quantity (body_qty.c) */
 } ap_meff;
 
 typedef struct ap_bmodel {
@@ -427,6 +429,8 @@ int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef);
  * function does not give them). */
 int ap_act_force(const ap_model *m, ap_data *d, const ap_meff *ef, double t, const ap_sc *q,
                  const ap_sc *v, ap_sc *Q);
+/* Quantity which (ap_body_qty) of body `body` from the kinematics in S (layout M; body_qty.c). */
+ap_sc ap_bq_value(const ap_bmodel *M, ap_sc *S, int body, int which);
 
 /* ---- evaluator (evaluate.c) ------------------------------------------------------------- */
 

@@ -16,8 +16,10 @@
  * u = -R^T e_z); lift_off is the contact's normal force F_n (ap_body_contact_force, after the
  * multipliers); joint_range is min(q - min, max - q) of the joint's first coordinate.
  * Defaults: direction either for when, falling for the others; action stop.
- * Implicit events: the kinks (abs, step) of every expression of the scene, on their
- * arguments, and the saturation switching of motors with a limit, u = +-max for the
+ * An expression that reads body quantities (expr_body.c) is evaluated at the acceleration
+ * stage, whose kinematics it reads from d.
+ * Implicit events: the kinks (abs, step, sign, floor, min, max; expr_fn2.c) of every
+ * expression of the scene, on their arguments, and the saturation switching of motors with a limit, u = +-max for the
  * unsaturated PD law u (set-points constant or of t; lib/model/actuator.c has the law); both
  * restart the stepper where they cross (a switch with no change of state).
  * Invariant: after sc_events_bind nothing here is written; the functions read the scene and
@@ -53,8 +55,9 @@ typedef struct sc_kink {
   const sc_expr *e;
   int which;                      /* its place among the program's kinks */
   int nin;
+  const ap_state_input *in;       /* its inputs (the effect's) */
   int index[AP_STATE_MAX_INPUTS]; /* global q or v index of each input */
-  int speed[AP_STATE_MAX_INPUTS];
+  const ap_model *m;              /* for the body quantities among its inputs */
 } sc_kink;
 
 /* A motor's saturation switching, |u| = max_effort of its unsaturated PD law u: the events
@@ -193,9 +196,8 @@ static int add_kinks(sc_scene *s, const ap_model *m, const sc_expr *e, const ap_
   for (int i = 0; k && i < n; i++, k++) {
     snprintf(k->name, sizeof k->name, "kink %d of %.100s", i + 1,
              e->node && e->node->path ? e->node->path : "an expression");
-    k->e = e, k->which = i, k->nin = nin;
-    for (int j = 0; j < nin; j++)
-      k->index[j] = sc_state_index(s, m, &in[j]), k->speed[j] = in[j].speed;
+    k->e = e, k->which = i, k->nin = nin, k->in = in, k->m = m;
+    for (int j = 0; j < nin; j++) k->index[j] = sc_state_index(s, m, &in[j]);
   }
   return n;
 }
@@ -295,7 +297,7 @@ static int event_fn(double t, const double *q, const double *v, const ap_data *d
   int rc = AP_OK;
   switch (e->kind) {
     case SC_EV_WHEN:
-      for (int j = 0; j < e->nin; j++) x[j] = e->in[j].speed ? v[e->index[j]] : q[e->index[j]];
+      if (sc_state_gather(e->m, d, e->in, e->index, e->nin, q, v, x) != AP_OK) return -1;
       sc_prog_value(e->when.prog, t, x, f);
       return 0;
     case SC_EV_COLLIDE:
@@ -313,10 +315,9 @@ static int event_fn(double t, const double *q, const double *v, const ap_data *d
 
 static int kink_fn(double t, const double *q, const double *v, const ap_data *d, void *user,
                    double *f) {
-  (void)d;
   const sc_kink *k = user;
   double x[AP_STATE_MAX_INPUTS], args[SC_EXPR_MAX];
-  for (int j = 0; j < k->nin; j++) x[j] = k->speed[j] ? v[k->index[j]] : q[k->index[j]];
+  if (sc_state_gather(k->m, d, k->in, k->index, k->nin, q, v, x) != AP_OK) return -1;
   sc_prog_kinks(k->e->prog, t, x, args);
   *f = args[k->which];
   return 0;
@@ -354,6 +355,8 @@ static int add_kink_events(const sc_scene *s, ap_sim *sim) {
     def.name = s->kinks[i].name, def.fn = kink_fn, def.user = (void *)&s->kinks[i];
     def.action = AP_EVENT_SWITCH, def.on_switch = kink_restart;
     def.of_time = s->kinks[i].nin == 0;
+    if (sc_inputs_read_bodies(s->kinks[i].in, s->kinks[i].nin))   /* the kinematics of d */
+      def.stage = AP_EVENT_ACCELERATION;
     int rc = ap_sim_add_event(sim, &def);
     if (rc != AP_OK) return rc;
   }
@@ -378,7 +381,8 @@ int ap_scene_add_events(const ap_scene *sc, ap_sim *sim, char *msg, size_t msg_l
     def.direction = e->direction;
     def.action = e->action == 1 ? AP_EVENT_LOG : AP_EVENT_STOP;
     def.stage = e->kind == SC_EV_LIFT_OFF ? AP_EVENT_REACTIONS
-                : e->kind == SC_EV_COLLIDE ? AP_EVENT_POSITION : AP_EVENT_STATE;
+                : e->kind == SC_EV_COLLIDE ? AP_EVENT_POSITION
+                : sc_inputs_read_bodies(e->in, e->nin) ? AP_EVENT_ACCELERATION : AP_EVENT_STATE;
     int rc = ap_sim_add_event(sim, &def);
     if (rc != AP_OK) {
       if (msg && msg_len) snprintf(msg, msg_len, "%s: %s", s->file, ap_sim_message(sim));

@@ -25,7 +25,10 @@
  * the jet is constant: abs(t - 1) at t = 1 has time derivative +1, abs(1 - t) too (the
  * argument enters u < 0, where abs' = -1, times u' = -1); step has derivative 0 on both
  * sides. The simulation stops exactly at such kinks (scene events, docs/scenes.md "Kinks"),
- * so the one-sided derivative is the one of the piece integrated next. */
+ * so the one-sided derivative is the one of the piece integrated next. sign, floor, min, max
+ * (and clamp, compiled as min(max(...))) are kinks too (expr_fn2.c); at the jumps of sign and
+ * floor the JET's value is that of the side being entered too, so there (only there) c[0] of
+ * sc_prog_jet differs from sc_prog_value (sign(0) = 0, floor(n) = n). */
 #ifndef AP_SCENE_EXPR_H
 #define AP_SCENE_EXPR_H
 
@@ -78,8 +81,9 @@ int sc_prog_nx(const sc_prog *p);             /* 1 + the largest slot used (0 wh
 /* 1 and *value when the program uses neither t nor a variable (it folded to a number). */
 int sc_prog_constant(const sc_prog *p, double *value);
 
-/* The kinks (abs, step, delta) of a program, in the order of its code, and their arguments
- * at (t, x) into args (sc_prog_nkinks entries); returns their number. */
+/* The kinks (abs, step, delta, sign, floor, min, max) of a program, in the order of its code,
+ * and their event functions at (t, x) into args (sc_prog_nkinks entries, sc_kink_arg in
+ * expr_int.h: zero exactly at the kink); returns their number. */
 int sc_prog_nkinks(const sc_prog *p);
 int sc_prog_kinks(const sc_prog *p, double t, const double *x, double *args);
 /* The value at (t, x); x may be NULL when the program uses no variable. */

@@ -24,7 +24,7 @@
 #include "scene/expr_int.h"
 
 int sc_op_push(int op) {
-  return op <= SC_OP_K ? 1 : op >= SC_OP_ADD && op <= SC_OP_POW ? -1 : 0;
+  return op <= SC_OP_K ? 1 : op >= SC_OP_ADD && op <= SC_OP_FN2 ? -1 : 0;
 }
 
 #if defined(__GNUC__)
@@ -49,6 +49,7 @@ static SC_INLINE double *step_value(const sc_ins *in, const double *k, double t,
     case SC_OP_MUL: top--, top[0] = top[0] * top[1]; break;
     case SC_OP_DIV: top--, top[0] = top[0] / top[1]; break;
     case SC_OP_POW: top--, top[0] = pow_value(top[0], top[1]); break;
+    case SC_OP_FN2: top--, top[0] = sc_fn2_value(in->fn, top[0], top[1]); break;
     case SC_OP_ADDK: *top = *top + k[in->arg]; break;
     case SC_OP_RSUBK: *top = k[in->arg] - *top; break;
     case SC_OP_MULK: *top = *top * k[in->arg]; break;
@@ -138,6 +139,7 @@ static SC_INLINE sc_jet *step_jet(const sc_ins *in, const double *kk, const sc_j
     case SC_OP_MUL: top--, jet_mul(top, top + 1, top); break;
     case SC_OP_DIV: top--, jet_div(top, top + 1, top); break;
     case SC_OP_POW: top--, jet_pow(top, top + 1, top); break;
+    case SC_OP_FN2: top--, sc_fn2_jet(in->fn, top, top + 1, top); break;
     case SC_OP_ADDK: top->c[0] = top->c[0] + k; break;
     case SC_OP_RSUBK: top->c[0] = k - top->c[0], top->c[1] = -top->c[1], top->c[2] = -top->c[2];
       break;
@@ -160,22 +162,18 @@ int sc_prog_value(const sc_prog *p, double t, const double *x, double *f) {
   return isfinite(st[1]) ? 0 : -1;
 }
 
-static int is_kink(const sc_ins *in) {
-  return in->op == SC_OP_FN && (in->fn == SC_FN_ABS || in->fn == SC_FN_STEP ||
-                                in->fn == SC_FN_DELTA);
-}
-
 int sc_prog_nkinks(const sc_prog *p) {
   int n = 0;
-  for (int i = 0; p && i < p->nins; i++) n += is_kink(&p->ins[i]);
+  for (int i = 0; p && i < p->nins; i++) n += sc_is_kink(&p->ins[i]);
   return n;
 }
 
 int sc_prog_kinks(const sc_prog *p, double t, const double *x, double *args) {
   double st[SC_PROG_STACK + 1], *top = st;
   int n = 0;
+  st[0] = 0.0;   /* the b of a one-operand kink at the bottom (unused by sc_kink_arg) */
   for (const sc_ins *in = p->ins, *end = in + p->nins; in < end; in++) {
-    if (is_kink(in)) args[n++] = *top;
+    if (sc_is_kink(in)) args[n++] = sc_kink_arg(in, top[-1], top[0]);
     top = step_value(in, p->k, t, x, top);
   }
   return n;
@@ -235,6 +233,13 @@ static void describe(const sc_prog *p, const sc_ins *in, const sc_jet *b, const 
                  order[bad]);
       else
         snprintf(what, sizeof what, "%s(%s) = %s", sc_fn_names[in->fn], y, z);
+      break;
+    case SC_OP_FN2:
+      if (bad)
+        snprintf(what, sizeof what, "%s(%s, %s) has no finite %s derivative",
+                 sc_fn2_names[in->fn], x, y, order[bad]);
+      else
+        snprintf(what, sizeof what, "%s(%s, %s) = %s", sc_fn2_names[in->fn], x, y, z);
       break;
     default:
       if (bad)

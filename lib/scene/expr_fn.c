@@ -15,7 +15,11 @@
  * +inf at 0. The derivative of acoth is 1/(1 - u^2) (libmatheval had the sign wrong). At the
  * kinks of abs and step (u = 0) phi' and phi'' are those of the side the argument's jet
  * enters, delta's are NaN: expr.h, "Kinks". NaN arguments
- * give NaN (libmatheval's step(NaN) was 1). */
+ * give NaN (libmatheval's step(NaN) was 1). sign(u) is -1, 0, 1 and floor(u) the largest
+ * integer <= u; both have derivatives 0. At their jumps (u = 0, u an integer) with a moving
+ * argument the jet takes the value of the side being entered (sign(t) at t = 0 is 1 on the jet,
+ * floor(-t) at t = 0 is -1): a run restarted exactly at the jump integrates the next piece. The
+ * value path gives sign(0) = 0 and floor(n) = n. */
 #include <math.h>
 
 #include "scene/expr_int.h"
@@ -26,7 +30,7 @@ const char *const sc_fn_names[SC_FN_COUNT + 1] = {
     "exp",   "log",   "sqrt",  "sin",   "cos",   "tan",   "cot",   "sec",   "csc",
     "asin",  "acos",  "atan",  "acot",  "asec",  "acsc",  "sinh",  "cosh",  "tanh",
     "coth",  "sech",  "csch",  "asinh", "acosh", "atanh", "acoth", "asech", "acsch",
-    "erf",   "abs",   "step",  "delta", NULL};
+    "erf",   "abs",   "step",  "delta", "sign",  "floor", NULL};
 
 double sc_fn_value(int fn, double u) {
   switch ((sc_fn)fn) {
@@ -61,6 +65,8 @@ double sc_fn_value(int fn, double u) {
     case SC_FN_ABS: return fabs(u);
     case SC_FN_STEP: return isnan(u) ? u : u < 0.0 ? 0.0 : 1.0;
     case SC_FN_DELTA: return isnan(u) ? u : u == 0.0 ? INFINITY : 0.0;
+    case SC_FN_SIGN: return isnan(u) ? u : u > 0.0 ? 1.0 : u < 0.0 ? -1.0 : 0.0;
+    case SC_FN_FLOOR: return floor(u);
     case SC_FN_COUNT: break;
   }
   return NAN;
@@ -129,6 +135,7 @@ static void derivs(int fn, double u, double y, double *d1, double *d2) {
     case SC_FN_ERF: *d1 = SC_2_SQRTPI * exp(-u * u), *d2 = -2.0 * u * *d1; return;
     case SC_FN_ABS: *d1 = u > 0.0 ? 1.0 : u < 0.0 ? -1.0 : NAN, *d2 = u != 0.0 ? 0.0 : NAN; return;
     case SC_FN_STEP: case SC_FN_DELTA: *d1 = *d2 = u != 0.0 ? 0.0 : NAN; return;
+    case SC_FN_SIGN: case SC_FN_FLOOR: *d1 = *d2 = 0.0; return;   /* piecewise constant */
     default: inverse_derivs(fn, u, d1, d2); return;
   }
 }
@@ -142,6 +149,10 @@ void sc_fn_jet(int fn, const sc_jet *a, sc_jet *r) {
   if (u == 0.0 && (fn == SC_FN_ABS || fn == SC_FN_STEP)) {   /* the side being entered */
     double side = a1 != 0.0 ? a1 : a2;
     d1 = fn == SC_FN_STEP ? 0.0 : side > 0 ? 1.0 : -1.0, d2 = 0.0;
+  } else if ((fn == SC_FN_SIGN && u == 0.0) || (fn == SC_FN_FLOOR && y == u)) {
+    double side = a1 != 0.0 ? a1 : a2;   /* at the jump: the value of the side being entered */
+    y = fn == SC_FN_SIGN ? (side > 0 ? 1.0 : -1.0) : side > 0 ? y : y - 1.0;
+    d1 = d2 = 0.0;
   } else {
     derivs(fn, u, y, &d1, &d2);
   }

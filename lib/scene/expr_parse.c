@@ -4,7 +4,9 @@
  *   sum     := product {(+|-) product}
  *   product := unary {(*|/) unary}
  *   unary   := - unary | primary [^ unary]          (so ^ is right-associative, -2^2 = -4)
- *   primary := number | name | function ( sum ) | ( sum )
+ *   primary := number | name | function ( sum {, sum} ) | ( sum )
+ * A function takes one argument, except atan2, min, max, hypot (two) and clamp (three:
+ * clamp(x, lo, hi) is emitted as min(max(x, lo), hi)).
  * Numbers are digits [. digits] or . digits, with an optional exponent e[+-]digits; names are
  * dot-separated parts of letters, digits and '_' (expr.h, sc_symtab). Nesting deeper than 100
  * levels of unary is refused, which also bounds the evaluation stack.
@@ -112,7 +114,7 @@ static int expected(parser *p, const char *what) {
 /* Every byte must belong to the grammar's alphabet. */
 static int check_bytes(parser *p) {
   size_t bad = strspn(p->s, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_"
-                            ".+-*/^() \t");
+                            ".+-*/^(), \t");
   if (bad == p->len) return 0;
   unsigned char ch = (unsigned char)p->s[bad];
   if (ch >= 0x20 && ch < 0x7f)
@@ -255,7 +257,11 @@ static int find(const char *const *list, const char *s, size_t len) {
 static const char *closest(const parser *p, const char *word, int call) {
   static const char *const consts[] = {"t", "pi", "e", "deg", NULL};
   const char *best[4] = {NULL, NULL, NULL, NULL};
-  if (call) return sc_suggest(word, sc_fn_names);
+  if (call) {
+    best[0] = sc_suggest(word, sc_fn_names), best[1] = sc_suggest(word, sc_fn2_names);
+    if (!best[0]) best[0] = best[1], best[1] = NULL;
+    return best[0] ? sc_suggest(word, best) : NULL;
+  }
   best[0] = sc_suggest(word, consts + (p->sym->allow_t ? 0 : 1));
   best[1] = p->sym->names ? sc_suggest(word, p->sym->names) : NULL;
   best[2] = p->sym->constants ? sc_suggest(word, p->sym->constants) : NULL;
@@ -302,7 +308,8 @@ static int variable(parser *p, size_t at, size_t len) {
   int known = v < 0 && p->sym->lookup ? p->sym->lookup(p->sym->user, w, len, &named) : 0;
   if (known < 0) return set_err(p, AP_ERR_ARG, at, "the parameter '%.*s' has no value", (int)len, w);
   if (known > 0) return emit_k(p, named, at);
-  if (v < 0 && find(sc_fn_names, w, len) >= 0) return expected(p, "'(' after the function name");
+  if (v < 0 && (find(sc_fn_names, w, len) >= 0 || find(sc_fn2_names, w, len) >= 0))
+    return expected(p, "'(' after the function name");
   if (v < 0) return unknown_name(p, at, len, 0);
   int slot = p->sym->slots ? p->sym->slots[v] : v;
   if (slot < 0) return set_err(p, AP_ERR_ARG, at, "negative slot for the name '%.*s'",
@@ -314,15 +321,51 @@ static int variable(parser *p, size_t at, size_t len) {
 
 static int sum(parser *p);
 
+/* fn2(b, a) with b's code at lstart and a's at rstart: folded when both are constants. */
+static int emit_fn2(parser *p, int fn, size_t col, int lstart, int rstart) {
+  if (!(rstart - lstart == 1 && p->code[lstart].op == SC_OP_K && is_k(p, rstart)))
+    return emit(p, SC_OP_FN2, fn, col, 0);
+  double x = sc_fn2_value(fn, p->k[p->code[lstart].arg], p->k[p->code[rstart].arg]);
+  p->n = lstart;
+  return emit_k(p, x, col);
+}
+
+/* The arguments of a call after its '(' (their code starts in start[], at most 3 kept); the
+ * count. For clamp, max(x, lo) is emitted as soon as lo is read, so that the code reads
+ * x lo MAX hi MIN (start[1] then holds nothing). */
+static int arguments(parser *p, int clamp, size_t at, int start[3]) {
+  int n = 0;
+  do {
+    if (n < 3) start[n] = p->n;
+    if (sum(p) != 0) return -1;
+    if (++n == 2 && clamp && emit_fn2(p, SC_FN2_MAX, at, start[0], start[1]) != 0) return -1;
+  } while (accept(p, ','));
+  return accept(p, ')') ? n : (expected(p, "')' or ','"), -1);
+}
+
+/* A function of two or three arguments (fn indexes sc_fn2_names) with its n arguments. */
+static int call2(parser *p, int fn, size_t at, size_t len, int n, const int start[3]) {
+  int want = fn == SC_FN2_COUNT ? 3 : 2;
+  if (n != want)
+    return set_err(p, AP_ERR_ARG, at, "%.*s takes %d arguments, not %d, in expression '%s' "
+                   "(column %zu of the value)", (int)len, p->s + at, want, n, p->shown, at + 1);
+  if (fn < SC_FN2_COUNT) return emit_fn2(p, fn, at, start[0], start[1]);
+  return emit_fn2(p, SC_FN2_MIN, at, start[0], start[2]);   /* clamp: max(x, lo) is emitted */
+}
+
 static int name_or_call(parser *p) {
   size_t at = p->i, len = scan_name(p->s + at);
   p->i += len;
   if (!accept(p, '(')) return variable(p, at, len);
-  int fn = find(sc_fn_names, p->s + at, len), start = p->n;
-  if (sum(p) != 0) return -1;
-  if (!accept(p, ')')) return expected(p, "')'");
-  if (fn >= 0) return emit_unary(p, SC_OP_FN, fn, at, start);
-  p->n = start;
+  int fn = find(sc_fn_names, p->s + at, len), fn2 = find(sc_fn2_names, p->s + at, len);
+  int start[3] = {0, 0, 0}, n = arguments(p, fn2 == SC_FN2_COUNT, at, start);
+  if (n < 0) return -1;
+  if (fn2 >= 0) return call2(p, fn2, at, len, n, start);
+  if (n != 1 && fn >= 0)
+    return set_err(p, AP_ERR_ARG, at, "%.*s takes 1 argument, not %d, in expression '%s' "
+                   "(column %zu of the value)", (int)len, p->s + at, n, p->shown, at + 1);
+  if (fn >= 0) return emit_unary(p, SC_OP_FN, fn, at, start[0]);
+  p->n = start[0];
   return unknown_name(p, at, len, 1);
 }
 

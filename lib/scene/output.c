@@ -4,12 +4,14 @@
  * Columns, in this order: t; coordinates (model names, e.g. disk.x, disk.qw); speeds
  * (disk.wx); angles (disk.heading, disk.tilt, disk.spin: Z-X-Z of each quaternion joint,
  * unwrapped from row to row so that a steady spin gives a straight line); com (disk.com.x);
- * contacts (disk.contact.x, .y); poses (per body: disk.pos.x, .y, .z, the body origin, and
+ * contacts (disk.contact.x, .y, for plane-contact joints, then for bodies held by a wheel
+ * contact); poses (per body: disk.pos.x, .y, .z, the body origin, and
  * disk.rot.w, .x, .y, .z, the unit quaternion of the body axes in world axes, w >= 0, from
  * ap_quat_from_matrix of ap_body_get_state's R); energy (kinetic, potential, energy, energy_error = E - E(t0));
  * residual (max |A v + a0|); reactions (lambda.<row>); contact forces (per rolling constraint,
  * named by its body: disk.contact.Fx, .Fy, .Fz, .friction_ratio, from ap_body_contact_force
- * with the simulation's multipliers, IDA's own in DAE mode). Only the channels asked for are
+ * with the simulation's multipliers, IDA's own in DAE mode); then the named channels and the
+ * driven coordinates (channels.c). Only the channels asked for are
  * evaluated. Invariant: sc_out_names and sc_out_row agree on the count and the order. */
 #include <math.h>
 #include <stdio.h>
@@ -47,6 +49,16 @@ static int push(sc_out *o, const char *a, const char *b) {
   return AP_OK;
 }
 
+/* Is body b held by a wheel contact (a rolling constraint on a body that is not on a
+ * plane-contact joint)? Its contact point is a `contacts` column like a plane contact's. */
+static int wheel_body(const sc_scene *s, int b) {
+  for (int j = 0; j < s->nj; j++)
+    if (s->joints[j].def.child == b && s->joints[j].def.kind == AP_JOINT_PLANE_CONTACT) return 0;
+  for (int i = 0; i < s->nc; i++)
+    if (s->cons[i].def.kind == AP_CON_ROLLING && s->cons[i].def.body == b) return 1;
+  return 0;
+}
+
 static int body_cols(sc_out *o, const sc_scene *s, unsigned ch) {
   static const char *const ang[] = {".heading", ".tilt", ".spin"};
   static const char *const com[] = {".com.x", ".com.y", ".com.z"};
@@ -61,6 +73,11 @@ static int body_cols(sc_out *o, const sc_scene *s, unsigned ch) {
       const char *bn = s->bodies[s->joints[j].def.child].name;
       rc = push(o, bn, ".contact.x");
       if (rc == AP_OK) rc = push(o, bn, ".contact.y");
+    }
+  for (int b = 0; rc == AP_OK && (ch & SC_OUT_CONTACTS) && b < s->nb; b++)
+    if (wheel_body(s, b)) {
+      rc = push(o, s->bodies[b].name, ".contact.x");
+      if (rc == AP_OK) rc = push(o, s->bodies[b].name, ".contact.y");
     }
   static const char *const pose[] = {".pos.x", ".pos.y", ".pos.z", ".rot.w", ".rot.x", ".rot.y",
                                      ".rot.z"};
@@ -87,6 +104,9 @@ int sc_out_names(sc_out *o, const sc_scene *s, const ap_model *m) {
   for (int i = 0; rc == AP_OK && (ch & SC_OUT_CONTACT_FORCES) && i < s->nc; i++)
     for (int j = 0; rc == AP_OK && j < 4 && s->cons[i].def.kind == AP_CON_ROLLING; j++)
       rc = push(o, s->bodies[s->cons[i].def.body].name, cf[j]);
+  char buf[160];
+  for (int i = 0; rc == AP_OK && i < sc_named_count(s, m); i++)
+    rc = push(o, sc_named_column(s, i, buf, sizeof buf), "");
   if (rc == AP_OK) o->angles = calloc((size_t)3 * (size_t)s->nj + 1, sizeof *o->angles);
   return rc == AP_OK && o->angles ? AP_OK : AP_ERR_NOMEM;
 }
@@ -122,6 +142,13 @@ static int body_vals(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d
     ap_body_state st;
     if (ap_body_get_state(m, d, s->joints[j].def.child, &st) != AP_OK) return AP_ERR_INTERNAL;
     row[(*c)++] = st.contact[0], row[(*c)++] = st.contact[1];
+  }
+  for (int b = 0; (ch & SC_OUT_CONTACTS) && b < s->nb; b++) {
+    if (!wheel_body(s, b)) continue;
+    ap_body_state st;
+    if (ap_body_get_state(m, d, b, &st) != AP_OK) return AP_ERR_INTERNAL;
+    row[(*c)++] = st.has_contact ? st.contact[0] : NAN;
+    row[(*c)++] = st.has_contact ? st.contact[1] : NAN;
   }
   for (int b = 0; (ch & SC_OUT_POSES) && b < s->nb; b++) {
     ap_body_state st;
@@ -180,6 +207,11 @@ int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_s
       row[c++] = f.force[0] + 0.0, row[c++] = f.force[1] + 0.0, row[c++] = f.force[2];
       row[c++] = f.friction_ratio;
     }
+  }
+  if (s->nnamed || (ch & SC_OUT_DRIVEN)) {
+    int nv = sc_named_values(s, m, d, row + c);
+    if (nv < 0) return nv;
+    c += nv;
   }
   o->rows++;
   return c == o->ncols ? AP_OK : AP_ERR_INTERNAL;

@@ -136,6 +136,9 @@ static int check_name(sc_ctx *c, const sc_node *key) {
   for (int i = 0; sc_fn_names[i]; i++)
     if (strcmp(s, sc_fn_names[i]) == 0)
       return sc_err(c, key, "'%s' is a function of expressions", s);
+  for (int i = 0; sc_fn2_names[i]; i++)
+    if (strcmp(s, sc_fn2_names[i]) == 0)
+      return sc_err(c, key, "'%s' is a function of expressions", s);
   return AP_OK;
 }
 

@@ -229,13 +229,18 @@ static int parse_channels(sc_ctx *c, sc_scene *s, const sc_node *ch) {
   for (int i = 0; i < ch->n; i++) {
     const sc_node *it = ch->kids[i];
     int k = -1;
+    if (it->kind == SC_MAP) {   /* NAME: EXPRESSION (channels.c) */
+      if (sc_parse_named_channels(c, s, it)) return AP_ERR_ARG;
+      continue;
+    }
     if (sc_expect(c, it, SC_SCALAR)) return AP_ERR_ARG;
     for (int j = 0; names[j]; j++)
       if (strcmp(it->text, names[j]) == 0) k = j;
     if (k < 0) {
       const char *sug = sc_suggest(it->text, names);
       return sc_err(c, it, "unknown channel '%s'%s%s%s (channels: coordinates, speeds, angles, "
-                    "com, contacts, energy, residual, reactions, contact_forces, poses)", it->text,
+                    "com, contacts, energy, residual, reactions, contact_forces, poses, driven; or "
+                    "NAME: EXPRESSION)", it->text,
                     sug ? " (did you mean '" : "", sug ? sug : "", sug ? "'?)" : "");
     }
     s->channels |= 1u << k;

@@ -45,6 +45,7 @@ void sc_scene_clear(sc_scene *s) {
   sc_events_free(s);
   sc_params_free(s->params);
   sc_strings_free(&s->strings);
+  sc_named_free(s);
   free(s->bodies);
   free(s->joints);
   free(s->cons);

@@ -247,11 +247,12 @@ enum {
   SC_OUT_RESIDUAL = 1 << 6,
   SC_OUT_REACTIONS = 1 << 7,
   SC_OUT_CONTACT_FORCES = 1 << 8,
-  SC_OUT_POSES = 1 << 9
+  SC_OUT_POSES = 1 << 9,
+  SC_OUT_DRIVEN = 1 << 10
 };
 #define SC_OUT_NAMES                                                                     \
   { "coordinates", "speeds", "angles", "com", "contacts", "energy", "residual", "reactions", \
-    "contact_forces", "poses", NULL }
+    "contact_forces", "poses", "driven", NULL }
 
 typedef struct sc_scene {
   char *file;
@@ -276,6 +277,8 @@ typedef struct sc_scene {
   struct sc_sat *sats;     /* saturation switching of its motors: implicit events too */
   sc_params *params;       /* the parameters: section (params.c), or NULL */
   sc_strings strings;      /* file names and instance notes the tree's nodes point to */
+  int nnamed;
+  struct sc_named *named;  /* named output channels, NAME: EXPRESSION (channels.c) */
 } sc_scene;
 
 int sc_parse_scene(sc_ctx *c, sc_scene *s);
@@ -314,6 +317,15 @@ int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
 /* Every expression of the state finite at (t, q, v); else a message at its node. */
 int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
                          const double *q, const double *v);
+/* Body quantities in expressions (expr_body.c): BODY.x ... BODY.wz appended to t (names it
+ * has already are kept); does any of in[nin] read one; the inputs x at (q, v), body quantities
+ * from d's kinematics at that state (index: global q or v index of the others); the
+ * kinematics of (t, q, v) into d (ap_body_eval). */
+int sc_state_names_add_bodies(const sc_scene *s, sc_state_names *t);
+int sc_inputs_read_bodies(const ap_state_input *in, int nin);
+int sc_state_gather(const ap_model *m, const ap_data *d, const ap_state_input *in,
+                    const int *index, int nin, const double *q, const double *v, double *x);
+int sc_state_at(const ap_model *m, ap_data *d, double t, const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
@@ -354,6 +366,15 @@ void sc_out_free(sc_out *o);
 int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_sim *sim,
                double *row);
 int sc_out_energy(const ap_model *m, ap_data *d, double *T, double *V);
+/* Named channels and the driven channel (channels.c): read a mapping item of
+ * output.channels; free them; the number of their columns, the name of column i (buf: room
+ * for a driven column's name), and their values at the data's (t, q, v) into row (returns the
+ * count written, or a negative status). */
+int sc_parse_named_channels(sc_ctx *c, sc_scene *s, const sc_node *map);
+void sc_named_free(sc_scene *s);
+int sc_named_count(const sc_scene *s, const ap_model *m);
+const char *sc_named_column(const sc_scene *s, int i, char *buf, size_t len);
+int sc_named_values(const sc_scene *s, const ap_model *m, ap_data *d, double *row);
 /* The scene's own data, which output rows, ap_scene_energy and ap_scene_residual evaluate in:
  * its counters (cnt.energy, cnt.position) show which optional outputs were computed. */
 const ap_data *sc_scene_output_data(const ap_scene *sc);

@@ -7,7 +7,8 @@
  * A joint's child body lends its name too (BODY.NAME, as in the output columns) when no joint
  * has that name. Entry i is slot i of the expression evaluator's variable vector; what it
  * reads is refs[i] (joint id, coordinate or speed, local index), or driven[i] = 1 when the
- * coordinate is driven (a function of t, not part of the state: an error to read).
+ * coordinate is driven (a function of t, not part of the state: an error to read). After the
+ * joints come the bodies' quantities, BODY.x ... BODY.wz (expr_body.c).
  * Invariant: names[count] == NULL; the strings are owned by the table. */
 #include <math.h>
 #include <stdio.h>
@@ -102,11 +103,13 @@ int sc_state_names_build(const sc_scene *s, sc_state_names *t) {
   memset(t, 0, sizeof *t);
   size_t cap = 1;   /* at most 2 prefixes x (7 coordinates + 6 speeds) x 2 names per joint */
   for (int j = 0; j < s->nj; j++) cap += 52;
+  cap += (size_t)s->nb * AP_BODY_QTY_COUNT;   /* BODY.x ... (expr_body.c) */
   t->names = calloc(cap, sizeof *t->names);
   t->refs = calloc(cap, sizeof *t->refs);
   t->driven = calloc(cap, sizeof *t->driven);
   int rc = t->names && t->refs && t->driven ? AP_OK : AP_ERR_NOMEM;
   for (int j = 0; rc == AP_OK && j < s->nj; j++) rc = add_joint(t, s, j);
+  if (rc == AP_OK) rc = sc_state_names_add_bodies(s, t);
   if (rc != AP_OK) sc_state_names_free(t);
   return rc;
 }
@@ -202,22 +205,40 @@ int sc_read_value(sc_ctx *c, sc_scene *s, const sc_node *v, sc_expr *e, ap_effec
 /* ---- checked at the initial state ------------------------------------------------------------ */
 
 int sc_state_index(const sc_scene *s, const ap_model *m, const ap_state_input *in) {
+  if (in->speed == AP_STATE_BODY) return -1;   /* read from the kinematics (expr_body.c) */
   int first = in->speed ? ap_joint_speed_index(m, in->joint) : ap_joint_coord_index(m, in->joint);
   for (int i = 0; i < in->index && i < 3; i++) first -= s->joints[in->joint].def.drive[i] != NULL;
   return first + in->index;
 }
 
+static int check_one(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_data *d, int k,
+                     double t, const double *q, const double *v) {
+  const ap_effect_def *e = &s->effs[k].def;
+  sc_jet tj = {{t, 0.0, 0.0}}, x[AP_STATE_MAX_INPUTS];
+  double xv[AP_STATE_MAX_INPUTS];
+  int index[AP_STATE_MAX_INPUTS];
+  for (int i = 0; i < e->ninputs; i++) index[i] = sc_state_index(s, m, &e->inputs[i]);
+  if (sc_state_gather(m, d, e->inputs, index, e->ninputs, q, v, xv) != AP_OK)
+    return sc_err(c, s->effs[k].value.node, "cannot evaluate the body quantities it reads");
+  for (int i = 0; i < e->ninputs; i++) x[i] = (sc_jet){{xv[i], 0.0, 0.0}};
+  return sc_expr_check_jet(c, &s->effs[k].value, &tj, x, 0) != AP_OK ? AP_ERR_ARG : AP_OK;
+}
+
 int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
                          const double *q, const double *v) {
-  for (int k = 0; k < s->ne; k++) {
-    const ap_effect_def *d = &s->effs[k].def;
-    if (d->state_fn != sc_state_fn) continue;
-    sc_jet tj = {{t, 0.0, 0.0}}, x[AP_STATE_MAX_INPUTS];
-    for (int i = 0; i < d->ninputs; i++) {
-      int g = sc_state_index(s, m, &d->inputs[i]);
-      x[i] = (sc_jet){{d->inputs[i].speed ? v[g] : q[g], 0.0, 0.0}};
+  ap_data *d = NULL;
+  int rc = AP_OK;
+  for (int k = 0; rc == AP_OK && k < s->ne; k++) {
+    const ap_effect_def *e = &s->effs[k].def;
+    if (e->state_fn != sc_state_fn) continue;
+    if (!d && sc_inputs_read_bodies(e->inputs, e->ninputs)) {   /* their kinematics, once */
+      if (ap_data_create(m, &d) != AP_OK) return sc_nomem(c);
+      rc = sc_state_at(m, d, t, q, v);
+      if (rc != AP_OK) rc = sc_err(c, s->effs[k].value.node, "the kinematics at t = %g fail: "
+                                   "%s", t, d->msg);
     }
-    if (sc_expr_check_jet(c, &s->effs[k].value, &tj, x, 0) != AP_OK) return AP_ERR_ARG;
+    if (rc == AP_OK) rc = check_one(c, s, m, d, k, t, q, v);
   }
-  return AP_OK;
+  ap_data_free(d);
+  return rc;
 }
