@@ -54,7 +54,7 @@ static int read_one(sc_ctx *c, sc_scene *s, const sc_node *key, const sc_node *v
   nc->name = strdup(key->text);
   if (!nc->name) return sc_nomem(c);
   if (sc_expect(c, v, SC_SCALAR)) return AP_ERR_ARG;
-  sc_symtab sym = {1, (const char *const *)t->names, NULL};
+  sc_symtab sym = {1, (const char *const *)t->names, NULL, NULL, NULL, NULL};
   int rc = sc_expr_compile_sym(c, v, v->text, &sym, &nc->e);
   if (rc == AP_OK && nc->e.timed && sc_prog_nvars(nc->e.prog) > 0)
     rc = sc_bind_state(c, v, t, &nc->e, nc->in, &nc->nin);
