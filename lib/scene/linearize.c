@@ -231,6 +231,7 @@ int ap_scene_get_linearize(const ap_scene *sc, ap_scene_lin *out, char *msg, siz
   char ***dst[] = {&out->free, &out->independent, &out->inputs, &out->states};
   for (int i = 0; rc == AP_OK && i < 4; i++) {
     const sc_node *l = sc_map_get(n, lists[i]);
+    if (!l && i == 2) l = sc_map_get(s->root, "inputs");   /* the scene's inputs: (B = theirs) */
     if (l && !(*dst[i] = name_list(l))) rc = AP_ERR_NOMEM;
   }
   if (rc == AP_OK && c.status != AP_OK) rc = c.status;   /* checked at load: cannot happen */

@@ -15,7 +15,7 @@
 
 static const char *const top_keys[] = {"name", "description", "bodies", "joints", "constraints",
                                        "effects", "ground", "initial", "simulation", "output",
-                                       "linearize", "events", NULL};
+                                       "linearize", "events", "inputs", NULL};
 static const char *const body_keys[] = {"mass", "com", "inertia", "shape", "collide", "visual", NULL};
 static const char *const shape_keys[] = {"kind", "radius", "tube", "semi_axes", "flat_tol",
                                          NULL};
