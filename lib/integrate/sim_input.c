@@ -201,7 +201,7 @@ static int call_controller(ap_sim *s, double t, const double *y) {
   ap_data *d = s->d;
   ap_basis keep = d->basis;
   d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
-  int rc = ap_drv_rhs(t, y, c->ybuf, s);
+  int rc = s->dae || !ap_drv_evaluated_at(s, t, y) ? ap_drv_rhs(t, y, c->ybuf, s) : 0;
   d->basis = keep;
   if (rc != 0) return ap_drv_fail(s, s->rhs_status ? s->rhs_status : AP_ERR_SOLVER, "%s",
                                   s->rhs_msg);
@@ -222,11 +222,19 @@ static int call_controller(ap_sim *s, double t, const double *y) {
   return AP_OK;
 }
 
-/* Restart at the accepted state (t, q, v) of the simulation when values changed. */
+/* Restart at the accepted state (t, q, v) of the simulation when values changed: a stepper
+ * continues from the same state with the new f (ap_step_jump: its step size kept); IDA is
+ * restarted from the Appell solve there (its q', v' jumped). */
 static int restart_if_pending(ap_sim *s, double t) {
   ap_sim_ctrl *c = s->ctrl;
   if (!c->pending) return AP_OK;
   c->pending = 0;
+  s->ev_stamp = -1;   /* the data's evaluation had the old inputs */
+  if (!s->dae) {
+    int rc = ap_step_jump(s->st, t, s->y);
+    s->stats.restarts++;
+    return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", ap_step_message(s->st));
+  }
   double *q = c->ybuf + s->n + s->k + s->b + (s->m->ev.phi ? s->m->nphi : 0), *v = q + s->n;
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
