@@ -16,8 +16,10 @@
  * ratio of evaluations, and the CPU-time ratio ctrl/plain as the median over `rounds` ABAB
  * rounds (thread CPU time; A and B alternate so that the machine's load falls on both).
  * Instructions: valgrind --tool=callgrind --toggle-collect=run_plain --toggle-collect=run_ctrl
- * build/bench/bench_control --rounds 1; callgrind_annotate --inclusive=yes shows both.
- * Usage: bench_control [--rounds N] [--period S] [--t-end S]. Run with OPENBLAS_NUM_THREADS=1. */
+ * build/bench/bench_control --rounds 1 --only bicycle; callgrind_annotate --inclusive=yes
+ * shows both (run_plain is called rounds + 1 times: a warm-up, then one per round).
+ * Usage: bench_control [--rounds N] [--period S] [--t-end S] [--only bicycle|diff_drive].
+ * Run with OPENBLAS_NUM_THREADS=1. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -121,11 +123,13 @@ static void bench(bscene *b, int rounds, double period, double t_end) {
 int main(int argc, char **argv) {
   int rounds = 9;
   double period = 0.01, t_end = 10.0;
+  const char *only = NULL;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--rounds") && i + 1 < argc) rounds = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--period") && i + 1 < argc) period = atof(argv[++i]);
     else if (!strcmp(argv[i], "--t-end") && i + 1 < argc) t_end = atof(argv[++i]);
-    else bench_die("usage", "bench_control [--rounds N] [--period S] [--t-end S]");
+    else if (!strcmp(argv[i], "--only") && i + 1 < argc) only = argv[++i];
+    else bench_die("usage", "bench_control [--rounds N] [--period S] [--t-end S] [--only NAME]");
   }
   if (rounds < 1 || !(period > 0) || !(t_end > 0)) bench_die("usage", "bad argument");
   bscene scenes[] = {
@@ -133,6 +137,7 @@ int main(int argc, char **argv) {
       {"diff_drive", "diff_drive_control.yaml", "initial.chassis.vx=0.5", NULL, {0}, {0}},
   };
   for (int i = 0; i < 2; i++) {
+    if (only && strcmp(only, scenes[i].name)) continue;
     load(&scenes[i]);
     bench(&scenes[i], rounds, period, t_end);
     ap_scene_free(scenes[i].sc);
