@@ -203,8 +203,9 @@ typedef struct ap_scene_lin {
   int sweep_count;         /* 0: no sweep given */
 } ap_scene_lin;
 
-/* Read the linearize: section (an absent section gives present = 0 and the defaults). The
- * result owns its arrays: ap_scene_lin_free. */
+/* Read the linearize: section (an absent section gives present = 0 and the defaults). Its
+ * inputs are the scene's inputs: section when it lists none (docs/control.md), with or
+ * without the section. The result owns its arrays: ap_scene_lin_free. */
 AP_API int ap_scene_get_linearize(const ap_scene *s, ap_scene_lin *out, char *msg,
                                   size_t msg_len);
 AP_API void ap_scene_lin_free(ap_scene_lin *l);

@@ -213,8 +213,8 @@ int ap_scene_get_linearize(const ap_scene *sc, ap_scene_lin *out, char *msg, siz
   out->drop_cyclic = 1;
   const sc_scene *s = sc_scene_parsed(sc);
   if (!s) return AP_ERR_ARG;
-  const sc_node *n = sc_map_get(s->root, "linearize");
-  if (!n) return AP_OK;
+  const sc_node *n = sc_map_get(s->root, "linearize"), *in = sc_map_get(s->root, "inputs");
+  if (!n) return in && !(out->inputs = name_list(in)) ? AP_ERR_NOMEM : AP_OK;   /* B = theirs */
   sc_ctx c = {s->file, "", AP_OK};
   int about = 0, rc = AP_OK;
   long count = 0;

@@ -68,10 +68,11 @@ def test_set_inputs_and_step():
 
 
 def test_linearizer_uses_the_scene_inputs():
-    """B's column is the scene's input: dv'/dtau = 1/m."""
-    lin = appell.linearize(appell.loads(CART + "linearize: {about: equilibrium}\n"))
-    assert lin.input_names == ("cart.pos_dot",)
-    assert lin.block(["cart.pos_dot"], matrix="B")[0, 0] == pytest.approx(1 / M, rel=1e-14)
+    """B's column is the scene's input: dv'/dtau = 1/m, with or without a linearize: section."""
+    for extra in ("linearize: {about: equilibrium}\n", ""):
+        lin = appell.linearize(appell.loads(CART + extra), about="equilibrium")
+        assert lin.input_names == ("cart.pos_dot",)
+        assert lin.block(["cart.pos_dot"], matrix="B")[0, 0] == pytest.approx(1 / M, rel=1e-14)
 
 
 def test_controller_errors():
