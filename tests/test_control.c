@@ -62,15 +62,21 @@ static int pd_fn(double t, const double *q, const double *v, double *u, void *us
   return 0;
 }
 
-static ap_sim *make_sim(const ap_model *m, ap_mode mode, double x0, double v0) {
+static ap_sim *make_sim_method(const ap_model *m, ap_mode mode, const char *method, double x0,
+                               double v0) {
   ap_sim_def def = ap_sim_def_default();
   def.mode = mode, def.rtol = 1e-10, def.atol = 1e-12;
+  if (method) def.method = method;
   ap_sim *s = NULL;
   char msg[256];
   int rc = ap_sim_create(m, &def, 0.0, &x0, &v0, &s, msg, sizeof msg);
   AP_CHECK_EQ_INT(rc, AP_OK);
   if (rc != AP_OK) fprintf(stderr, "%s\n", msg);
   return s;
+}
+
+static ap_sim *make_sim(const ap_model *m, ap_mode mode, double x0, double v0) {
+  return make_sim_method(m, mode, NULL, x0, v0);
 }
 
 /* The simulation against the discrete solution at every instant up to t = 3. */
@@ -102,6 +108,18 @@ static void test_math_level(void) {
     ap_sim *s = make_sim(m, modes[i], 1.0, 0.0);
     AP_CHECK_EQ_INT(ap_sim_declare_inputs(s, in), AP_OK);
     check_zoh(s, modes[i] == AP_MODE_DAE ? 1e-6 : 1e-8, names[i]);
+    ap_sim_free(s);
+  }
+  /* Every kind of stepper continuation: our FSAL pair (dop853), ERKStep without and with FSAL
+   * (verner6, dopri5 above), CVODE's multistep methods (reset at each jump: restarted at order
+   * 1, their error follows rtol, 1e-6 allowed). */
+  const char *methods[] = {"dop853", "verner6", "adams", "bdf"};
+  for (int i = 0; i < 4; i++) {
+    char what[64];
+    snprintf(what, sizeof what, "math-level, minimal, %s", methods[i]);
+    ap_sim *s = make_sim_method(m, AP_MODE_MINIMAL, methods[i], 1.0, 0.0);
+    AP_CHECK_EQ_INT(ap_sim_declare_inputs(s, in), AP_OK);
+    check_zoh(s, i < 2 ? 1e-8 : 1e-6, what);
     ap_sim_free(s);
   }
   /* A constant force from rest, then none: x = F t^2 / (2 m), then uniform motion. */

@@ -59,8 +59,8 @@ static int take_named(ap_sim *sim, PyObject *key, PyObject *val, double *u) {
   return 0;
 }
 
-/* values (a mapping by input name: the others keep their value; or a sequence of one value per
- * input) into u, which holds the values in force; 0 or -1 with an exception. */
+/* values (a mapping by input name: the others keep their value; a sequence of one value per
+ * input; a number when there is one input) into u, which holds the values in force; 0 or -1 with an exception. */
 static int take_values(ap_sim *sim, PyObject *values, double *u) {
   int nu = ap_sim_input_count(sim);
   if (PyDict_Check(values)) {
@@ -69,6 +69,11 @@ static int take_values(ap_sim *sim, PyObject *values, double *u) {
     while (PyDict_Next(values, &pos, &key, &val))
       if (take_named(sim, key, val, u)) return -1;
     return 0;
+  }
+  if (nu == 1 && PyNumber_Check(values) && !PySequence_Check(values) &&
+      !PyArray_Check(values)) {   /* a lone number for a lone input */
+    u[0] = PyFloat_AsDouble(values);
+    return u[0] == -1.0 && PyErr_Occurred() ? -1 : 0;
   }
   PyArrayObject *a = (PyArrayObject *)PyArray_FROMANY(values, NPY_DOUBLE, 1, 1,
                                                       NPY_ARRAY_CARRAY_RO);

@@ -61,7 +61,7 @@ def test_set_inputs_and_step():
     sim.set_inputs({"cart.pos_dot": 3.0})
     sim.step(1.0)
     assert sim.state[1][0] == pytest.approx(3.0 / (2 * M), abs=1e-10)
-    sim.set_inputs([0.0])
+    sim.set_inputs(0.0)                                   # a lone input: a number will do
     sim.step(1.0)
     assert sim.state[1][0] == pytest.approx(3.0 / (2 * M) + 3.0 / M, abs=1e-10)
     assert sim.inputs == {"cart.pos_dot": 0.0}
