@@ -141,6 +141,55 @@ static void test_math_level(void) {
   ap_model_free(m);
 }
 
+static int x_fn(double t, const double *q, const double *v, const ap_data *d, void *user,
+                double *f) {
+  (void)t, (void)v, (void)d, (void)user;
+  *f = q[0];
+  return 0;
+}
+
+/* A stop event between two instants (x crossing 0) and a controller: the event time is the
+ * root of the interval's quadratic x_j + v_j tau + u_j tau^2 / (2 m), and after the stop the
+ * instants go on at j T with the values of the recursion. */
+static void test_with_event(void) {
+  ap_model *m = double_integrator();
+  const char *const in[] = {"x_dot", NULL};
+  ap_sim *s = make_sim(m, AP_MODE_MINIMAL, 1.0, 0.0);
+  AP_CHECK_EQ_INT(ap_sim_declare_inputs(s, in), AP_OK);
+  ap_event_def ev = ap_event_def_default();
+  ev.name = "x0", ev.fn = x_fn;
+  AP_CHECK_EQ_INT(ap_sim_add_event(s, &ev), AP_OK);
+  pd c = {0, 0.0, 0.0, 0};
+  AP_CHECK_EQ_INT(ap_sim_set_controller(s, pd_fn, PERIOD, &c), AP_OK);
+  double x = 1.0, v = 0.0, t_root = NAN;
+  int j = 0;
+  for (; j < 60 && isnan(t_root); j++) {   /* the interval where x changes sign */
+    double u = -KP * x - KD * v, x1 = x + PERIOD * v + PERIOD * PERIOD * u / (2 * MASS);
+    if (x1 < 0) {
+      double a = u / (2 * MASS), disc = v * v - 4 * a * x;
+      double tau = a != 0 ? (-v - sqrt(disc)) / (2 * a) : -x / v;
+      if (!(tau > 0 && tau < PERIOD)) tau = (-v + sqrt(disc)) / (2 * a);
+      t_root = j * PERIOD + tau;
+    }
+    x = x1, v += PERIOD * u / MASS;
+  }
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 3.0), AP_STOPPED);
+  printf("stop event x = 0 at t = %.15g, the quadratic's root %.15g\n", ap_sim_time(s), t_root);
+  AP_CHECK_NEAR(ap_sim_time(s), t_root, 1e-9);
+  AP_CHECK_EQ_INT(c.calls, j);   /* the instants before the event, none since */
+  for (; j <= 40; j++) {        /* and on, at the instants j T */
+    AP_CHECK_EQ_INT(ap_sim_advance(s, j * PERIOD), AP_OK);
+    if (j > 0) {
+      AP_CHECK_NEAR(ap_sim_q(s)[0], x, 1e-8);
+      double u = -KP * x - KD * v;
+      x += PERIOD * v + PERIOD * PERIOD * u / (2 * MASS), v += PERIOD * u / MASS;
+    }
+  }
+  AP_CHECK_LE(c.t_err, 1e-12);
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 /* Each failure is refused with its status and a message containing every one of words. */
 static void expect(int rc, int status, const ap_sim *s, const char *w1, const char *w2) {
   AP_CHECK_EQ_INT(rc, status);
@@ -228,6 +277,7 @@ static void test_scene(void) {
 
 int main(void) {
   test_math_level();
+  test_with_event();
   test_errors();
   test_scene();
   return ap_check_finish("control");
