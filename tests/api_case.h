@@ -94,5 +94,6 @@ ap_system_def sysdef(int n, int k, int b);
 void api_cases_low(void);
 void api_cases_high(void);
 void api_cases_io(void);      /* api_cases_io.c: output files (outfile.h) */
+void api_cases_ctrl(void);    /* api_cases_ctrl.c: inputs and controllers (control.h) */
 
 #endif

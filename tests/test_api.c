@@ -77,6 +77,7 @@ static void all_cases(void) {
   api_cases_low();
   api_cases_high();
   api_cases_io();
+  api_cases_ctrl();
 }
 
 /* ---- fixtures ------------------------------------------------------------------------------ */

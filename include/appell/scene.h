@@ -68,6 +68,12 @@ AP_API void ap_scene_get_run(const ap_scene *s, ap_scene_run *run);
  * nothing (and the simulation then evaluates nothing of them). */
 AP_API int ap_scene_add_events(const ap_scene *s, ap_sim *sim, char *msg, size_t msg_len);
 
+/* Declare the scene's inputs (its inputs: section, docs/control.md) on a simulation of its
+ * model (ap_sim_declare_inputs; appell/control.h), all 0. A scene without the section declares
+ * nothing. AP_ERR_ARG for a NULL s or sim or a simulation of a model of other sizes (msg, may
+ * be NULL, says which). */
+AP_API int ap_scene_add_inputs(const ap_scene *s, ap_sim *sim, char *msg, size_t msg_len);
+
 /* The initial state (n coordinates, k speeds) made consistent with the constraints: unit
  * quaternions, loop closures assembled, unspecified speeds completed and over-specified ones
  * projected (nearest in the metric g). report (may be NULL) receives a description of every
@@ -203,8 +209,9 @@ typedef struct ap_scene_lin {
   int sweep_count;         /* 0: no sweep given */
 } ap_scene_lin;
 
-/* Read the linearize: section (an absent section gives present = 0 and the defaults). The
- * result owns its arrays: ap_scene_lin_free. */
+/* Read the linearize: section (an absent section gives present = 0 and the defaults). Its
+ * inputs are the scene's inputs: section when it lists none (docs/control.md), with or
+ * without the section. The result owns its arrays: ap_scene_lin_free. */
 AP_API int ap_scene_get_linearize(const ap_scene *s, ap_scene_lin *out, char *msg,
                                   size_t msg_len);
 AP_API void ap_scene_lin_free(ap_scene_lin *l);

@@ -112,7 +112,16 @@ typedef struct ap_scratch {
                                a multistep stepper's trial states (predictor, Newton
                                iterates, difference-quotient columns) lie off A v + a0 = 0 */
   ap_st *st;                /* the tree path's structured state (m->ops), else NULL */
+  const double *input_Q;    /* (k) generalized forces added to Q by the velocity stage: a
+                               simulation's inputs (lib/integrate/sim_input.c), or NULL */
 } ap_scratch;
+
+/* Q += the data's input forces, when it has them (the velocity stage, double build only: the
+ * linearizer takes the inputs' columns of B apart, exactly). */
+static inline void ap_core_add_inputs(const ap_model *m, ap_data *d) {
+  const double *u = ((const ap_scratch *)d->internal)->input_Q;
+  for (int i = 0; u && i < m->k; i++) d->Q[i] += u[i];
+}
 
 /* The structured state of a data on the tree path, or NULL (double build only). */
 static inline ap_st *ap_core_st(const ap_data *d) {

@@ -248,6 +248,7 @@ static int velocity_callbacks(const ap_model *m, ap_data *d) {
       break;   /* h stays zero from ap_data_create */
   }
   if (m->sys.force) CALL(force, d->Q, k, 1, m->sys.force(d->t, d->q, d->v, d->Q, m->sys.user));
+  else if (s->input_Q) memset(d->Q, 0, sizeof(double) * (size_t)k);   /* inputs add to it */
   if (m->b == 0 || d->basis == AP_BASIS_NONE) return AP_OK;   /* w = 0, or not needed */
   CALL(gamma, d->gamma, m->b, 1, m->sys.gamma(d->t, d->q, d->v, d->gamma, m->sys.user));
   return AP_OK;
@@ -308,6 +309,7 @@ static int fwd_velocity(const ap_model *m, ap_data *d) {
   if (rc == AP_OK) rc = velocity_evaluator(m, d);
 #else
   int rc = m->ev.velocity ? velocity_evaluator(m, d) : velocity_callbacks(m, d);
+  if (rc == AP_OK) ap_core_add_inputs(m, d);
 #endif
   if (rc != AP_OK || m->b == 0 || d->basis == AP_BASIS_NONE) return rc;  /* w = 0 or unused */
   return particular(m, d);

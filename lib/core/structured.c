@@ -168,6 +168,7 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.velocity++;
   if (d->speeds_from_e && d->basis == AP_BASIS_PARTITIONED) ap_st_speeds(m, d, st);
   int rc = st->ops->velocity(m, d, st->ws);
+  if (rc == AP_OK) ap_core_add_inputs(m, d);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);

@@ -356,6 +356,7 @@ void ap_sim_free(ap_sim *s) {
   ap_step_free(s->st);
   ap_dae_free(s->dae);
   ap_drv_events_free(s);
+  ap_drv_ctrl_free(s);
   ap_data_free(s->d);
   free(s->gn);
   free(s->gn_iwork);
@@ -422,7 +423,7 @@ static int advance_one(ap_sim *s, double tout) {
   double t = s->t;
   s->rhs_status = AP_OK, s->rhs_diverged = 0;
   if (s->dae) {
-    int rc = ap_dae_one(s->dae, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
+    int rc = ap_dae_one(s->dae, ap_drv_stop_time(s, tout), &t, s->ytry);
     if (rc != AP_OK) return ap_drv_fail(s, rc, "%s", ap_dae_message(s->dae));
     rc = ap_drv_after_step(s, &t);
     if (rc != AP_OK && rc != AP_STOPPED) return s->failed = rc;   /* IDA went on; we cannot */
@@ -430,7 +431,7 @@ static int advance_one(ap_sim *s, double tout) {
     memcpy(s->y, s->ytry, sizeof(double) * (size_t)s->ny);
     return rc;
   }
-  int rc = ap_step_one(s->st, s->t_ahead > t ? fmin(tout, s->t_ahead) : tout, &t, s->ytry);
+  int rc = ap_step_one(s->st, ap_drv_stop_time(s, tout), &t, s->ytry);
   if (rc != AP_OK) {
     if (s->rhs_status < 0) return stiff_hint(s, ap_drv_fail(s, s->rhs_status, "%s", s->rhs_msg));
     return stiff_hint(s, ap_drv_fail(s, rc, "%s%s%s", ap_step_message(s->st),
@@ -503,6 +504,7 @@ int ap_sim_advance(ap_sim *s, double tout) {
   if (!s) return AP_ERR_ARG;
   if (s->failed) return s->failed;              /* s->msg still says why */
   int rc = check_tout(s, tout);
+  if (rc == AP_OK) rc = ap_drv_inputs_before_advance(s);
   if (rc != AP_OK) return rc;
   s->has_fail = 0;
   double t_start = s->t, h_mid = 0.0;

@@ -7,6 +7,9 @@
  *   plain       events, coordinates, residual, redundant rows, event state
  *   DAE         events, DAE checks, DAE rows, event state
  *
+ * and, once inputs are declared (sim_input.c), "controller" before "event state": at a
+ * controller instant it calls the controller and restarts the stepper from the step's state.
+ *
  * events (event.c) runs first, on the step exactly as the stepper made it, so that its dense
  * output still describes the step; when it cuts the step at a stop or switch event it moves
  * the time back to the event and the later stages work there. It is in the list only when the
@@ -132,6 +135,7 @@ static const ap_drv_stage stage_redundant = {"redundant rows", ap_drv_stage_redu
 static const ap_drv_stage stage_dae = {"DAE checks", stage_dae_checks};
 static const ap_drv_stage stage_rows = {"DAE rows", stage_dae_rows};
 static const ap_drv_stage stage_event_state = {"event state", ap_drv_stage_event_state};
+static const ap_drv_stage stage_controller = {"controller", ap_drv_stage_controller};
 
 void ap_drv_pipeline_build(ap_sim *s) {
   int n = 0;
@@ -157,6 +161,7 @@ void ap_drv_pipeline_build(ap_sim *s) {
       s->stages[n++] = &stage_redundant;
       break;
   }
+  if (s->ctrl) s->stages[n++] = &stage_controller;   /* after ap_sim_declare_inputs */
   if (s->ev) s->stages[n++] = &stage_event_state;
   s->nstages = n;
 }

@@ -13,6 +13,7 @@
 #include "integrate/stepper.h"
 
 typedef struct ap_sim_events ap_sim_events;   /* event.c */
+typedef struct ap_sim_ctrl ap_sim_ctrl;       /* sim_input.c */
 
 /* One stage of the work after an accepted step (sim_after.c). *t is the time of the step's
  * state (s->y for the steppers, s->ytry for IDA); the events stage may move it back to an
@@ -66,6 +67,7 @@ struct ap_sim {
   ap_sim_events *ev;        /* events and their records (event.c); NULL until one is added */
   double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
                                stepper stops at it); INFINITY when none */
+  ap_sim_ctrl *ctrl;        /* inputs and controller (sim_input.c); NULL until declared */
 };
 
 /* printf into s->msg; returns status. */
@@ -120,5 +122,14 @@ void ap_drv_events_free(ap_sim *s);
 /* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
  * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
 int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);
+
+/* Inputs and controllers (sim_input.c): free them with the simulation; the time the next
+ * internal step must stop at, for an advance to tout (events of t alone, controller
+ * instants); the controller stage of the pipeline; before an advance, the first controller
+ * call and the restart that changed inputs left pending. */
+void ap_drv_ctrl_free(ap_sim *s);
+double ap_drv_stop_time(const ap_sim *s, double tout);
+int ap_drv_stage_controller(ap_sim *s, double *t);
+int ap_drv_inputs_before_advance(ap_sim *s);
 
 #endif

@@ -147,6 +147,15 @@ int ap_step_restart(ap_stepper *s, double t, const double *y, const double *ydot
   return ap_step_rk_restart(s, t, y, ydot);
 }
 
+int ap_step_jump(ap_stepper *s, double t, const double *y) {
+  if (!isfinite(t) || !all_finite(s->n, y))
+    return say(s->msg, sizeof s->msg, AP_ERR_ARG, "%s: restart at a non-finite state at "
+               "t = %g", s->meth->name, t);
+  if (s->meth->backend == &ap_step_rk) return ap_step_rk_restart(s, t, y, NULL);
+  if (s->meth->backend == &ap_step_arkode) return ap_step_ark_jump(s, t, y);
+  return ap_step_reset(s, t, y);   /* multistep: the history across the jump is void */
+}
+
 static void copy_out(const ap_stepper *s, double *t, double *y) {
   *t = s->t;
   memcpy(y, s->yacc, sizeof(double) * (size_t)s->n);

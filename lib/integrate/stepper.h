@@ -96,6 +96,13 @@ int ap_step_reset(ap_stepper *s, double t, const double *y);
  * not evaluate f again. Only our own backend (stepper_rk.c) has it; the others reset. */
 int ap_step_restart(ap_stepper *s, double t, const double *y, const double *ydot);
 
+/* Continue at the accepted state (t, y) after the right-hand side jumped there (an input
+ * changed): the same state, a new f. Single-step methods keep their step size (ours: the
+ * FSAL derivative is evaluated again; ERKStep: restarted with the step its error controller
+ * proposes, ap_step_ark_jump); multistep methods reset (their history lies across the jump). */
+int ap_step_jump(ap_stepper *s, double t, const double *y);
+int ap_step_ark_jump(ap_stepper *s, double t, const double *y);
+
 /* Take one internal step, never past tstop (the step is shortened to land on tstop exactly).
  * tstop must lie after the current time (forward integration only).
  * On return *t is the time reached and y (n) the solution there. Returns AP_OK, or a negative

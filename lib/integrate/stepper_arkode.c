@@ -197,6 +197,31 @@ static int ark_reset(ap_stepper *s, double t, const double *y) {
   return AP_OK;
 }
 
+/* After a jump of f at the accepted state (t, y) (an input changed: docs/control.md): restart
+ * with the step the error controller would take next, h_last * 0.9 dsm^(-1/order) within
+ * [0.2, 5] h_last (dsm: the weighted RMS norm of the last step's local error estimate, weights
+ * 1 / (rtol |y| + atol)). ark_reset's "current step" is the last step taken, which a stop time
+ * cut: restarting from it at every controller instant kept a run at two steps per period where
+ * one sufficed. */
+static int ark_jump(ap_stepper *s, double t, const double *y) {
+  double h = 0.0, sum = 0.0;
+  ERKStepGetLastStep(s->mem, &h);
+  if (s->o.h_fixed > 0 || !(h > 0) || ERKStepGetEstLocalErrors(s->mem, s->tmp) != ARK_SUCCESS)
+    return ark_reset(s, t, y);
+  const double *ele = NV(s->tmp);
+  for (int i = 0; i < s->n; i++) {
+    double e = ele[i] / (s->o.rtol * fabs(s->yacc[i]) + s->o.atol);
+    sum += e * e;
+  }
+  double dsm = sqrt(sum / s->n), eta = dsm > 0 ? 0.9 * pow(dsm, -1.0 / s->meth->order) : 5.0;
+  int flag = ark_restart(s, t, y, h * fmin(5.0, fmax(0.2, eta)));
+  if (flag != ARK_SUCCESS) return ark_flag_fail(s, flag);
+  ap_step_accept(s, t, y);
+  return AP_OK;
+}
+
+int ap_step_ark_jump(ap_stepper *s, double t, const double *y) { return ark_jump(s, t, y); }
+
 /* The step to retry with after a recoverable failure: a quarter of the one that failed. */
 static double retry_h(ap_stepper *s, double tstop) {
   double h = 0.0;

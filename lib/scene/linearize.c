@@ -213,8 +213,8 @@ int ap_scene_get_linearize(const ap_scene *sc, ap_scene_lin *out, char *msg, siz
   out->drop_cyclic = 1;
   const sc_scene *s = sc_scene_parsed(sc);
   if (!s) return AP_ERR_ARG;
-  const sc_node *n = sc_map_get(s->root, "linearize");
-  if (!n) return AP_OK;
+  const sc_node *n = sc_map_get(s->root, "linearize"), *in = sc_map_get(s->root, "inputs");
+  if (!n) return in && !(out->inputs = name_list(in)) ? AP_ERR_NOMEM : AP_OK;   /* B = theirs */
   sc_ctx c = {s->file, "", AP_OK};
   int about = 0, rc = AP_OK;
   long count = 0;
@@ -231,6 +231,7 @@ int ap_scene_get_linearize(const ap_scene *sc, ap_scene_lin *out, char *msg, siz
   char ***dst[] = {&out->free, &out->independent, &out->inputs, &out->states};
   for (int i = 0; rc == AP_OK && i < 4; i++) {
     const sc_node *l = sc_map_get(n, lists[i]);
+    if (!l && i == 2) l = sc_map_get(s->root, "inputs");   /* the scene's inputs: (B = theirs) */
     if (l && !(*dst[i] = name_list(l))) rc = AP_ERR_NOMEM;
   }
   if (rc == AP_OK && c.status != AP_OK) rc = c.status;   /* checked at load: cannot happen */

@@ -16,7 +16,7 @@
 static const char *const top_keys[] = {"name", "description", "bodies", "joints", "constraints",
                                        "effects", "ground", "initial", "simulation", "output",
                                        "linearize", "events", "parameters", "include", "parts",
-                                       "instances", NULL};
+                                       "instances", "inputs", NULL};
 static const char *const body_keys[] = {"mass", "com", "inertia", "shape", "collide", "visual", NULL};
 static const char *const shape_keys[] = {"kind", "radius", "tube", "semi_axes", "flat_tol",
                                          NULL};

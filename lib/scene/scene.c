@@ -79,6 +79,7 @@ static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
   if (sc_events_bind(c, &sc->s, sc->m) != AP_OK) return c->status;
+  if (sc_inputs_check(c, &sc->s, sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)
     return sc_nomem(c);
   return AP_OK;

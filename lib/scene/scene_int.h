@@ -405,4 +405,10 @@ void sc_euler_rates_to_omega(int zyx, const double e[3], const double rates[3], 
 /* Z-X-Z angles (heading, tilt, spin) of a rotation. */
 void sc_quat_to_zxz(const double q[4], double e[3]);
 
+/* The inputs: section (inputs.c): checked against the model at load; its names (into the
+ * tree, NULL-terminated, freed by the caller; NULL without the section, *count -1 when out
+ * of memory). */
+int sc_inputs_check(sc_ctx *c, const sc_scene *s, const ap_model *m);
+const char **sc_input_names(const sc_scene *s, int *count);
+
 #endif

@@ -230,12 +230,55 @@ class Simulation(_appell.Simulation):
                 model = loads(text, name=name, set=tuple(old) + sets)
         return super().__new__(cls, model, *args, **kw)
 
-    def run(self, t_end=None, dt=None):
+    def run(self, t_end=None, dt=None, controller=None, period=None):
         """Integrate from the current time to t_end (default: the scene's), recording a row
         every dt (default: the scene's output interval), the last at t_end exactly; the first
         row is the current state. Returns a Result. On failure raises Error with .result, the
         rows up to where the run stopped (status "failed"); Ctrl-C raises KeyboardInterrupt
-        with .result the same way (status "interrupted")."""
+        with .result the same way (status "interrupted").
+
+        controller: f(t, state) -> inputs, called every period seconds of simulated time
+        (default: dt) from the current time on, the scene's inputs: held at its result until
+        the next call (zero-order hold; docs/control.md). state is a dict of every coordinate,
+        speed and output column by name, plus "q" and "v" arrays; the result is a dict by
+        input name (the others keep their values) or one value per input. An exception raised
+        by f stops the run and propagates with .result, the rows up to there. The inputs keep
+        their last values after the run."""
+        if controller is None:
+            return self._run_rows(t_end, dt)
+        if period is None:
+            period = dt if dt is not None else self.model.settings["interval"]
+        handle = _appell._set_controller(self, controller, float(period))
+        try:
+            return self._run_rows(t_end, dt)
+        except Error as e:
+            raised = _appell._controller_error(handle)
+            if raised is None:
+                raise
+            try:
+                raised.result = getattr(e, "result", None)
+            except AttributeError:
+                pass
+            raise raised from None
+        finally:
+            _appell._set_controller(self, None, 0.0)
+
+    def step(self, dt):
+        """Advance by dt without recording (the inputs held as they are); for loops that
+        compute the inputs themselves: sim.set_inputs(...); sim.step(0.01)."""
+        self.advance(self.t + dt)
+
+    def set_inputs(self, values=None, **named):
+        """Set the scene's inputs from now on, held until changed (docs/control.md): a dict by
+        input name, one value per input, or keywords for names that are identifiers."""
+        _appell._set_inputs(self, named if values is None else values)
+
+    @property
+    def inputs(self):
+        """The input values in force, a dict by name (the scene's inputs: section)."""
+        return _appell._inputs(self)
+
+    def _run_rows(self, t_end, dt):
         m = self.model
         try:
             columns, table, q, v = self._run(t_end, dt)

@@ -6,6 +6,7 @@
  *   _batch.c    run_plan: a slice of a sweep plan on the batch API's thread pool
  *   _lin.c      linearize: operating points, A and B, eigenvalues, speed sweeps
  *   _io.c       write_file: files written by the rules of appell run --out (outfile.h)
+ *   _ctrl.c     inputs and controllers in the loop (control.h)
  *
  * Only the public C API (<appell/appell.h>) is used. Integration and batches run with the
  * GIL released; a Model is only read by Simulations and may be shared by Python threads. */
@@ -66,5 +67,13 @@ PyObject *apx_plan_info(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_constant(PyObject *self, PyObject *args);
 PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_write_file(PyObject *self, PyObject *args, PyObject *kw);
+/* Inputs and controllers (_ctrl.c): the simulation of a Simulation object and its scene (NULL
+ * with TypeError for another object, or RuntimeError when idle is asked and another thread
+ * runs it); the module functions. */
+ap_sim *apx_sim_handle(PyObject *obj, const ap_scene **sc, int idle);
+PyObject *apx_set_controller(PyObject *self, PyObject *args);
+PyObject *apx_controller_error(PyObject *self, PyObject *capsule);
+PyObject *apx_set_inputs(PyObject *self, PyObject *args);
+PyObject *apx_get_inputs(PyObject *self, PyObject *sim);
 
 #endif

@@ -167,6 +167,12 @@ static PyMethodDef module_methods[] = {
      "(appell.linearize wraps it)"},
     {"write_file", (PyCFunction)(void (*)(void))apx_write_file, METH_VARARGS | METH_KEYWORDS,
      "write_file(path, data, keep=()): write bytes by appell run --out's rules (_io.c)"},
+    {"_set_controller", apx_set_controller, METH_VARARGS,
+     "_set_controller(sim, f, period) -> handle or None (Simulation.run(controller=) uses it)"},
+    {"_controller_error", apx_controller_error, METH_O,
+     "_controller_error(handle) -> the exception the controller raised, or None"},
+    {"_set_inputs", apx_set_inputs, METH_VARARGS, "_set_inputs(sim, values): dict or array"},
+    {"_inputs", apx_get_inputs, METH_O, "_inputs(sim) -> dict of the input values now"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {

@@ -450,3 +450,16 @@ PyTypeObject apx_sim_type = {
     .tp_getset = sim_getset,
     .tp_methods = sim_methods,
 };
+
+/* ---- for _ctrl.c (inputs and controllers) ---------------------------------------------- */
+
+ap_sim *apx_sim_handle(PyObject *obj, const ap_scene **sc, int idle) {
+  if (!PyObject_TypeCheck(obj, &apx_sim_type))
+    return PyErr_SetString(PyExc_TypeError, "expected an appell.Simulation"), NULL;
+  apx_sim *s = (apx_sim *)obj;
+  if (idle && s->busy)
+    return PyErr_SetString(PyExc_RuntimeError, "this Simulation is running in another thread"),
+           NULL;
+  if (sc) *sc = s->model->sc;
+  return s->sim;
+}
