@@ -28,7 +28,8 @@ extern "C" {
 
 /* free_ (n) receives 1 for each coordinate that no other part of the state's derivative
  * depends on (found numerically at the current state and a nearby one; docs/accuracy.md),
- * 0 otherwise. Outputs and events are not considered: clear the flags of the coordinates they
+ * 0 otherwise; all 0 once an event has been added (an event may read any coordinate).
+ * Outputs are not considered: clear the flags of the coordinates they
  * ask for before ap_sim_set_uncontrolled. AP_ERR_ARG for NULL, AP_ERR_UNSUPPORTED in DAE
  * mode. */
 AP_API int ap_sim_free_coordinates(ap_sim *s, int *free_);

@@ -11,8 +11,9 @@
  * size (both in the mode's own variables), each coordinate perturbed by 1e-4 of its size; a
  * component counts as depending on q_i when it moved by more than 1e-10 of its size (and
  * 1e-13 of the largest rate), far above round-off (1e-16) and far below a real dependence of
- * relative strength 1e-5. S is then shrunk to a fixed point. Outputs and events are not seen
- * here: the caller keeps the coordinates they ask for (ap_sim_set_uncontrolled).
+ * relative strength 1e-5. S is then shrunk to a fixed point. A simulation with events has no
+ * free coordinate (an event function may read any). Outputs are not seen here: the caller
+ * keeps the coordinates they ask for (ap_sim_set_uncontrolled).
  *
  * Weights: s->wt (ny) is 1 for every state entry and 0 for an uncontrolled coordinate; the
  * stepper reads it at every step (ap_step_opts.weight). */
@@ -69,6 +70,10 @@ int ap_sim_free_coordinates(ap_sim *s, int *free_) {
   if (s->dae) return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "ap_sim_free_coordinates: not in DAE "
                                  "mode (IDA controls every variable)");
   int n = s->n, ny = s->ny;
+  if (ap_drv_event_defined(s)) {   /* an event may depend on any coordinate: none is free */
+    for (int i = 0; i < n; i++) free_[i] = 0;
+    return AP_OK;
+  }
   unsigned char *dep = calloc((size_t)n * (size_t)ny + 1, 1);
   double *buf = malloc(sizeof(double) * (size_t)(4 * ny + 1));
   if (!dep || !buf) {

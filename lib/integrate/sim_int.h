@@ -115,6 +115,8 @@ int ap_drv_judge_state(ap_sim *s, double t, const double *y);
 double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 int ap_drv_evaluate_current(ap_sim *s);
+/* The number of events added to the simulation (event.c). */
+int ap_drv_event_defined(const ap_sim *s);
 /* Events (event.c): free them with the simulation. */
 void ap_drv_events_free(ap_sim *s);
 /* The error weights s->wt, all 1 (free_coords.c). */
