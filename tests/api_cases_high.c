@@ -521,6 +521,9 @@ static void cases_accuracy(void) {
   CASE(ap_global_error, "nt 0",
        ap_global_error(SM, &def, 0, q0, v0, tt, 0, 1, api_out, NULL, NULL, NULL, NULL, NULL,
                        &rep, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_error_against, "rows NULL",
+       ap_error_against(SM, &def, 0, q0, v0, tt, 1, 1, api_out, NULL, NULL, NULL, NULL, NULL,
+                        NULL, &rep, msg, sizeof msg) == AP_ERR_ARG);
   CASE(ap_accuracy_pick, "accuracy 0",
        ap_accuracy_pick(SM, &def, 0, q0, v0, tt, 1, 1, api_out, NULL, NULL, 0.0, &pk, msg,
                         sizeof msg) == AP_ERR_ARG);

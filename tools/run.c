@@ -207,7 +207,7 @@ static int write_row(run_state *rs, FILE *f) {
   rs->t_last = ap_sim_time(rs->sim);
   for (int i = 0; i < nc; i++) fprintf(f, i ? ",%.15g" : "%.15g", rs->row[i]);
   fputc('\n', f);
-  if (cli_acc_estimate_row(&rs->acc, rs->sim) == AP_OK) cli_acc_estimate_fold(&rs->acc, rs->row);
+  cli_acc_keep_row(&rs->acc, rs->row, nc);
   warn_lift_off(rs, nc);
   double E = 0.0;
   rc = ap_scene_energy(rs->sc, ap_sim_time(rs->sim), ap_sim_q(rs->sim), ap_sim_v(rs->sim), &E);
@@ -355,8 +355,6 @@ static int start(run_state *rs, const run_opts *o) {
   ap_scene_get_run(rs->sc, &rs->run);
   rs->acc.estimate = o->estimate, rs->acc.accuracy = o->accuracy;
   rs->acc.control_all = o->control_all;
-  if (o->accuracy > 0 && (rc = cli_acc_pick(&rs->acc, rs->sc, &rs->run, q0, v0, o->quiet)) != AP_OK)
-    return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
   cli_warn_tolerance("run", rs->run.sim.mode == AP_MODE_DAE, rs->run.sim.method,
                      rs->run.sim.rtol);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
@@ -366,8 +364,14 @@ static int start(run_state *rs, const run_opts *o) {
     return cli_exit_code(rc);
   }
   rc = cli_acc_control(&rs->acc, rs->sc, &rs->run, rs->sim, q0, v0);
-  if (rc == AP_OK && o->estimate)
-    rc = cli_acc_estimate_start(&rs->acc, rs->sc, &rs->run, q0, v0, rs->err_path);
+  if (rc == AP_OK && o->accuracy > 0) {   /* the pick, then the simulation with its choice */
+    if ((rc = cli_acc_pick(&rs->acc, rs->sc, &rs->run, q0, v0, o->quiet)) != AP_OK)
+      return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
+    ap_sim_free(rs->sim);
+    rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
+    if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
+    if (rc == AP_OK && rs->acc.nunc) rc = ap_sim_set_uncontrolled(rs->sim, rs->acc.unc);
+  }
   if (rc != AP_OK) {
     fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc),
             ap_sim_message(rs->sim));
@@ -450,7 +454,9 @@ int cmd_run(int argc, char **argv) {
     write_header(rs.sc, out.f);
     code = loop(&rs, &out);
     rs.wall = now() - t_start;
-    cli_acc_finish(&rs.acc, rs.status && strcmp(rs.status, CLI_STATUS_INTERRUPTED) != 0);
+    cli_acc_finish(&rs.acc, rs.sc, &rs.run, rs.buf, rs.buf + ap_model_n(ap_scene_model(rs.sc)),
+                   rs.status && strcmp(rs.status, CLI_STATUS_INTERRUPTED) != 0 &&
+                   strcmp(rs.status, CLI_STATUS_FAILED) != 0, rs.err_path);
     code = finish(&rs, &o, &out, &rec, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
     if (code == EXIT_OK && !o.quiet) cli_acc_summary(&rs.acc, ap_scene_model(rs.sc));

@@ -1,7 +1,7 @@
 /* appell run's accuracy options (docs/accuracy.md): --accuracy (the method and tolerance
- * chosen by ap_accuracy_pick before the run), --error-estimate (a reference simulation
- * advanced beside the run, its output rows compared with the run's at every output time and
- * written to OUT.error.csv), and the error control where it matters (coordinates nothing and
+ * chosen by ap_accuracy_pick before the run), --error-estimate (the run's rows kept, then a
+ * reference run through the same times by ap_error_against, the differences written to
+ * OUT.error.csv), and the error control where it matters (coordinates nothing and
  * no output depends on left out of the step-size control; --error-control all turns it off).
  *
  * Which coordinates an output asks for: a column named after the coordinate, or else the
@@ -34,6 +34,11 @@ static int pick_setup(ap_sim *s, void *user) {
   int rc = ap_scene_add_events(c->sc, s, msg, sizeof msg);
   if (rc == AP_OK && c->unc) rc = ap_sim_set_uncontrolled(s, c->unc);
   if (rc == AP_OK) rc = ap_scene_out_create(c->sc, &c->out);
+  /* The first row at t0, as the run's: it sets E(t0) and the angles' unwrapping. */
+  double *row = rc == AP_OK ? calloc((size_t)ap_scene_output_count(c->sc) + 1, sizeof *row)
+                            : NULL;
+  if (rc == AP_OK) rc = row ? ap_scene_out_row(c->out, s, row) : AP_ERR_NOMEM;
+  free(row);
   return rc;
 }
 
@@ -57,7 +62,7 @@ int cli_acc_pick(cli_acc *a, ap_scene *sc, ap_scene_run *run, const double *q0,
   int nt = 0;
   double *times = output_times(run, &nt);
   if (!times) return fprintf(stderr, "appell run: out of memory\n"), AP_ERR_NOMEM;
-  pick_ctx c = {sc, NULL, NULL};
+  pick_ctx c = {sc, NULL, a->unc};
   char msg[1024];
   int rc = ap_accuracy_pick(ap_scene_model(sc), &run->sim, run->t0, q0, v0, times, nt,
                             ap_scene_output_count(sc), pick_out, pick_setup, &c, a->accuracy,
@@ -135,80 +140,87 @@ int cli_acc_control(cli_acc *a, ap_scene *sc, const ap_scene_run *run, ap_sim *s
   return rc;
 }
 
-/* ---- the global error estimate beside the run ------------------------------------------- */
+/* ---- the global error estimate -------------------------------------------------------- */
 
-int cli_acc_estimate_start(cli_acc *a, ap_scene *sc, const ap_scene_run *run,
-                           const double *q0, const double *v0, const char *out_path) {
-  const ap_model *m = ap_scene_model(sc);
+/* Rows kept for the estimate: at most this many numbers (400 MB). */
+#define CLI_ACC_MAX_CELLS 50000000L
+
+int cli_acc_keep_row(cli_acc *a, const double *row, int nc) {
+  if (!a->estimate || a->too_many) return AP_OK;
+  if ((a->rows + 1) * (long)nc > CLI_ACC_MAX_CELLS) return a->too_many = 1, AP_OK;
+  if (a->rows == a->cap) {
+    long cap = a->cap ? 2 * a->cap : 1024;
+    double *p = realloc(a->kept, sizeof(double) * (size_t)cap * (size_t)nc);
+    if (!p) return a->too_many = 1, AP_ERR_NOMEM;
+    a->kept = p, a->cap = cap;
+  }
+  memcpy(a->kept + (size_t)a->rows * (size_t)nc, row, sizeof(double) * (size_t)nc);
+  a->nc = nc, a->rows++;
+  return AP_OK;
+}
+
+/* OUT.error.csv: t and |row - ref| per column, through a .part file renamed into place. */
+static void write_errors(cli_acc *a, const ap_scene *sc, const double *ref, const char *out) {
+  char part[AP_OUT_PATH_MAX + 24];
+  snprintf(a->path, sizeof a->path, "%s.error.csv", out);
+  snprintf(part, sizeof part, "%s.part", a->path);
+  FILE *f = fopen(part, "w");
+  for (int c = 0; f && c < a->nc; c++) fprintf(f, c ? ",%s" : "%s", ap_scene_output_name(sc, c));
+  if (f) fprintf(f, "\n%.15g", a->kept[0]);
+  for (int c = 1; f && c < a->nc; c++) fputs(",0", f);
+  for (long i = 1; f && i < a->rows; i++) {
+    const double *r = a->kept + (size_t)i * (size_t)a->nc, *x = ref + (size_t)(i - 1) * a->nc;
+    fprintf(f, "\n%.15g", r[0]);
+    for (int c = 1; c < a->nc; c++) fprintf(f, ",%.6g", fabs(r[c] - x[c]));
+  }
+  if (f) fputc('\n', f);
+  if (!f || fclose(f) != 0 || rename(part, a->path) != 0) {
+    unlink(part);
+    snprintf(a->failure, sizeof a->failure, "cannot write %.900s", a->path);
+    a->path[0] = '\0';
+  }
+}
+
+/* The estimate of the rows kept: the reference (ap_error_against) through their times. */
+static void estimate(cli_acc *a, ap_scene *sc, const ap_scene_run *run, const double *q0,
+                     const double *v0, const char *out) {
+  if (a->too_many || a->rows < 2) {
+    snprintf(a->failure, sizeof a->failure, "%s", a->too_many ? "too many rows to keep for the "
+             "estimate" : "no row after the first");
+    return;
+  }
+  long nt = a->rows - 1;
+  double *times = malloc(sizeof(double) * (size_t)nt * (size_t)(a->nc + 1));
+  if (!times) return (void)snprintf(a->failure, sizeof a->failure, "out of memory");
+  double *ref = times + nt;
+  for (long i = 0; i < nt; i++) times[i] = a->kept[(size_t)(i + 1) * (size_t)a->nc];
+  pick_ctx c = {sc, NULL, a->unc};
   char msg[1024];
-  a->nc = ap_scene_output_count(sc);
-  ap_error_reference_def(&run->sim, &a->ref_def);
-  a->row = calloc(4 * (size_t)a->nc + 1, sizeof *a->row);
-  if (!a->row) return fprintf(stderr, "appell run: out of memory\n"), AP_ERR_NOMEM;
-  a->ref_row = a->row + a->nc, a->err = a->ref_row + a->nc, a->scale = a->err + a->nc;
-  int rc = ap_sim_create(m, &a->ref_def, run->t0, q0, v0, &a->ref, msg, sizeof msg);
-  if (rc == AP_OK) rc = ap_scene_add_events(sc, a->ref, msg, sizeof msg);
-  if (rc == AP_OK && a->nunc) rc = ap_sim_set_uncontrolled(a->ref, a->unc);
-  if (rc == AP_OK) rc = ap_scene_out_create(sc, &a->out);
-  if (rc != AP_OK) {
-    fprintf(stderr, "appell run: --error-estimate: cannot start the reference run: %s: %s\n",
-            ap_strerror(rc), msg);
-    return rc;
-  }
-  if (out_path) {
-    snprintf(a->path, sizeof a->path, "%s.error.csv", out_path);
-    snprintf(a->part, sizeof a->part, "%s.error.csv.part", out_path);
-    a->csv = fopen(a->part, "w");
-    if (!a->csv) return fprintf(stderr, "appell run: cannot write %s\n", a->part), AP_ERR_IO;
-    for (int c = 0; c < a->nc; c++)
-      fprintf(a->csv, c ? ",%s" : "%s", ap_scene_output_name(sc, c));
-    fputc('\n', a->csv);
-  }
-  return AP_OK;
+  int rc = ap_error_against(ap_scene_model(sc), &run->sim, run->t0, q0, v0, times, (int)nt,
+                            a->nc, pick_out, pick_setup, &c, a->kept + a->nc, ref, NULL, NULL,
+                            &a->rep, msg, sizeof msg);
+  ap_scene_out_free(c.out);
+  if (rc != AP_OK) snprintf(a->failure, sizeof a->failure, "%s: %.900s", ap_strerror(rc), msg);
+  else a->done = 1;
+  if (rc == AP_OK && out) write_errors(a, sc, ref, out);
+  free(times);
 }
 
-int cli_acc_estimate_row(cli_acc *a, ap_sim *sim) {
-  if (!a->ref) return AP_OK;
-  double t = ap_sim_time(sim);
-  int rc = t > ap_sim_time(a->ref) ? ap_sim_advance(a->ref, t) : AP_OK;
-  if (rc == AP_STOPPED) rc = AP_OK;
-  if (rc == AP_OK) rc = ap_scene_out_row(a->out, a->ref, a->ref_row);
-  if (rc != AP_OK) {
-    snprintf(a->failure, sizeof a->failure, "the reference run failed at t = %.10g: %s",
-             ap_sim_time(a->ref), ap_sim_message(a->ref));
-    ap_sim_free(a->ref), a->ref = NULL;
-    return rc;
+void cli_acc_finish(cli_acc *a, ap_scene *sc, const ap_scene_run *run, const double *q0,
+                    const double *v0, int keep, const char *out_path) {
+  if (out_path && keep) {   /* an older estimate must not describe these rows */
+    char old[AP_OUT_PATH_MAX + 16];
+    if ((size_t)snprintf(old, sizeof old, "%s.error.csv", out_path) < sizeof old) unlink(old);
   }
-  return AP_OK;
-}
-
-void cli_acc_estimate_fold(cli_acc *a, const double *row) {
-  if (!a->ref) return;
-  double *e = a->row;   /* |row - ref| */
-  for (int c = 0; c < a->nc; c++) e[c] = c == 0 ? row[0] : fabs(row[c] - a->ref_row[c]);
-  ap_error_fold(a->nc - 1, row + 1, a->ref_row + 1, a->err + 1, a->scale + 1);
-  a->error = ap_error_norm(a->nc - 1, a->err + 1, a->scale + 1);
-  a->rows++;
-  for (int c = 0; a->csv && c < a->nc; c++) fprintf(a->csv, c ? ",%.6g" : "%.15g", e[c]);
-  if (a->csv) fputc('\n', a->csv);
-}
-
-void cli_acc_finish(cli_acc *a, int keep) {
-  if (!a->csv) return;
-  int ok = fclose(a->csv) == 0 && keep && a->rows > 0 && !a->failure[0];
-  if (ok && rename(a->part, a->path) != 0) ok = 0;
-  if (!ok) unlink(a->part), a->path[0] = '\0';
-  a->csv = NULL;
+  if (a->estimate && keep) estimate(a, sc, run, q0, v0, out_path);
 }
 
 void cli_acc_summary(const cli_acc *a, const ap_model *m) {
-  if (a->ref) {
-    ap_sim_stats st;
-    ap_sim_get_stats(a->ref, &st);
+  if (a->done)
     fprintf(stderr, "  estimated global error %.3g on the outputs (reference: %s at rtol %.3g, "
-            "%ld steps, %ld evaluations)%s%s\n", a->error, a->ref_def.method, a->ref_def.rtol,
-            st.steps, st.rhs_evals, a->path[0] ? " -> " : "", a->path);
-  }
+            "%ld steps, %ld evaluations)%s%s\n", a->rep.error, a->rep.ref.method,
+            a->rep.ref.rtol, a->rep.ref_stats.steps, a->rep.ref_stats.rhs_evals,
+            a->path[0] ? " -> " : "", a->path);
   if (a->failure[0]) fprintf(stderr, "appell run: --error-estimate: %s\n", a->failure);
   for (int i = 0, k = 0; a->unc && i < ap_model_n(m); i++) {
     if (!a->unc[i]) continue;
@@ -219,9 +231,7 @@ void cli_acc_summary(const cli_acc *a, const ap_model *m) {
 }
 
 void cli_acc_free(cli_acc *a) {
-  ap_sim_free(a->ref);
-  ap_scene_out_free(a->out);
-  free(a->row);
+  free(a->kept);
   free(a->unc);
 }
 
@@ -234,21 +244,19 @@ static void jkey(FILE *f, const char *name, int first) {
 }
 
 static void record_estimate(FILE *f, const cli_acc *a) {
-  ap_sim_stats st;
-  ap_sim_get_stats(a->ref, &st);
-  jkey(f, "error", 1), cli_json_number(f, a->error);
+  jkey(f, "error", 1), cli_json_number(f, a->rep.error);
   jkey(f, "how", 0), cli_json_string(f, "a second run at a tighter tolerance on the same "
                                          "output times (docs/accuracy.md)");
+  jkey(f, "reliable", 0), fputs(a->rep.reliable ? "true" : "false", f);
   jkey(f, "reference", 0);
-  jkey(f, "method", 1), cli_json_string(f, a->ref_def.method);
-  jkey(f, "rtol", 0), cli_json_number(f, a->ref_def.rtol);
-  jkey(f, "atol", 0), cli_json_number(f, a->ref_def.atol);
-  jkey(f, "steps", 0), fprintf(f, "%ld", st.steps);
-  jkey(f, "evaluations", 0), fprintf(f, "%ld}", st.rhs_evals);
+  jkey(f, "method", 1), cli_json_string(f, a->rep.ref.method);
+  jkey(f, "rtol", 0), cli_json_number(f, a->rep.ref.rtol);
+  jkey(f, "atol", 0), cli_json_number(f, a->rep.ref.atol);
+  jkey(f, "steps", 0), fprintf(f, "%ld", a->rep.ref_stats.steps);
+  jkey(f, "evaluations", 0), fprintf(f, "%ld}", a->rep.ref_stats.rhs_evals);
   jkey(f, "file", 0);
   if (a->path[0]) cli_json_string(f, a->path);
   else fputs("null", f);
-  jkey(f, "failure", 0), cli_json_string(f, a->failure);
   fputs("}", f);
 }
 
@@ -277,7 +285,8 @@ static void record_pick(FILE *f, const cli_acc *a) {
 
 void cli_acc_record(FILE *f, const cli_acc *a, const ap_model *m) {
   jkey(f, "error_estimate", 1);
-  if (a->ref) record_estimate(f, a);
+  if (a->done) record_estimate(f, a);
+  else if (a->estimate) cli_json_string(f, a->failure[0] ? a->failure : "not made");
   else fputs("null", f);
   jkey(f, "pick", 0);
   if (a->picked) record_pick(f, a);

@@ -84,6 +84,19 @@ AP_API int ap_global_error(const ap_model *m, const ap_sim_def *def, double t0, 
                            double *err, double *scale, ap_error_report *rep, char *msg,
                            size_t msg_len);
 
+/* The reference half of ap_global_error, against rows (nt x nc, row-major) the caller's run
+ * with def already produced at times: ref_rows (nt x nc, may be NULL) receives the
+ * reference's rows; rep->run is left zero. An estimate below 30 x the reference's rtol cannot
+ * tell the run's error from the reference's (a run whose steps were set by the output times
+ * took the same steps as its reference): a second reference then runs at max(1e-14,
+ * min(rtol_ref, estimate) / 100) and replaces the first (rep->ref says which ran last,
+ * rep->ref_stats counts both). Arguments and failures as for ap_global_error. */
+AP_API int ap_error_against(const ap_model *m, const ap_sim_def *def, double t0,
+                            const double *q0, const double *v0, const double *times, int nt,
+                            int nc, ap_output_fn out, ap_sim_setup_fn setup, void *user,
+                            const double *rows, double *ref_rows, double *err, double *scale,
+                            ap_error_report *rep, char *msg, size_t msg_len);
+
 /* ---- accuracy on demand ------------------------------------------------------------------ */
 
 #define AP_PICK_MAX 4   /* candidate methods the pilot tries */

@@ -95,6 +95,41 @@ static int second_pass(ap_error_report *rep, const ap_sim_def *def) {
   return 1;
 }
 
+int ap_error_against(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
+                     const double *v0, const double *times, int nt, int nc, ap_output_fn out,
+                     ap_sim_setup_fn setup, void *user, const double *rows, double *ref_rows,
+                     double *err, double *scale, ap_error_report *rep, char *msg,
+                     size_t msg_len) {
+  if (!m || !def || !q0 || !v0 || !times || !out || !rows || !rep || nt < 1 || nc < 0) {
+    if (msg && msg_len) snprintf(msg, msg_len, "ap_error_against: NULL argument or nt < 1");
+    return AP_ERR_ARG;
+  }
+  memset(rep, 0, sizeof *rep);
+  ap_error_reference_def(def, &rep->ref);
+  size_t cells = (size_t)nt * (size_t)nc;
+  double *b = calloc(2 * (size_t)nc + cells + 1, sizeof *b);
+  if (!b) return AP_ERR_NOMEM;
+  double *e = b + cells, *sc = e + nc;
+  int rc = AP_OK;
+  for (int pass = 0; rc == AP_OK && pass < 2; pass++) {
+    ap_sim_stats st;
+    rc = run_rows(m, &rep->ref, t0, q0, v0, times, nt, nc, out, setup, user, b, &st,
+                  "reference run", msg, msg_len);
+    rep->ref_stats.steps += st.steps, rep->ref_stats.rhs_evals += st.rhs_evals;
+    memset(e, 0, sizeof(double) * 2 * (size_t)nc);
+    for (int i = 0; rc == AP_OK && i < nt; i++)
+      ap_error_fold(nc, rows + (size_t)i * nc, b + (size_t)i * nc, e, sc);
+    rep->error = ap_error_norm(nc, e, sc);
+    if (!second_pass(rep, def)) break;
+  }
+  rep->reliable = rep->ref.rtol <= 0.1 * def->rtol || rep->ref.rtol == 1e-12;
+  if (rc == AP_OK && ref_rows) memcpy(ref_rows, b, sizeof(double) * cells);
+  if (rc == AP_OK && err) memcpy(err, e, sizeof(double) * (size_t)nc);
+  if (rc == AP_OK && scale) memcpy(scale, sc, sizeof(double) * (size_t)nc);
+  free(b);
+  return rc;
+}
+
 int ap_global_error(const ap_model *m, const ap_sim_def *def, double t0, const double *q0,
                     const double *v0, const double *times, int nt, int nc, ap_output_fn out,
                     ap_sim_setup_fn setup, void *user, double *rows, double *err,
@@ -104,28 +139,17 @@ int ap_global_error(const ap_model *m, const ap_sim_def *def, double t0, const d
     return AP_ERR_ARG;
   }
   memset(rep, 0, sizeof *rep);
-  ap_error_reference_def(def, &rep->ref);
   size_t cells = (size_t)nt * (size_t)nc;
-  double *a = calloc(3 * (size_t)nc + 2 * cells + 1, sizeof *a);
+  double *a = calloc(cells + 1, sizeof *a);
   if (!a) return AP_ERR_NOMEM;
-  double *b = a + cells, *e = b + cells, *sc = e + nc;
-  int rc = run_rows(m, def, t0, q0, v0, times, nt, nc, out, setup, user, a, &rep->run, "run",
-                    msg, msg_len);
-  for (int pass = 0; rc == AP_OK && pass < 2; pass++) {
-    ap_sim_stats st;
-    rc = run_rows(m, &rep->ref, t0, q0, v0, times, nt, nc, out, setup, user, b, &st,
-                  "reference run", msg, msg_len);
-    rep->ref_stats.steps += st.steps, rep->ref_stats.rhs_evals += st.rhs_evals;
-    memset(e, 0, sizeof(double) * 2 * (size_t)nc);
-    for (int i = 0; rc == AP_OK && i < nt; i++)
-      ap_error_fold(nc, a + (size_t)i * nc, b + (size_t)i * nc, e, sc);
-    rep->error = ap_error_norm(nc, e, sc);
-    if (!second_pass(rep, def)) break;
-  }
-  rep->reliable = rep->ref.rtol <= 0.1 * def->rtol || rep->ref.rtol == 1e-12;
+  ap_sim_stats run;
+  int rc = run_rows(m, def, t0, q0, v0, times, nt, nc, out, setup, user, a, &run, "run", msg,
+                    msg_len);
+  if (rc == AP_OK)
+    rc = ap_error_against(m, def, t0, q0, v0, times, nt, nc, out, setup, user, a, NULL, err,
+                          scale, rep, msg, msg_len);
+  rep->run = run;
   if (rc == AP_OK && rows) memcpy(rows, a, sizeof(double) * cells);
-  if (rc == AP_OK && err) memcpy(err, e, sizeof(double) * (size_t)nc);
-  if (rc == AP_OK && scale) memcpy(scale, sc, sizeof(double) * (size_t)nc);
   free(a);
   return rc;
 }
