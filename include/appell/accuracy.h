@@ -68,7 +68,9 @@ typedef struct ap_error_report {
   double error;           /* the estimated global error (ap_error_norm); units as above */
   int reliable;           /* 1 when the reference's tolerance is at least 10 x tighter */
   ap_sim_def ref;         /* the reference's settings (ap_error_reference_def) */
-  ap_sim_stats run, ref_stats;   /* steps and evaluations of the run and of the reference */
+  ap_sim_stats run, ref_stats;   /* steps and evaluations of the run and of the reference
+                                    (both reference runs when a second one was made) */
+  ap_sim_stats ref_last;         /* the last reference run alone (at ref.rtol) */
 } ap_error_report;
 
 /* Run def from (t0, q0, v0) and its reference (ap_error_reference_def) through the nt output
@@ -123,7 +125,7 @@ typedef struct ap_pick_report {
 } ap_pick_report;
 
 /* Choose the method and tolerance that reach the global error `accuracy` (> 0, >= 1e-12) on
- * the outputs at the fewest evaluations: for each candidate (dop853, dopri5, bs3), a pilot
+ * the outputs at the fewest evaluations: for each candidate (dop853; dopri5 for accuracy >= 1e-6; bs3 for >= 1e-4), a pilot
  * over the whole interval at a loose tolerance and its reference 100 x tighter gives the
  * error per unit rtol; the rtol that reaches accuracy / 3 (a safety factor for the error's
  * growth as the tolerance tightens) follows, and its cost from the pilot's evaluations and the

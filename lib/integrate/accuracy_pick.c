@@ -27,13 +27,14 @@ static const struct {
   const char *name;
   int order;
   double loosest;          /* accuracies below this skip the candidate (its cost is hopeless) */
-} cands[] = {{"dop853", 8, 0.0}, {"dopri5", 5, 1e-11}, {"bs3", 3, 1e-7}};
+} cands[] = {{"dop853", 8, 0.0}, {"dopri5", 5, 1e-6}, {"bs3", 3, 1e-4}};
 
-/* Evaluations at rtol from the two pilot points (rtol_a, ea) and (rtol_a / 100, eb). */
-static double cost_at(double rtol, double rtol_a, double ea, double eb, int order) {
-  double slope = log(fmax(eb, 1.0) / fmax(ea, 1.0)) / log(100.0);
+/* Evaluations at rtol from the two pilot points (rtol_a, ea) and (rtol_b < rtol_a, eb). */
+static double cost_at(double rtol, double rtol_a, double ea, double rtol_b, double eb,
+                      int order) {
+  double slope = log(fmax(eb, 1.0) / fmax(ea, 1.0)) / log(rtol_a / rtol_b);
   if (!(slope >= 1.0 / order)) slope = 1.0 / order;
-  double r_ref = rtol <= rtol_a / 100 ? rtol_a / 100 : rtol_a, e_ref = r_ref < rtol_a ? eb : ea;
+  double r_ref = rtol <= rtol_b ? rtol_b : rtol_a, e_ref = r_ref < rtol_a ? eb : ea;
   return e_ref * pow(r_ref / rtol, slope);
 }
 
@@ -55,8 +56,8 @@ static int pilot(const ap_model *m, const ap_sim_def *def, double t0, const doub
   p->cand[i].method = cands[c].name, p->cand[i].rtol = d.rtol, p->cand[i].error = rep.error;
   p->cand[i].rtol_pick = r;
   p->cand[i].evals = r < RTOL_MIN ? INFINITY
-                     : cost_at(r, d.rtol, (double)rep.run.rhs_evals,
-                               (double)rep.ref_stats.rhs_evals, cands[c].order);
+                     : cost_at(r, d.rtol, (double)rep.run.rhs_evals, rep.ref.rtol,
+                               (double)rep.ref_last.rhs_evals, cands[c].order);
   return AP_OK;
 }
 

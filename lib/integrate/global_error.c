@@ -116,6 +116,7 @@ int ap_error_against(const ap_model *m, const ap_sim_def *def, double t0, const 
     rc = run_rows(m, &rep->ref, t0, q0, v0, times, nt, nc, out, setup, user, b, &st,
                   "reference run", msg, msg_len);
     rep->ref_stats.steps += st.steps, rep->ref_stats.rhs_evals += st.rhs_evals;
+    rep->ref_last = st;
     memset(e, 0, sizeof(double) * 2 * (size_t)nc);
     for (int i = 0; rc == AP_OK && i < nt; i++)
       ap_error_fold(nc, rows + (size_t)i * nc, b + (size_t)i * nc, e, sc);

@@ -187,13 +187,31 @@ class Simulation(_appell.Simulation):
     warning and report tell where it is. Simulations of one Model may run in parallel
     threads (the GIL is released while integrating)."""
 
-    def run(self, t_end=None, dt=None):
+    def __new__(cls, model, *args, accuracy=None, error_estimate=False, **kw):
+        """accuracy (a global error on the output channels, docs/accuracy.md): the method and
+        tolerances are picked by a pilot over the scene's t_end and output interval (the
+        choice in .pick). error_estimate=True: every run() estimates its global error."""
+        pick = None
+        if accuracy is not None:
+            probe = super().__new__(cls, model, *args, **kw)   # the initial state and settings
+            t0, q0, v0 = probe.state
+            ms = model.settings
+            pick = _appell._pick(model, float(accuracy), probe.settings, t0, q0, v0,
+                                 ms["t_end"], ms["interval"])
+            kw.update(method=pick["method"], rtol=pick["rtol"], atol=pick["atol"])
+        self = super().__new__(cls, model, *args, **kw)
+        self.pick, self.error_estimate = pick, bool(error_estimate)
+        return self
+
+    def run(self, t_end=None, dt=None, error_estimate=None):
         """Integrate from the current time to t_end (default: the scene's), recording a row
         every dt (default: the scene's output interval), the last at t_end exactly; the first
         row is the current state. Returns a Result. On failure raises Error with .result, the
         rows up to where the run stopped (status "failed"); Ctrl-C raises KeyboardInterrupt
-        with .result the same way (status "interrupted")."""
+        with .result the same way (status "interrupted"). With error_estimate (default: the
+        Simulation's), Result.error_estimate holds the estimated global error (docs/accuracy.md)."""
         m = self.model
+        start = self.state
         try:
             columns, table, q, v = self._run(t_end, dt)
         except BaseException as e:
@@ -209,6 +227,11 @@ class Simulation(_appell.Simulation):
         res = Result(columns, table, q, v, m.coordinate_names, m.speed_names, status="ok",
                      message=self.warning, events=_run_events(self))
         res.model = m   # for res.view() (_view.py)
+        res.pick = self.pick
+        res.error_estimate = None
+        if (self.error_estimate if error_estimate is None else error_estimate) and len(table) > 1:
+            res.error_estimate = _appell._error_estimate(m, self.settings, start[0], start[1],
+                                                         start[2], table)
         return res
 
 

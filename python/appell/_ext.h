@@ -6,6 +6,7 @@
  *   _batch.c    run_plan: a slice of a sweep plan on the batch API's thread pool
  *   _lin.c      linearize: operating points, A and B, eigenvalues, speed sweeps
  *   _io.c       write_file: files written by the rules of appell run --out (outfile.h)
+ *   _accuracy.c _error_estimate, _pick: accuracy on demand (include/appell/accuracy.h)
  *
  * Only the public C API (<appell/appell.h>) is used. Integration and batches run with the
  * GIL released; a Model is only read by Simulations and may be shared by Python threads. */
@@ -66,5 +67,7 @@ PyObject *apx_plan_info(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_constant(PyObject *self, PyObject *args);
 PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_write_file(PyObject *self, PyObject *args, PyObject *kw);
+PyObject *apx_error_estimate(PyObject *self, PyObject *args);   /* _accuracy.c */
+PyObject *apx_pick(PyObject *self, PyObject *args);
 
 #endif

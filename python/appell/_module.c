@@ -167,6 +167,10 @@ static PyMethodDef module_methods[] = {
      "(appell.linearize wraps it)"},
     {"write_file", (PyCFunction)(void (*)(void))apx_write_file, METH_VARARGS | METH_KEYWORDS,
      "write_file(path, data, keep=()): write bytes by appell run --out's rules (_io.c)"},
+    {"_error_estimate", apx_error_estimate, METH_VARARGS,
+     "_error_estimate(model, settings, t0, q0, v0, table) -> dict (_accuracy.c)"},
+    {"_pick", apx_pick, METH_VARARGS,
+     "_pick(model, accuracy, settings, t0, q0, v0, t_end, dt) -> dict (_accuracy.c)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {
