@@ -123,29 +123,6 @@ static void picker(FILE *csv) {
          missed, NPROB * 4);
 }
 
-/* Steps of the ball on the turntable and its centre error against the closed form. */
-static long ball(const ap_model *m, const rs_turntable *tp, const double *q0, const double *v0,
-                 const double *qh, const double *vh, const char *meth, double rtol, int free_,
-                 double *err) {
-  ap_sim_def def = ap_sim_def_default();
-  def.method = meth, def.rtol = def.atol = rtol;
-  ap_sim *s = NULL;
-  if (ap_sim_create(m, &def, 0.0, q0, v0, &s, NULL, 0) != AP_OK) return -1;
-  int fl[8] = {0};
-  if (free_ && ap_sim_free_coordinates(s, fl) == AP_OK) ap_sim_set_uncontrolled(s, fl);
-  *err = 0.0;
-  for (int j = 1; j <= NOUT; j++) {
-    double t = 16.0 * j / NOUT, qe[5];
-    if (ap_sim_advance(s, t) != AP_OK) return ap_sim_free(s), -1;
-    rs_turntable_exact(tp, qh, vh, t, qe, NULL);
-    for (int c = 0; c < 2; c++) *err = fmax(*err, fabs(ap_sim_q(s)[c] - qe[c]));
-  }
-  ap_sim_stats st;
-  ap_sim_get_stats(s, &st);
-  ap_sim_free(s);
-  return st.steps;
-}
-
 static void free_coordinates(void) {
   static rs_turntable tp = {1.0, 0.1, 0.4, 2.0, 0.0};
   ap_system_def hd;
@@ -162,9 +139,9 @@ static void free_coordinates(void) {
   for (int k = 0; k < 2; k++)
     for (double r = 1e-6; r > 1e-11; r *= 1e-2) {
       double eh, e0, e1;
-      long nh = ball(h, &tp, qh, vh, qh, vh, ms[k], r, 0, &eh);
-      long n0 = ball(m, &tp, qb, vh, qh, vh, ms[k], r, 0, &e0);
-      long n1 = ball(m, &tp, qb, vh, qh, vh, ms[k], r, 1, &e1);
+      long nh = bs_turntable_run(h, &tp, qh, vh, qh, vh, ms[k], r, 0, NULL, &eh);
+      long n0 = bs_turntable_run(m, &tp, qb, vh, qh, vh, ms[k], r, 0, NULL, &e0);
+      long n1 = bs_turntable_run(m, &tp, qb, vh, qh, vh, ms[k], r, 1, NULL, &e1);
       printf("%-7s %-6.0e | %5ld  %10.2e  | %5ld  %10.2e  | %5ld  %10.2e\n", ms[k], r, nh, eh, n0,
              e0, n1, e1);
     }

@@ -135,36 +135,6 @@ static void check_pick(prob *pr, double accuracy) {
   AP_CHECK_LE(tru, accuracy);
 }
 
-/* Steps and the largest centre error against the closed form at NT times over 16 s, rtol =
- * atol = 1e-8; with uncontrolled = 1 the free coordinates are left out of the error control. */
-static long ball_run(const ap_model *m, const rs_turntable *tp, const double *q0,
-                     const double *v0, const double *qh, const double *vh, int body,
-                     int uncontrolled, double *err) {
-  ap_sim_def def = ap_sim_def_default();
-  def.rtol = def.atol = 1e-8;
-  ap_sim *s = NULL;
-  AP_CHECK_EQ_INT(ap_sim_create(m, &def, 0.0, q0, v0, &s, NULL, 0), AP_OK);
-  if (!s) return -1;
-  int n = ap_model_n(m), fr[8] = {0};
-  if (body) {
-    AP_CHECK_EQ_INT(ap_sim_free_coordinates(s, fr), AP_OK);
-    for (int i = 0; i < n; i++) AP_CHECK_EQ_INT(fr[i], i >= 2);   /* the quaternion only */
-  }
-  if (uncontrolled) AP_CHECK_EQ_INT(ap_sim_set_uncontrolled(s, fr), AP_OK);
-  for (int i = 0; i < n; i++) AP_CHECK_EQ_INT(ap_sim_uncontrolled(s, i), uncontrolled && fr[i]);
-  *err = 0.0;
-  for (int j = 1; j <= NT; j++) {
-    double t = 16.0 * j / NT, qe[5];
-    AP_CHECK_EQ_INT(ap_sim_advance(s, t), AP_OK);
-    rs_turntable_exact(tp, qh, vh, t, qe, NULL);
-    for (int c = 0; c < 2; c++) *err = fmax(*err, fabs(ap_sim_q(s)[c] - qe[c]));
-  }
-  ap_sim_stats st;
-  ap_sim_get_stats(s, &st);
-  ap_sim_free(s);
-  return st.steps;
-}
-
 /* 3. The body-built ball on a turntable (tests/bodysys.c) against the hand model (refsys). */
 static void check_free_ball(void) {
   static rs_turntable tp = {1.0, 0.1, 0.4, 2.0, 0.0};
@@ -177,9 +147,12 @@ static void check_free_ball(void) {
   double qh[5], vh[5];
   rs_turntable_initial(&tp, 0.3, -0.1, 1.0, -2.0, 3.0, qh, vh);
   double qb[6] = {qh[0], qh[1], 1, 0, 0, 0}, eh, e0, e1;   /* x, y, quaternion (w x y z) */
-  long nh = ball_run(h, &tp, qh, vh, qh, vh, 0, 0, &eh);
-  long n0 = ball_run(m, &tp, qb, vh, qh, vh, 1, 0, &e0);
-  long n1 = ball_run(m, &tp, qb, vh, qh, vh, 1, 1, &e1);
+  int fl[6] = {0};
+  long nh = bs_turntable_run(h, &tp, qh, vh, qh, vh, "dopri5", 1e-8, 0, NULL, &eh);
+  long n0 = bs_turntable_run(m, &tp, qb, vh, qh, vh, "dopri5", 1e-8, 0, NULL, &e0);
+  long n1 = bs_turntable_run(m, &tp, qb, vh, qh, vh, "dopri5", 1e-8, 1, fl, &e1);
+  AP_CHECK_EQ_INT(ap_model_n(m), 6);
+  for (int i = 0; i < 6; i++) AP_CHECK_EQ_INT(fl[i], i >= 2);   /* the quaternion only */
   printf("ball on a turntable, rtol 1e-8: hand model %ld steps (error %.3g m), body model %ld "
          "steps (%.3g m), orientation uncontrolled %ld steps (%.3g m)\n", nh, eh, n0, e0, n1,
          e1);
