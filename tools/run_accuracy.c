@@ -26,8 +26,15 @@ typedef struct pick_ctx {
   const int *unc;          /* coordinates to leave uncontrolled, or NULL */
 } pick_ctx;
 
+/* A terminating signal stops the pilot, the checks and the reference between steps. */
+static int poll_signal(double t, void *user) {
+  (void)t, (void)user;
+  return cli_interrupted();
+}
+
 static int pick_setup(ap_sim *s, void *user) {
   pick_ctx *c = user;
+  ap_sim_set_poll(s, poll_signal, NULL);
   ap_scene_out_free(c->out);
   c->out = NULL;
   char msg[512];
