@@ -20,6 +20,9 @@ struct wp_problem {
   const char *name, *title;
   ap_system_def def;        /* the Appell math-level system (refsys) */
   ap_model *body_model;     /* or a compiled body model (rolling disk) */
+  ap_model *ball_model;     /* turntables: the ball built from bodies (tests/bodysys.c), run
+                               beside the math-level system as tool "appell_body" */
+  double bq0[MAXS];         /* its initial coordinates (x, y, unit quaternion); speeds v0 */
   int n, k;                 /* its sizes */
   double q0[MAXS], v0[MAXS];
   double T;                 /* end time (s) */

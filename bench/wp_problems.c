@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bodysys.h"
 #include "wp.h"
 
 /* Position = the first npos coordinates (knife, sleigh, turntable: x, y; line: X, Y, Z). */
@@ -201,6 +202,9 @@ void setup_problems(wp_problem *P) {
     rs_turntable_system(&pr->p.turn, &pr->def);
     rs_turntable_initial(&pr->p.turn, 0.3, -0.1, 1.0, -2.0, 3.0, pr->q0, pr->v0);
     pr->T = 16.0, pr->npos = 2, pr->hn = 4, pr->hand = turn_hand;
+    pr->ball_model = bs_turntable_model(&pr->p.turn);   /* keeps a pointer to pr->p.turn */
+    double bq[6] = {pr->q0[0], pr->q0[1], 1, 0, 0, 0};
+    memcpy(pr->bq0, bq, sizeof bq);
     double ht[4] = {pr->q0[0], pr->q0[1], pr->v0[0], pr->v0[1]};
     memcpy(pr->hy0, ht, sizeof ht);
   }
@@ -235,5 +239,5 @@ void setup_problems(wp_problem *P) {
 }
 
 void free_problems(wp_problem *P) {
-  for (int i = 0; i < NPROB; i++) ap_model_free(P[i].body_model);
+  for (int i = 0; i < NPROB; i++) ap_model_free(P[i].body_model), ap_model_free(P[i].ball_model);
 }

@@ -510,10 +510,52 @@ static void cases_lin(void) {
        ap_lin_sweep_speed(LN, sv, 2, NULL, 0, 0, 1e-6, NULL) == AP_ERR_ARG);
 }
 
+static int api_out(ap_sim *s, double *row, void *user) {
+  (void)user;
+  row[0] = ap_sim_q(s)[0];
+  return AP_OK;
+}
+
+static void cases_accuracy(void) {
+  ap_sim_def def = ap_sim_def_default(), ref;
+  ap_error_report rep;
+  ap_pick_report pk;
+  double q0[8] = {0, 0, 1, 0, 0, 0, 0, 0}, v0[8] = {0}, tt[1] = {0.1}, e[1] = {1}, sc[1] = {0};
+  int fl[8];
+  char msg[256];
+  CASE(ap_sim_free_coordinates, "s NULL", ap_sim_free_coordinates(NULL, fl) == AP_ERR_ARG);
+  CASE(ap_sim_free_coordinates, "out NULL", ap_sim_free_coordinates(S, NULL) == AP_ERR_ARG);
+  CASE(ap_sim_set_uncontrolled, "s NULL", ap_sim_set_uncontrolled(NULL, NULL) == AP_ERR_ARG);
+  CASE(ap_sim_set_uncontrolled, "flags NULL (all controlled)",
+       ap_sim_set_uncontrolled(S, NULL) == AP_OK && !ap_sim_uncontrolled(S, 0));
+  CASE(ap_sim_uncontrolled, "s NULL", ap_sim_uncontrolled(NULL, 0) == 0);
+  CASE(ap_sim_uncontrolled, "i 999", ap_sim_uncontrolled(S, 999) == 0);
+  CASE(ap_error_reference_def, "dopri5 at 1e-8: dop853 at 1e-10",
+       (ap_error_reference_def(&def, &ref), ref.rtol == 1e-10 && !strcmp(ref.method, "dop853")));
+  CASE(ap_error_fold, "nc 0", (ap_error_fold(0, NULL, NULL, NULL, NULL), 1));
+  CASE(ap_error_norm, "relative above 1", (sc[0] = 4, ap_error_norm(1, e, sc) == 0.25));
+  CASE(ap_global_error, "out NULL",
+       ap_global_error(SM, &def, 0, q0, v0, tt, 1, 1, NULL, NULL, NULL, NULL, NULL, NULL, &rep,
+                       msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_global_error, "nt 0",
+       ap_global_error(SM, &def, 0, q0, v0, tt, 0, 1, api_out, NULL, NULL, NULL, NULL, NULL,
+                       &rep, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_error_against, "rows NULL",
+       ap_error_against(SM, &def, 0, q0, v0, tt, 1, 1, api_out, NULL, NULL, NULL, NULL, NULL,
+                        NULL, &rep, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_accuracy_pick, "accuracy 0",
+       ap_accuracy_pick(SM, &def, 0, q0, v0, tt, 1, 1, api_out, NULL, NULL, 0.0, &pk, msg,
+                        sizeof msg) == AP_ERR_ARG);
+  CASE(ap_accuracy_pick, "pick NULL",
+       ap_accuracy_pick(SM, &def, 0, q0, v0, tt, 1, 1, api_out, NULL, NULL, 1e-6, NULL, msg,
+                        sizeof msg) == AP_ERR_ARG);
+}
+
 void api_cases_high(void) {
   cases_body_queries();
   cases_scene();
   cases_scene_runs();
   cases_batch();
   cases_lin();
+  cases_accuracy();
 }

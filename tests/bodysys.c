@@ -264,6 +264,29 @@ ap_model *bs_turntable_model(rs_turntable *p) {
   return finish(b, good);
 }
 
+long bs_turntable_run(const ap_model *m, const rs_turntable *p, const double *q0,
+                      const double *v0, const double *qh, const double *vh, const char *method,
+                      double rtol, int free_, int *flags, double *err) {
+  ap_sim_def def = ap_sim_def_default();
+  def.method = method, def.rtol = def.atol = rtol;
+  ap_sim *s = NULL;
+  int fl[16] = {0}, rc = ap_sim_create(m, &def, 0.0, q0, v0, &s, NULL, 0);
+  if (rc == AP_OK && free_ && ap_model_n(m) <= 16) rc = ap_sim_free_coordinates(s, fl);
+  if (rc == AP_OK && free_) rc = ap_sim_set_uncontrolled(s, fl);
+  if (flags) memcpy(flags, fl, sizeof(int) * (size_t)ap_model_n(m));
+  *err = 0.0;
+  for (int j = 1; rc == AP_OK && j <= 10; j++) {
+    double t = 1.6 * j, qe[5];
+    rc = ap_sim_advance(s, t);
+    rs_turntable_exact(p, qh, vh, t, qe, NULL);
+    for (int c = 0; rc == AP_OK && c < 2; c++) *err = fmax(*err, fabs(ap_sim_q(s)[c] - qe[c]));
+  }
+  ap_sim_stats st;
+  ap_sim_get_stats(s, &st);
+  ap_sim_free(s);
+  return rc == AP_OK ? st.steps : -1;
+}
+
 ap_model *bs_skate_model(const rs_knife *p) { return bs_skate_model_blades(p, 1); }
 
 ap_model *bs_skate_model_blades(const rs_knife *p, int blades) {

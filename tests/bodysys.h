@@ -110,6 +110,14 @@ int bs_rattleback_state(const ap_model *m, ap_data *d, double rock, double spin,
 /* Sphere of radius p->R, uniform (kI = 2/5), rolling on a table turning at
  * rs_turntable_omega(p, t); p must outlive the model. q = (x, y, quaternion). */
 ap_model *bs_turntable_model(rs_turntable *p);
+/* A run of the turntable ball m (body model, free = 1: its free coordinates, found by
+ * ap_sim_free_coordinates, left out of the error control; their flags into flags (n) when not
+ * NULL) or of its hand model (refsys) from (q0, v0), rtol = atol, to 16 s with 10 outputs:
+ * the steps, and in *err the largest centre error against the closed form from (qh, vh).
+ * -1 when the run fails. */
+long bs_turntable_run(const ap_model *m, const rs_turntable *p, const double *q0,
+                      const double *v0, const double *qh, const double *vh, const char *method,
+                      double rtol, int free_, int *flags, double *err);
 
 /* Planar joint on a plane inclined by p->alpha about y (x down the slope), knife edge across
  * the body's y; q = (x, y, heading) as rs_knife's. */

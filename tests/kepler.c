@@ -39,7 +39,7 @@ double err_at(double t, const double *y) {
 }
 
 ap_step_opts kepler_opts(double rtol, double h_fixed) {
-  ap_step_opts o = {rtol, rtol * 1e-2, h_fixed, 0.0, 0.0, 10000000L, NULL};
+  ap_step_opts o = {rtol, rtol * 1e-2, h_fixed, 0.0, 0.0, 10000000L, NULL, NULL};
   return o;
 }
 

@@ -123,9 +123,9 @@ static void check_restart(void) {
     ap_stepper *s = NULL, *r = NULL;
     kepler_exact(0.0, yb), kepler_exact(0.0, yc);
     AP_CHECK_EQ_INT(ap_step_create(m, 4, kepler_rhs, &k, 0.0, yb, &(ap_step_opts){1e-9, 1e-11,
-                    0, 0, 0, 10000000L, NULL}, &s, NULL, 0), AP_OK);
+                    0, 0, 0, 10000000L, NULL, NULL}, &s, NULL, 0), AP_OK);
     AP_CHECK_EQ_INT(ap_step_create(m, 4, kepler_rhs, &k, 0.0, yc, &(ap_step_opts){1e-9, 1e-11,
-                    0, 0, 0, 10000000L, NULL}, &r, NULL, 0), AP_OK);
+                    0, 0, 0, 10000000L, NULL, NULL}, &r, NULL, 0), AP_OK);
     if (!s || !r) continue;
     while (t < ts[0]) AP_CHECK_EQ_INT(ap_step_one(s, ts[0], &t, yb), AP_OK);
     while (tc < ts[0]) AP_CHECK_EQ_INT(ap_step_one(r, ts[0], &tc, yc), AP_OK);

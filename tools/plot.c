@@ -37,26 +37,30 @@ static const char help[] =
     "  --title TEXT    a title above the plot\n"
     "  --equal         the same scale on both axes (for paths in the plane)\n"
     "  --logy          logarithmic vertical axis (absolute values are not taken)\n"
+    "  --error         draw the estimated global error of the --y columns instead, from\n"
+    "                  FILE.csv.error.csv (appell run --error-estimate; log scale)\n"
     "  -h, --help      this help\n"
     "\n"
     "Exit codes: 0 success, 2 bad input (file, columns, options), 1 gnuplot missing or failed.\n";
 
 typedef struct plot_opts {
   const char *csv, *x, *y[MAX_Y], *out, *title;
-  int ny, equal, logy;
+  int ny, equal, logy, error;
+  char error_csv[4200];    /* --error: FILE.csv.error.csv */
   int has_record;          /* rec read from CSV.run.json */
   cli_record_info rec;
 } plot_opts;
 
 static int parse(int argc, char **argv, plot_opts *o) {
   static const char *const known[] = {"--x", "--y", "--output", "--title", "--equal", "--logy",
-                                      "--help", NULL};
+                                      "--help", "--error", NULL};
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;
     int r = 0;
     if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) return 1;
     if (strcmp(argv[i], "--equal") == 0) o->equal = 1;
     else if (strcmp(argv[i], "--logy") == 0) o->logy = 1;
+    else if (strcmp(argv[i], "--error") == 0) o->error = o->logy = 1;
     else if ((r = cli_opt(argc, argv, &i, "--x", &v)) != 0) o->x = v;
     else if ((r = cli_opt(argc, argv, &i, "--y", &v)) != 0) {
       if (r > 0 && o->ny >= MAX_Y)
@@ -154,6 +158,7 @@ static void script(FILE *g, const plot_opts *o, int xc, const int *yc) {
   fprintf(g, "set xlabel '%s'\n", o->x);
   if (o->ny == 1) fprintf(g, "set ylabel '%s'\nset key off\n", o->y[0]);
   if (o->title) fprintf(g, "set title '%s'\n", o->title);
+  else if (o->error) fprintf(g, "set title 'estimated global error (appell run --error-estimate)'\n");
   if (o->equal) fprintf(g, "set size ratio -1\n");
   if (o->logy) fprintf(g, "set logscale y\nset format y '%%.0e'\n");
   if (o->has_record) record_marks(g, o);
@@ -192,6 +197,20 @@ static int check_figure(const char *out) {
   return EXIT_OK;
 }
 
+/* --error: the columns of FILE.csv.error.csv (same header as FILE.csv) instead. */
+static int use_error_csv(plot_opts *o, header *h) {
+  if ((size_t)snprintf(o->error_csv, sizeof o->error_csv, "%s.error.csv", o->csv) >=
+      sizeof o->error_csv)
+    return fprintf(stderr, "appell plot: %s: the path is too long\n", o->csv), EXIT_INPUT;
+  if (access(o->error_csv, R_OK) != 0)
+    return fprintf(stderr, "appell plot: --error: no %s: run appell run SCENE --out %s "
+                   "--error-estimate first\n", o->error_csv, o->csv), EXIT_INPUT;
+  free(h->line);
+  *h = (header){0};
+  o->csv = o->error_csv;
+  return read_header(o->csv, h) == 0 ? EXIT_OK : EXIT_INPUT;
+}
+
 int cmd_plot(int argc, char **argv) {
   plot_opts o = {.x = "t"};
   int rc = parse(argc, argv, &o);
@@ -209,6 +228,7 @@ int cmd_plot(int argc, char **argv) {
   char record[4200];
   if ((size_t)snprintf(record, sizeof record, "%s.run.json", o.csv) < sizeof record)
     o.has_record = cli_record_read(record, &o.rec) == 0;
+  if (code == EXIT_OK && o.error) code = use_error_csv(&o, &h);
   int xc = code == EXIT_OK ? column(&h, o.csv, o.x) : 0, yc[MAX_Y];
   if (code == EXIT_OK && !xc) code = EXIT_INPUT;
   for (int i = 0; code == EXIT_OK && i < o.ny; i++)

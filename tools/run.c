@@ -22,6 +22,7 @@
 #include <appell/appell.h>
 
 #include "cli.h"
+#include "run_accuracy.h"
 #include "runrecord.h"
 
 #define MAX_SETS 256
@@ -47,6 +48,13 @@ static const char help[] =
     "  --atol X           absolute tolerance (simulation.atol)\n"
     "  --t-end T          end time in seconds (simulation.t_end)\n"
     "  --interval DT      output interval in seconds (output.interval)\n"
+    "  --error-estimate   estimate the global error of every output channel by a second\n"
+    "                     run at rtol / 100 (docs/accuracy.md); the estimate goes to the\n"
+    "                     summary, the run record and FILE.csv.error.csv\n"
+    "  --accuracy E       pick the method and tolerance that reach the global error E on\n"
+    "                     the outputs at the least cost, from a short pilot run\n"
+    "  --error-control C  outputs (default): coordinates that nothing and no output\n"
+    "                     depends on are left out of the step-size control; all: none\n"
     "  --quiet            no summary and no progress bar\n"
     "  -h, --help         this help\n"
     "\n"
@@ -59,6 +67,8 @@ typedef struct run_opts {
   const char *scene, *out;
   const char *sets[MAX_SETS + 8];
   int nsets, quiet;
+  int estimate, control_all;   /* --error-estimate, --error-control all */
+  double accuracy;             /* --accuracy, 0 when not given */
   char extra[7][96];      /* overrides built from --mode, --method, ... */
 } run_opts;
 
@@ -98,7 +108,7 @@ static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
 static int parse_args(int argc, char **argv, run_opts *o) {
   static const char *const known[] = {"--out", "--set", "--mode", "--method", "--rtol", "--atol",
                                       "--t-end", "--interval", "--path", "--quiet", "--help",
-                                      NULL};
+                                      "--error-estimate", "--accuracy", "--error-control", NULL};
   int extra = 0;
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;
@@ -106,6 +116,18 @@ static int parse_args(int argc, char **argv, run_opts *o) {
     if (strcmp(argv[i], "-h") == 0 || strcmp(argv[i], "--help") == 0) return 1;
     if (strcmp(argv[i], "--quiet") == 0) {
       o->quiet = 1;
+    } else if (strcmp(argv[i], "--error-estimate") == 0) {
+      o->estimate = 1;
+    } else if ((r = cli_opt(argc, argv, &i, "--accuracy", &v)) != 0) {
+      if (r < 0) return cli_need("run", "--accuracy", "a global error, e.g. 1e-6");
+      if (cli_number("run", "--accuracy", v, &o->accuracy) != 0) return -1;
+      if (!(o->accuracy >= 1e-12 && o->accuracy < 1))
+        return fprintf(stderr, "appell run: --accuracy %s: give a global error in [1e-12, 1)\n",
+                       v), -1;
+    } else if ((r = cli_opt(argc, argv, &i, "--error-control", &v)) != 0) {
+      if (r < 0 || (strcmp(v, "all") != 0 && strcmp(v, "outputs") != 0))
+        return fprintf(stderr, "appell run: --error-control needs 'outputs' or 'all'\n"), -1;
+      o->control_all = strcmp(v, "all") == 0;
     } else if ((r = cli_opt(argc, argv, &i, "--out", &v)) != 0 ||
                (r = cli_opt(argc, argv, &i, "-o", &v)) != 0) {
       if (r < 0) return cli_need("run", "--out", "a file name");
@@ -148,6 +170,8 @@ typedef struct run_state {
   int quiet_events;        /* --quiet: no line for a stop event */
   const char *error;       /* ap_strerror of the failure, or NULL */
   char message[4096];      /* what stopped it, as printed on stderr */
+  cli_acc acc;             /* --accuracy, --error-estimate, --error-control (run_accuracy.c) */
+  const char *err_path;    /* --out when it names a regular file (for OUT.error.csv), or NULL */
 } run_state;
 
 static double now(void) {
@@ -183,6 +207,7 @@ static int write_row(run_state *rs, FILE *f) {
   rs->t_last = ap_sim_time(rs->sim);
   for (int i = 0; i < nc; i++) fprintf(f, i ? ",%.15g" : "%.15g", rs->row[i]);
   fputc('\n', f);
+  cli_acc_keep_row(&rs->acc, rs->row, nc);
   warn_lift_off(rs, nc);
   double E = 0.0;
   rc = ap_scene_energy(rs->sc, ap_sim_time(rs->sim), ap_sim_q(rs->sim), ap_sim_v(rs->sim), &E);
@@ -328,12 +353,28 @@ static int start(run_state *rs, const run_opts *o) {
   }
   if (report[0] && !o->quiet) fprintf(stderr, "appell: initial state: %s", report);
   ap_scene_get_run(rs->sc, &rs->run);
+  rs->acc.estimate = o->estimate, rs->acc.accuracy = o->accuracy;
+  rs->acc.control_all = o->control_all;
   cli_warn_tolerance("run", rs->run.sim.mode == AP_MODE_DAE, rs->run.sim.method,
                      rs->run.sim.rtol);
   rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
   if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
   if (rc != AP_OK) {
     fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc), msg);
+    return cli_exit_code(rc);
+  }
+  rc = cli_acc_control(&rs->acc, rs->sc, &rs->run, rs->sim, q0, v0);
+  if (rc == AP_OK && o->accuracy > 0) {   /* the pick, then the simulation with its choice */
+    if ((rc = cli_acc_pick(&rs->acc, rs->sc, &rs->run, q0, v0, o->quiet)) != AP_OK)
+      return cli_exit_code(rc) == EXIT_INPUT ? EXIT_NUMERIC : cli_exit_code(rc);
+    ap_sim_free(rs->sim);
+    rc = ap_sim_create(m, &rs->run.sim, rs->run.t0, q0, v0, &rs->sim, msg, sizeof msg);
+    if (rc == AP_OK) rc = ap_scene_add_events(rs->sc, rs->sim, msg, sizeof msg);
+    if (rc == AP_OK && rs->acc.nunc) rc = ap_sim_set_uncontrolled(rs->sim, rs->acc.unc);
+  }
+  if (rc != AP_OK) {
+    fprintf(stderr, "%s: cannot start the simulation: %s: %s\n", o->scene, ap_strerror(rc),
+            ap_sim_message(rs->sim));
     return cli_exit_code(rc);
   }
   return EXIT_OK;
@@ -363,7 +404,7 @@ static void fill_record(FILE *f, const run_state *rs, const run_opts *o, int cod
   cli_record r = {o->scene, ap_scene_name(rs->sc), o->out, o->sets, o->nsets, &rs->run,
                   ap_scene_model(rs->sc), rs->status, code, rs->error, rs->message,
                   ap_sim_time(rs->sim), rs->rows > 0 ? rs->rows : 0, rs->sim, rs->drift,
-                  rs->E0, rs->wall, ap_scene_conserves_energy(rs->sc)};
+                  rs->E0, rs->wall, ap_scene_conserves_energy(rs->sc), &rs->acc};
   cli_record_write(f, &r);
 }
 
@@ -397,6 +438,7 @@ int cmd_run(int argc, char **argv) {
   cli_signals_install();
   char msg[1024];
   run_state rs = {0};
+  rs.err_path = out.kind == CLI_OUT_FILE ? o.out : NULL;
   int st = ap_scene_load(o.scene, o.sets, o.nsets, &rs.sc, msg, sizeof msg);
   if (st != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(st);
   code = start(&rs, &o);
@@ -412,12 +454,17 @@ int cmd_run(int argc, char **argv) {
     write_header(rs.sc, out.f);
     code = loop(&rs, &out);
     rs.wall = now() - t_start;
+    cli_acc_finish(&rs.acc, rs.sc, &rs.run, rs.buf, rs.buf + ap_model_n(ap_scene_model(rs.sc)),
+                   rs.status && strcmp(rs.status, CLI_STATUS_INTERRUPTED) != 0 &&
+                   strcmp(rs.status, CLI_STATUS_FAILED) != 0, rs.err_path);
     code = finish(&rs, &o, &out, &rec, code);
     if (code == EXIT_OK && !o.quiet) summary(&rs, &o);
+    if (code == EXIT_OK && !o.quiet) cli_acc_summary(&rs.acc, ap_scene_model(rs.sc));
     if (!o.quiet) cli_print_events(rs.sim);
   }
   free(rs.buf);
   free(rs.lift);
+  cli_acc_free(&rs.acc);
   ap_sim_free(rs.sim);
   ap_scene_free(rs.sc);
   return code;

@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "commit.h"
+#include "run_accuracy.h"
 #include "runrecord.h"
 #include "sweep.h"
 
@@ -64,7 +65,7 @@ void cli_json_string(FILE *f, const char *s) {
 }
 
 /* The shortest of %.15g, %.16g, %.17g that reads back to x (1e-12, not 9.9999999999999998e-13). */
-static void number(FILE *f, double x) {
+void cli_json_number(FILE *f, double x) {
   if (!isfinite(x)) {
     fputs("null", f);
     return;
@@ -91,7 +92,7 @@ static void named(FILE *f, const ap_model *m, const char *(*name)(const ap_model
     fputs(i ? ", " : "", f);
     cli_json_string(f, name(m, i));
     fputs(": ", f);
-    number(f, x[i]);
+    cli_json_number(f, x[i]);
   }
   fputc('}', f);
 }
@@ -103,7 +104,7 @@ static void events(FILE *f, const cli_record *r) {
   for (int i = 0; i < n; i++) {
     fputs(i ? ",\n    {" : "\n    {", f);
     fputs("\"name\": ", f), cli_json_string(f, ev[i].name);
-    fputs(", \"t\": ", f), number(f, ev[i].t);
+    fputs(", \"t\": ", f), cli_json_number(f, ev[i].t);
     fputs(", \"action\": ", f), cli_json_string(f, ev[i].action);
     fputs(", \"direction\": ", f), cli_json_string(f, ev[i].direction);
     fputs(", \"state\": {\"q\": ", f);
@@ -123,15 +124,15 @@ static void settings(FILE *f, const cli_record *r) {
   key(f, "method", 4), cli_json_string(f, d->mode == AP_MODE_DAE ? "ida" : d->method);
   key(f, "path", 4), cli_json_string(f, ap_model_path(r->model) == AP_PATH_TREE ? "tree"
                                                                                  : "dense");
-  key(f, "rtol", 4), number(f, d->rtol);
-  key(f, "atol", 4), number(f, d->atol);
-  key(f, "h_fixed", 4), number(f, d->h_fixed);
-  key(f, "h_init", 4), number(f, d->h_init);
-  key(f, "h_max", 4), number(f, d->h_max);
+  key(f, "rtol", 4), cli_json_number(f, d->rtol);
+  key(f, "atol", 4), cli_json_number(f, d->atol);
+  key(f, "h_fixed", 4), cli_json_number(f, d->h_fixed);
+  key(f, "h_init", 4), cli_json_number(f, d->h_init);
+  key(f, "h_max", 4), cli_json_number(f, d->h_max);
   key(f, "max_steps", 4), fprintf(f, "%ld", d->max_steps);
-  key(f, "t0", 4), number(f, r->run->t0);
-  key(f, "t_end", 4), number(f, r->run->t_end);
-  key(f, "interval", 4), number(f, r->run->interval);
+  key(f, "t0", 4), cli_json_number(f, r->run->t0);
+  key(f, "t_end", 4), cli_json_number(f, r->run->t_end);
+  key(f, "interval", 4), cli_json_number(f, r->run->interval);
   fputs("\n  }", f);
 }
 
@@ -154,7 +155,7 @@ void cli_record_write(FILE *f, const cli_record *r) {
   if (r->error) cli_json_string(f, r->error);
   else fputs("null", f);
   key(f, "message", 2), cli_json_string(f, r->message);
-  key(f, "t", 2), number(f, r->t);
+  key(f, "t", 2), cli_json_number(f, r->t);
   key(f, "rows", 2), fprintf(f, "%ld", r->rows);
   key(f, "events", 2), events(f, r);
   key(f, "steps", 2), fprintf(f, "%ld", st.steps);
@@ -162,11 +163,12 @@ void cli_record_write(FILE *f, const cli_record *r) {
   key(f, "evaluations", 2), fprintf(f, "%ld", st.rhs_evals);
   key(f, "partition_switches", 2), fprintf(f, "%ld", st.partition_switches);
   key(f, "projections", 2), fprintf(f, "%ld", st.projections);
-  key(f, "max_residual", 2), number(f, st.max_residual);
-  key(f, "energy_drift", 2), number(f, r->energy_drift);
+  key(f, "max_residual", 2), cli_json_number(f, st.max_residual);
+  key(f, "energy_drift", 2), cli_json_number(f, r->energy_drift);
   key(f, "energy_drift_relative", 2),
-      number(f, r->energy_drift / fmax(fabs(r->energy0), 1e-300));
+      cli_json_number(f, r->energy_drift / fmax(fabs(r->energy0), 1e-300));
   key(f, "energy_conserved", 2), fputs(r->conserves_energy ? "true" : "false", f);
-  key(f, "wall_time", 2), number(f, r->wall);
+  key(f, "wall_time", 2), cli_json_number(f, r->wall);
+  if (r->acc) key(f, "accuracy", 2), cli_acc_record(f, r->acc, r->model);
   fputs("\n}\n", f);
 }

@@ -43,11 +43,14 @@ typedef struct cli_record {
   const ap_sim *sim;        /* statistics and events (may be NULL) */
   double energy_drift, energy0, wall;
   int conserves_energy;
+  const struct cli_acc *acc;   /* the accuracy options' results (tools/run_accuracy.h), or NULL */
 } cli_record;
 
 /* Write the record as JSON to f (UTF-8; strings escaped, invalid bytes as U+FFFD, numbers
  * with 17 significant digits, NaN and infinities as null). */
 void cli_record_write(FILE *f, const cli_record *r);
+/* A JSON number (the shortest of 15 to 17 digits that reads back; null for NaN, Inf). */
+void cli_json_number(FILE *f, double x);
 /* A JSON string (with its quotes) for s. */
 void cli_json_string(FILE *f, const char *s);
 

@@ -88,6 +88,8 @@ def label(key):
     _, tool, mode, meth = key
     if tool == "appell":
         return f"Appell {mode} {meth}"
+    if tool == "appell_body":
+        return f"Appell body {mode} {meth}"
     if tool == "hand":
         return f"limit (hand ODE) {meth}"
     if tool == "sympy_scipy":
@@ -167,6 +169,44 @@ def ratios(curves, have_sympy, have_simbody):
     return rows, md
 
 
+# Steppers of the same order on both sides: dopri5 (5(4)) against RungeKuttaFeldberg (4(5)),
+# bs3 (3(2)) against RungeKutta3 (3(2)).
+SAME_ORDER = (("dopri5", "rkfeldberg"), ("bs3", "rk3"))
+
+
+def body_ratios(curves):
+    """Appell's ball built from bodies against Simbody's (both body models), at equal achieved
+    error: each side's best stepper, and steppers of the same order."""
+    md = ["| problem | error | Appell body best (orientation free) | time | Appell body best "
+          "(all controlled) | time | Simbody best | time | Simbody / Appell body | "
+          + " | ".join(f"Simbody {b} / Appell {a}" for a, b in SAME_ORDER) + " |",
+          "|" + "---|" * (9 + len(SAME_ORDER))]
+    allr = []
+    for p in ("turntable", "turntable_var"):
+        for E in LEVELS:
+            def best(mode=None, meth=None, tool="appell_body"):
+                b = None
+                for key, pts in curves.items():
+                    if key[0] != p or key[1] != tool or (mode and key[2] != mode) or \
+                       (meth and key[3] != meth):
+                        continue
+                    t, ex = time_at(pts, E)
+                    if t is not None and (b is None or t < b[0]):
+                        b = (t, ex, key)
+                return b
+            free, full = best("minimal_free"), best("minimal")
+            sb = best(tool="simbody")
+            if free and sb:
+                allr.append(sb[0] / free[0])
+            same = [fmt_r(best(tool="simbody", meth=b), best("minimal_free", a))
+                    for a, b in SAME_ORDER]
+            md.append(f"| {p} | {E:.0e} | {label(free[2])[12:] if free else '-'} | "
+                      f"{fmt_t(free)} | {label(full[2])[12:] if full else '-'} | "
+                      f"{fmt_t(full)} | {label(sb[2])[8:] if sb else '-'} | {fmt_t(sb)} | "
+                      f"{fmt_r(sb, free)} | " + " | ".join(same) + " |")
+    return md, allr
+
+
 def overhead(curves):
     """Appell (each mode) / hand-reduced ODE under the same stepper at equal error."""
     rows, per = [], {}
@@ -210,7 +250,7 @@ def per_eval(rows_all):
         tool = r["tool"] if r["tool"] != "appell" else "appell " + r["mode"]
         acc.setdefault((r["problem"], tool), []).append(float(r["us_per_eval"]))
     tools = ["appell minimal", "appell projected", "appell dae", "hand", "sympy_scipy",
-             "simbody"]
+             "simbody", "appell_body"]
     md = ["| problem | " + " | ".join(tools) + " |", "|---|" + "---|" * len(tools)]
     for p in PROBLEMS:
         cells = [f"{statistics.median(acc[(p, t)]):.2f}" if (p, t) in acc else "-"
@@ -233,6 +273,8 @@ def style(key, idx):
     if tool == "appell":
         dt = {"minimal": 1, "projected": 2, "dae": 1}[mode]
         return f"lt {COLOR.get(meth, 8)} dt {dt} lw {2.5 if mode == 'dae' else 1.5}"
+    if tool == "appell_body":
+        return f"lt {COLOR.get(meth, 8)} dt {1 if mode == 'minimal_free' else 5} lw 3 pt 7 ps 0.6"
     if tool == "hand":
         return f"lt {COLOR.get(meth, 8)} dt 3 lw 1 pt 6 ps 0.5"
     if tool == "sympy_scipy":
@@ -300,6 +342,17 @@ def main():
           "Time = CPU time of one run to reach the error (interpolated in log-log between "
           "sweep points). `<=`: upper bound (the loosest tolerance already overshoots); `*`: "
           "ratio involving such a bound.", ""] + rmd
+    if sb:
+        bmd, ballr = body_ratios(curves)
+        md += ["", "## Body-built models: Appell's ball against Simbody's ball", "",
+               "Both sides build the ball on the turntable from bodies (Appell: "
+               "tests/bodysys.c; Simbody: bench/peers/simbody_turntable.cc). Appell with its "
+               "orientation left out of the error control (appell run's default) and with "
+               "every coordinate controlled. Ratios > 1: Appell is faster.", ""] + bmd
+        if ballr:
+            md += ["", f"Simbody / Appell body (orientation free), best against best, over "
+                   f"{len(ballr)} levels: {min(ballr):.0f} ... {max(ballr):.0f}, median "
+                   f"{statistics.median(ballr):.0f}."]
     md += ["", "## Appell / hand-reduced ODE under the same stepper",
            "", "Median (min-max) over the error levels 1e-4 ... 1e-10 that both reach.", ""]
     md += omd

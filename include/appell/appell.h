@@ -14,6 +14,7 @@
 #include "appell/batch.h"
 #include "appell/outfile.h"
 #include "appell/control.h"
+#include "appell/accuracy.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

@@ -528,3 +528,5 @@ void ap_drv_events_free(ap_sim *s) {
   free(ev);
   s->ev = NULL;
 }
+
+int ap_drv_event_defined(const ap_sim *s) { return s->ev ? s->ev->count : 0; }

@@ -194,7 +194,7 @@ static int setup_dae(ap_sim *s) {
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
   double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, s->y, d->vdot);
-  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL};
+  ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL, NULL};
   int rc = ap_dae_create(s->m, d, s->t, s->y, yp, &o, s->def.rank_rtol, &s->dae, s->msg,
                          sizeof s->msg);
   if (rc == AP_OK) ap_dae_state(s->dae, s->y);
@@ -238,7 +238,10 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
   ap_step_opts o = {s->def.rtol, s->def.atol, s->meth->adaptive ? 0.0 : s->def.h_fixed,
-                    s->def.h_init, s->def.h_max, s->def.max_steps, NULL};
+                    s->def.h_init, s->def.h_max, s->def.max_steps, NULL, NULL};
+  if (ap_drv_weights_create(s, (size_t)(s->n + s->k)) != AP_OK)
+    return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  o.weight = s->wt;
   int nphi = s->m->ev.phi && s->m->ev.project_q ? s->m->nphi : 0;
   if (ap_step_native_projection(s->meth) &&
       ((s->def.mode == AP_MODE_PROJECTED && s->m->b > 0) || nphi > 0)) {
@@ -360,6 +363,7 @@ void ap_sim_free(ap_sim *s) {
   ap_data_free(s->d);
   free(s->gn);
   free(s->gn_iwork);
+  free(s->wt);
   free(s->y);
   free(s);
 }

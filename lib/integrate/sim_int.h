@@ -65,6 +65,9 @@ struct ap_sim {
   const ap_drv_stage *stages[AP_DRV_MAX_STAGES];   /* the after-step pipeline, in order */
   int nstages;
   ap_sim_events *ev;        /* events and their records (event.c); NULL until one is added */
+  double *wt;               /* (ny) the stepper's error weights (ap_step_opts.weight): 1, or 0
+                               for a coordinate left out of the step-size control
+                               (ap_sim_set_uncontrolled, free_coords.c) */
   double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
                                stepper stops at it); INFINITY when none */
   ap_sim_ctrl *ctrl;        /* inputs and controller (sim_input.c); NULL until declared */
@@ -117,8 +120,12 @@ int ap_drv_judge_state(ap_sim *s, double t, const double *y);
 double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
 /* Evaluate the whole pipeline at the accepted state so ap_sim_data and q, v describe it. */
 int ap_drv_evaluate_current(ap_sim *s);
+/* The number of events added to the simulation (event.c). */
+int ap_drv_event_defined(const ap_sim *s);
 /* Events (event.c): free them with the simulation. */
 void ap_drv_events_free(ap_sim *s);
+/* The error weights s->wt, all 1 (free_coords.c). */
+int ap_drv_weights_create(ap_sim *s, size_t ny);
 /* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
  * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
 int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);

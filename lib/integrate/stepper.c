@@ -287,3 +287,21 @@ void ap_step_accept(ap_stepper *s, double t, const double *y) {
 int ap_step_native_projection(const ap_step_method *meth) {
   return meth && meth->backend == &ap_step_cvode && meth->table == CV_BDF;
 }
+
+/* ---- error weights (ap_step_opts.weight) ------------------------------------------------ */
+
+double ap_step_weight(const ap_stepper *s, int i) { return s->o.weight ? s->o.weight[i] : 1.0; }
+
+double ap_step_weight_norm(const ap_stepper *s) {
+  if (!s->o.weight) return 1.0;
+  int nw = 0;
+  for (int i = 0; i < s->n; i++) nw += s->o.weight[i] != 0.0;
+  return nw > 0 ? sqrt((double)s->n / nw) : 1.0;
+}
+
+int ap_step_ewt_fill(const ap_stepper *s, const double *y, double *ewt) {
+  double wn = ap_step_weight_norm(s);
+  for (int i = 0; i < s->n; i++)
+    ewt[i] = wn * ap_step_weight(s, i) / (s->o.rtol * fabs(y[i]) + s->o.atol);
+  return 0;
+}

@@ -33,6 +33,11 @@ typedef struct ap_step_opts {
                          ap_step_one calls with the same tstop); 0 = 100000 */
   ap_proj_fn proj;    /* CVODE: project after every step inside the method (NULL = none);
                          ignored by the other backends */
+  const double *weight; /* (n) or NULL (all 1): component i's scaled error is multiplied by
+                         weight[i] >= 0 in the error test; 0 leaves it out of the step-size
+                         control (global_error.c: coordinates nothing depends on). The norm
+                         is taken over the components with a nonzero weight. Read at every
+                         step: the owner may change the values (not the pointer) later */
 } ap_step_opts;
 
 typedef struct ap_step_stats {
@@ -167,6 +172,14 @@ struct ap_stepper {
   char sun_msg[256];     /* last message of SUNDIALS' error handler (never printed) */
   char msg[512];         /* last failure, for ap_step_message */
 };
+
+/* The weight of component i (1 without weights) and the factor sqrt(n / number of nonzero
+ * weights) that keeps a weighted RMS norm over n entries a mean over the weighted ones. */
+double ap_step_weight(const ap_stepper *s, int i);
+double ap_step_weight_norm(const ap_stepper *s);
+/* SUNDIALS' error weights (for ARKODE's and CVODE's ewt functions): ewt_i =
+ * weight_i sqrt(n / nw) / (rtol |y_i| + atol). Returns 0. */
+int ap_step_ewt_fill(const ap_stepper *s, const double *y, double *ewt);
 
 /* Allocate a stepper with its SUNContext and vectors y = y0, tmp; options defaulted. */
 /* Vectors of a stepper's pool (nvpool.c): enough for every clone ARKODE and CVODE make. */

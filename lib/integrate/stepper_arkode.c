@@ -132,6 +132,11 @@ static int ark_flag_fail(ap_stepper *s, int flag) {
 
 /* ---- creation ------------------------------------------------------------------------ */
 
+/* Error weights with ap_step_opts.weight (stepper.c). */
+static int ark_ewt(N_Vector y, N_Vector ewt, void *user) {
+  return ap_step_ewt_fill(user, N_VGetArrayPointer(y), N_VGetArrayPointer(ewt));
+}
+
 static int ark_configure(ap_stepper *s) {
   const ap_step_opts *o = &s->o;
   int flag = ERKStepSetUserData(s->mem, s);
@@ -140,6 +145,8 @@ static int ark_configure(ap_stepper *s) {
   if (flag == ARK_SUCCESS) flag = ERKStepSetTable(s->mem, B);
   ARKodeButcherTable_Free(B);
   if (flag == ARK_SUCCESS) flag = ERKStepSStolerances(s->mem, o->rtol, o->atol);
+  if (flag == ARK_SUCCESS && o->weight)
+    flag = ERKStepWFtolerances(s->mem, ark_ewt);
   if (flag == ARK_SUCCESS && o->h_fixed > 0) flag = ERKStepSetFixedStep(s->mem, o->h_fixed);
   if (flag == ARK_SUCCESS) flag = ERKStepSetMaxNumSteps(s->mem, o->max_steps);
   if (flag == ARK_SUCCESS && o->h_init > 0) flag = ERKStepSetInitStep(s->mem, o->h_init);

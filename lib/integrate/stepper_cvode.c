@@ -111,11 +111,18 @@ static int cv_proj(realtype t, N_Vector ycur, N_Vector corr, realtype eps, N_Vec
   return s->o.proj(t, NV(ycur), NV(corr), err ? NV(err) : NULL, s->user);
 }
 
+/* Error weights with ap_step_opts.weight (stepper.c). */
+static int cv_ewt(N_Vector y, N_Vector ewt, void *user) {
+  return ap_step_ewt_fill(user, N_VGetArrayPointer(y), N_VGetArrayPointer(ewt));
+}
+
 static int cv_configure(ap_stepper *s, double t0) {
   const ap_step_opts *o = &s->o;
   int flag = CVodeInit(s->mem, cv_rhs, t0, s->y);
   if (flag == CV_SUCCESS) flag = CVodeSetUserData(s->mem, s);
   if (flag == CV_SUCCESS) flag = CVodeSStolerances(s->mem, o->rtol, o->atol);
+  if (flag == CV_SUCCESS && o->weight)
+    flag = CVodeWFtolerances(s->mem, cv_ewt);
   if (flag == CV_SUCCESS) flag = cv_solver(s);
   if (flag == CV_SUCCESS) flag = CVodeSetMaxNumSteps(s->mem, o->max_steps);
   if (flag == CV_SUCCESS && o->h_init > 0) flag = CVodeSetInitStep(s->mem, o->h_init);

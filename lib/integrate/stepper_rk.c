@@ -299,10 +299,11 @@ static double solution_and_error(ap_stepper *s, rk_mem *rk, double h, const doub
     for (int p = 0; p < 3; p++) s3 += b3w[p] * rk->k[b3j[p]][x];
     rk->y1[x] = y[x] + h * s8;
     double sk = s->o.atol + s->o.rtol * fmax(fabs(y[x]), fabs(rk->y1[x]));
+    if (s->o.weight) sk /= s->o.weight[x];   /* weight 0: sk = inf, the term vanishes */
     e5 += (s5 / sk) * (s5 / sk), e3 += ((s8 - s3) / sk) * ((s8 - s3) / sk);
   }
-  double den = e5 + 0.01 * e3;
-  double err = fabs(h) * e5 / sqrt(n * (den > 0.0 ? den : 1.0));
+  double den = e5 + 0.01 * e3, wn = ap_step_weight_norm(s);
+  double err = wn * fabs(h) * e5 / sqrt(n * (den > 0.0 ? den : 1.0));
   return isfinite(err) ? err : NAN;
 }
 
@@ -322,10 +323,10 @@ static int attempt(ap_stepper *s, rk_mem *rk, double t, double h, const double *
 static double rms(const ap_stepper *s, const double *v, const double *y) {
   double sum = 0.0;
   for (int x = 0; x < s->n; x++) {
-    double r = v[x] / (s->o.atol + s->o.rtol * fabs(y[x]));
+    double r = ap_step_weight(s, x) * v[x] / (s->o.atol + s->o.rtol * fabs(y[x]));
     sum += r * r;
   }
-  return sqrt(sum / s->n);
+  return ap_step_weight_norm(s) * sqrt(sum / s->n);
 }
 
 /* The first step (HNW II.4): an Euler step of size h0 = 0.01 |y| / |f| estimates f', and

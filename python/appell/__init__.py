@@ -206,7 +206,8 @@ def _event_sets(events):
 
 class Simulation(_appell.Simulation):
     """Simulation(model, mode=None, method=None, rtol=None, atol=None, h_fixed=None,
-    h_init=None, h_max=None, max_steps=None, t0=None, q0=None, v0=None, events=None)
+    h_init=None, h_max=None, max_steps=None, t0=None, q0=None, v0=None, events=None, accuracy=None,
+    error_estimate=False)
 
     One run of a Model from its initial state (or q0, v0), with the scene's settings unless
     given here. run() records rows; advance() integrates without recording; state, stats,
@@ -218,9 +219,13 @@ class Simulation(_appell.Simulation):
     "hinge.angle - 60*deg", "direction": "rising", "action": "stop"} (or "kind": "collide",
     "lift_off", "joint_range" with body, constraint, joint, min, max). One with the name of
     a scene event replaces it. The simulation then runs a copy of the model loaded with these
-    events (sim.model is that copy); a bad entry raises SceneError naming it."""
+    events (sim.model is that copy); a bad entry raises SceneError naming it.
 
-    def __new__(cls, model, *args, events=None, **kw):
+    accuracy (a global error on the output channels, docs/accuracy.md): the method and
+    tolerances are picked by a pilot over the scene's t_end and output interval (the choice in
+    .pick). error_estimate=True: every run() estimates its global error."""
+
+    def __new__(cls, model, *args, events=None, accuracy=None, error_estimate=False, **kw):
         if events is not None:
             if not isinstance(model, Model):
                 raise TypeError(f"model must be an appell.Model, got {type(model).__name__}")
@@ -228,14 +233,25 @@ class Simulation(_appell.Simulation):
             if sets:
                 text, name, old = model.source
                 model = loads(text, name=name, set=tuple(old) + sets)
-        return super().__new__(cls, model, *args, **kw)
+        pick = None
+        if accuracy is not None:
+            probe = super().__new__(cls, model, *args, **kw)   # the initial state and settings
+            t0, q0, v0 = probe.state
+            ms = model.settings
+            pick = _appell._pick(model, float(accuracy), probe.settings, t0, q0, v0,
+                                 ms["t_end"], ms["interval"])
+            kw.update(method=pick["method"], rtol=pick["rtol"], atol=pick["atol"])
+        self = super().__new__(cls, model, *args, **kw)
+        self.pick, self.error_estimate = pick, bool(error_estimate)
+        return self
 
-    def run(self, t_end=None, dt=None, controller=None, period=None):
+    def run(self, t_end=None, dt=None, controller=None, period=None, error_estimate=None):
         """Integrate from the current time to t_end (default: the scene's), recording a row
         every dt (default: the scene's output interval), the last at t_end exactly; the first
         row is the current state. Returns a Result. On failure raises Error with .result, the
         rows up to where the run stopped (status "failed"); Ctrl-C raises KeyboardInterrupt
-        with .result the same way (status "interrupted").
+        with .result the same way (status "interrupted"). With error_estimate (default: the
+        Simulation's), Result.error_estimate holds the estimated global error (docs/accuracy.md).
 
         controller: f(t, state) -> inputs, called every period seconds of simulated time
         (default: dt) from the current time on, the scene's inputs: held at its result until
@@ -245,12 +261,12 @@ class Simulation(_appell.Simulation):
         by f stops the run and propagates with .result, the rows up to there. The inputs keep
         their last values after the run."""
         if controller is None:
-            return self._run_rows(t_end, dt)
+            return self._run_rows(t_end, dt, error_estimate)
         if period is None:
             period = dt if dt is not None else self.model.settings["interval"]
         handle = _appell._set_controller(self, controller, float(period))
         try:
-            return self._run_rows(t_end, dt)
+            return self._run_rows(t_end, dt, error_estimate)
         except Error as e:
             raised = _appell._controller_error(handle)
             if raised is None:
@@ -278,8 +294,9 @@ class Simulation(_appell.Simulation):
         """The input values in force, a dict by name (the scene's inputs: section)."""
         return _appell._inputs(self)
 
-    def _run_rows(self, t_end, dt):
+    def _run_rows(self, t_end, dt, error_estimate):
         m = self.model
+        start = self.state
         try:
             columns, table, q, v = self._run(t_end, dt)
         except BaseException as e:
@@ -300,6 +317,11 @@ class Simulation(_appell.Simulation):
                      message=(f"stopped by event '{stop['name']}' at t = {stop['t']:.10g}"
                               if stopped else self.warning), events=events)
         res.model = m   # for res.view() (_view.py)
+        res.pick = self.pick
+        res.error_estimate = None
+        if (self.error_estimate if error_estimate is None else error_estimate) and len(table) > 1:
+            res.error_estimate = _appell._error_estimate(m, self.settings, start[0], start[1],
+                                                         start[2], table)
         return res
 
 

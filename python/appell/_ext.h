@@ -7,6 +7,7 @@
  *   _lin.c      linearize: operating points, A and B, eigenvalues, speed sweeps
  *   _io.c       write_file: files written by the rules of appell run --out (outfile.h)
  *   _ctrl.c     inputs and controllers in the loop (control.h)
+ *   _accuracy.c _error_estimate, _pick: accuracy on demand (include/appell/accuracy.h)
  *
  * Only the public C API (<appell/appell.h>) is used. Integration and batches run with the
  * GIL released; a Model is only read by Simulations and may be shared by Python threads. */
@@ -75,5 +76,7 @@ PyObject *apx_set_controller(PyObject *self, PyObject *args);
 PyObject *apx_controller_error(PyObject *self, PyObject *capsule);
 PyObject *apx_set_inputs(PyObject *self, PyObject *args);
 PyObject *apx_get_inputs(PyObject *self, PyObject *sim);
+PyObject *apx_error_estimate(PyObject *self, PyObject *args);   /* _accuracy.c */
+PyObject *apx_pick(PyObject *self, PyObject *args);
 
 #endif

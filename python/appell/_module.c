@@ -173,6 +173,10 @@ static PyMethodDef module_methods[] = {
      "_controller_error(handle) -> the exception the controller raised, or None"},
     {"_set_inputs", apx_set_inputs, METH_VARARGS, "_set_inputs(sim, values): dict or array"},
     {"_inputs", apx_get_inputs, METH_O, "_inputs(sim) -> dict of the input values now"},
+    {"_error_estimate", apx_error_estimate, METH_VARARGS,
+     "_error_estimate(model, settings, t0, q0, v0, table) -> dict (_accuracy.c)"},
+    {"_pick", apx_pick, METH_VARARGS,
+     "_pick(model, accuracy, settings, t0, q0, v0, t_end, dt) -> dict (_accuracy.c)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {
