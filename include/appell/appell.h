@@ -13,6 +13,7 @@
 #include "appell/scene.h"
 #include "appell/batch.h"
 #include "appell/outfile.h"
+#include "appell/urdf.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

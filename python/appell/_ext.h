@@ -66,5 +66,6 @@ PyObject *apx_plan_info(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_constant(PyObject *self, PyObject *args);
 PyObject *apx_linearize(PyObject *self, PyObject *args, PyObject *kw);
 PyObject *apx_write_file(PyObject *self, PyObject *args, PyObject *kw);
+PyObject *apx_urdf(PyObject *self, PyObject *args, PyObject *kw);
 
 #endif
