@@ -198,3 +198,32 @@ def test_wheel_errors(tmp_path):
     assert np.max(np.abs(torus["residual"])) < 1e-12
     text = (tmp_path / "torus.yaml").read_text()
     assert re.search(r"shape: \{kind: torus, radius: 0\.0900*1?, tube: 0\.01\}", text), text
+
+
+G = 9.81
+
+
+def test_joint_kinds_closed_form(tmp_path):
+    got = import_and_run(tmp_path, URDF / "kinds.urdf", "kinds", [])
+    m, c, force = 2.0, 2.0, 0.8 * 2.0 * G
+
+    def s(t):
+        return force / c * (t - m / c * (1 - np.exp(-c * t / m)))
+    t = got["t"]
+    assert np.max(np.abs(got["sliderpos"] - s(t))) <= 10 * (RTOL * 0.5 + ATOL)
+    assert np.max(np.abs(got["sheety"] - G * t**2 / 2)) <= 10 * (RTOL * got["sheety"].max() + ATOL)
+    assert np.max(np.abs(got["sheetx"])) <= 10 * ATOL and np.max(np.abs(got["sheetheading"])) <= 10 * ATOL
+    # the upper limit 0.5 m ends the run where s(t) = 0.5 (Newton from the run's last time)
+    t_star = t[-1]
+    for _ in range(20):
+        t_star -= (s(t_star) - 0.5) / (force / c * (1 - np.exp(-c * t_star / m)))
+    assert t[-1] < 3 and abs(t[-1] - t_star) <= 1e-9, (t[-1], t_star)
+
+
+def test_floating_root(tmp_path):
+    got = import_and_run(tmp_path, URDF / "floating.urdf", "free",
+                         ["--set", "initial.body.omega=[1, 2, 3]"])
+    t = got["t"]
+    assert np.max(np.abs(got["bodyz"] + G * t**2 / 2)) <= 10 * (RTOL * 45 + ATOL)
+    assert np.max(np.abs(got["energy_error"])) <= 10 * RTOL * np.max(np.abs(got["potential"]))
+    assert np.ptp(got["bodyqw"]) > 0.1   # it turns
