@@ -400,23 +400,38 @@ static int read_robot(ur_ctx *c, xmlNode *root, const ap_urdf_def *def, ur_robot
   return AP_OK;
 }
 
+/* The first XML error of a parse (libxml2 reports later ones too, after recovering). */
+typedef struct ur_xml_error {
+  int set, line, col;
+  char what[512];
+} ur_xml_error;
+
+static void first_error(void *user, xmlErrorPtr e) {
+  xmlParserCtxt *x = user;
+  ur_xml_error *f = x ? x->_private : NULL;
+  if (!f || f->set || !e) return;
+  f->set = 1, f->line = e->line > 0 ? e->line : 1, f->col = e->int2 > 0 ? e->int2 : 1;
+  snprintf(f->what, sizeof f->what, "%s", e->message ? e->message : "not an XML document");
+  f->what[strcspn(f->what, "\n")] = '\0';
+}
+
 /* Parse the text; XML syntax errors with libxml2's line and column. */
 static xmlDoc *parse_xml(ur_ctx *c, const char *text, size_t len) {
   xmlParserCtxt *x = xmlNewParserCtxt();
-  if (!x) {
+  if (!x || !x->sax) {
+    xmlFreeParserCtxt(x);
     c->status = AP_ERR_NOMEM;
     return NULL;
   }
+  ur_xml_error f = {0, 1, 1, "not an XML document"};
+  x->_private = &f;
+  x->sax->serror = first_error;
   xmlDoc *doc = xmlCtxtReadMemory(x, text, (int)len, c->file, NULL,
                                   XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING |
                                       XML_PARSE_BIG_LINES);
-  if (!doc || !xmlDocGetRootElement(doc)) {
-    const xmlError *e = xmlCtxtGetLastError(x);
-    char what[512];
-    snprintf(what, sizeof what, "%s", e && e->message ? e->message : "not an XML document\n");
-    what[strcspn(what, "\n")] = '\0';
-    snprintf(c->msg, c->msg_len, "%s:%d:%d: XML syntax error: %s", c->file, e ? e->line : 1,
-             e && e->int2 > 0 ? e->int2 : 1, what);
+  if (!doc || !xmlDocGetRootElement(doc) || f.set) {
+    snprintf(c->msg, c->msg_len, "%s:%d:%d: XML syntax error: %s", c->file, f.line, f.col,
+             f.what);
     c->status = AP_ERR_ARG;
     xmlFreeDoc(doc);
     doc = NULL;
