@@ -19,23 +19,13 @@
 #include <string.h>
 
 #include <libxml/parser.h>
-#include <libxml/tree.h>
 
 #include "appell/scene.h"
 #include "core/defcheck.h"
 #include "scene/urdf_int.h"
 
-typedef struct ur_ctx {
-  const char *file;
-  char *msg;
-  size_t msg_len;
-  int status;
-} ur_ctx;
 
-/* "FILE:LINE: <element name='NAME'>: what"; the first error wins. */
-static int ur_err(ur_ctx *c, const xmlNode *at, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static int ur_err(ur_ctx *c, const xmlNode *at, const char *fmt, ...) {
+int ur_err(ur_ctx *c, const xmlNode *at, const char *fmt, ...) {
   if (c->status != AP_OK) return c->status;
   char what[600];
   va_list ap;
@@ -175,19 +165,13 @@ static int read_link(ur_ctx *c, const xmlNode *n, ur_link *l) {
   return AP_OK;
 }
 
-static int find_link(const ur_robot *r, const char *urdf_name) {
-  for (int i = 0; i < r->nlinks; i++)
-    if (strcmp(r->links[i].urdf_name, urdf_name) == 0) return i;
-  return -1;
-}
-
 /* <parent link=...> or <child link=...>: the link index. */
 static int link_ref(ur_ctx *c, const ur_robot *r, const xmlNode *j, const char *role, int *out) {
   const xmlNode *e = child(j, role);
   if (!e) return ur_err(c, j, "<%s link=...> is missing", role);
   xmlChar *name = xmlGetProp(e, BAD_CAST "link");
   if (!name) return ur_err(c, e, "attribute 'link' is missing");
-  *out = find_link(r, (const char *)name);
+  *out = ur_find_link(r, (const char *)name);
   if (*out < 0) {
     const char *names[256];
     int cnt = r->nlinks < 256 ? r->nlinks : 256;
@@ -267,55 +251,10 @@ static int read_joint(ur_ctx *c, ur_robot *r, const xmlNode *n, ur_joint *j) {
   return AP_OK;
 }
 
-/* The cycle that link `at` lies on, reported at its joint first in the file:
- * "the joints form a cycle: a -> b -> a" (parent to child). */
-static int report_cycle(ur_ctx *c, const ur_robot *r, int at, xmlNode *const *jnodes) {
-  int first = r->links[at].parent_joint, k = at;
-  do {
-    int j = r->links[k].parent_joint;
-    if (r->joints[j].line < r->joints[first].line) first = j;
-    k = r->joints[j].parent;
-  } while (k != at);
-  int seq[64], n = 0;   /* from the parent of `first` up through the parents */
-  k = r->joints[first].parent;
-  do {
-    if (n < 64) seq[n++] = k;
-    k = r->joints[r->links[k].parent_joint].parent;
-  } while (k != r->joints[first].parent);
-  char chain[400];
-  size_t used = 0;
-  for (int i = 0; i <= n && used < sizeof chain; i++) {   /* seq[0], seq[n-1] ... seq[1], seq[0] */
-    int m = seq[i == 0 || i == n ? 0 : n - i];
-    int w = snprintf(chain + used, sizeof chain - used, "%s%s", i ? " -> " : "",
-                     r->links[m].urdf_name);
-    used += w > 0 ? (size_t)w : 0;
-  }
-  return ur_err(c, jnodes[first], "the joints form a cycle: %s; a URDF is a tree (close loops "
-                "in the scene with constraints)", chain);
-}
-
-/* Every link reaches the root through its parents; one root. */
-static int check_tree(ur_ctx *c, ur_robot *r, xmlNode *const *jnodes, xmlNode *const *lnodes) {
-  r->root = -1;
-  for (int i = 0; i < r->nlinks; i++) {
-    int at = i, steps = 0;
-    while (r->links[at].parent_joint >= 0 && steps++ <= r->nlinks)
-      at = r->joints[r->links[at].parent_joint].parent;
-    if (steps > r->nlinks) return report_cycle(c, r, at, jnodes);
-    if (r->root >= 0 && at != r->root)
-      return ur_err(c, lnodes[at], "a second root: links '%s' and '%s' have no parent joint, "
-                    "and a URDF is one tree", r->links[r->root].urdf_name,
-                    r->links[at].urdf_name);
-    r->root = at;
-  }
-  if (r->root < 0) return ur_err(c, NULL, "the robot has no link");
-  return AP_OK;
-}
-
 static int mark_wheels(ur_ctx *c, ur_robot *r, const ap_urdf_def *def, xmlNode *const *lnodes) {
   for (int w = 0; w < def->nwheels; w++) {
     const char *name = def->wheels ? def->wheels[w] : NULL;
-    int i = name ? find_link(r, name) : -1;
+    int i = name ? ur_find_link(r, name) : -1;
     if (i < 0) {
       const char *names[256];
       int cnt = r->nlinks < 256 ? r->nlinks : 256;
@@ -336,23 +275,6 @@ static int mark_wheels(ur_ctx *c, ur_robot *r, const ap_urdf_def *def, xmlNode *
                     "its radius (length %g, radius %g)", l->length, l->radius);
     l->wheel = 1;
   }
-  return AP_OK;
-}
-
-/* Distinct names: links among links, joints among joints (URDF names as given). */
-static int check_names(ur_ctx *c, const ur_robot *r, xmlNode *const *jn, xmlNode *const *ln) {
-  for (int i = 0; i < r->nlinks; i++)
-    for (int k = 0; k < i; k++)
-      if (strcmp(r->links[i].name, r->links[k].name) == 0)
-        return ur_err(c, ln[i], "a second link of this name (the first is at line %d)%s",
-                      r->links[k].line,
-                      strcmp(r->links[i].urdf_name, r->links[k].urdf_name) ? " once its "
-                      "characters other than letters, digits, '_' and '-' are '_'" : "");
-  for (int i = 0; i < r->njoints; i++)
-    for (int k = 0; k < i; k++)
-      if (strcmp(r->joints[i].name, r->joints[k].name) == 0)
-        return ur_err(c, jn[i], "a second joint of this name (the first is at line %d)",
-                      r->joints[k].line);
   return AP_OK;
 }
 
@@ -385,12 +307,13 @@ static int read_robot(ur_ctx *c, xmlNode *root, const ap_urdf_def *def, ur_robot
       (*lnodes)[r->nlinks] = k;
       if (read_link(c, k, &r->links[r->nlinks++])) return AP_ERR_ARG;
     }
+  if (ur_index_links(c, r, *lnodes)) return c->status;
   for (xmlNode *k = root->children; k; k = k->next)
     if (is(k, "joint")) {
       (*jnodes)[r->njoints] = k;
       if (read_joint(c, r, k, &r->joints[r->njoints++])) return AP_ERR_ARG;
     }
-  if (check_names(c, r, *jnodes, *lnodes) || check_tree(c, r, *jnodes, *lnodes) ||
+  if (ur_check_joint_names(c, r, *jnodes) || ur_check_tree(c, r, *jnodes, *lnodes) ||
       mark_wheels(c, r, def, *lnodes))
     return c->status;
   for (int j = 0; !r->links[r->root].world && j < r->njoints; j++)
@@ -459,6 +382,7 @@ static int convert(ur_ctx *c, const char *text, size_t len, const ap_urdf_def *d
   if (rc == AP_OK) rc = ur_emit(&r, def, c->file, yaml, ylen, c->msg, c->msg_len);
   free(r.links);
   free(r.joints);
+  free(r.by_name);
   free(lnodes);
   free(jnodes);
   xmlFreeDoc(doc);

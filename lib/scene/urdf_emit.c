@@ -225,13 +225,24 @@ static void root_joint(ur_buf *b, const ur_robot *r) {
   frame(b, "child_frame", &cf);
 }
 
-/* Links in tree order (parents first), from the root. */
+/* Links in tree order (parents first, children in file order), from the root: O(n). */
 static int order(const ur_robot *r, int *out) {
+  int *first = malloc(((size_t)r->nlinks + 1) * sizeof *first);
+  int *next = malloc(((size_t)r->njoints + 1) * sizeof *next);
+  if (!first || !next) {
+    free(first);
+    free(next);
+    return -1;
+  }
+  for (int i = 0; i < r->nlinks; i++) first[i] = -1;
+  for (int j = r->njoints - 1; j >= 0; j--)
+    next[j] = first[r->joints[j].parent], first[r->joints[j].parent] = j;
   int n = 0;
   out[n++] = r->root;
   for (int k = 0; k < n; k++)
-    for (int j = 0; j < r->njoints; j++)
-      if (r->joints[j].parent == out[k]) out[n++] = r->joints[j].child;
+    for (int j = first[out[k]]; j >= 0; j = next[j]) out[n++] = r->joints[j].child;
+  free(first);
+  free(next);
   return n;
 }
 
@@ -274,6 +285,10 @@ int ur_emit(const ur_robot *r, const ap_urdf_def *def, const char *file, char **
   int *ord = calloc((size_t)r->nlinks + 1, sizeof *ord);
   if (!ord) return AP_ERR_NOMEM;
   int n = order(r, ord);
+  if (n < 0) {
+    free(ord);
+    return AP_ERR_NOMEM;
+  }
   ur_buf b = {0};
   put(&b, "# Imported from %s by appell import (docs/urdf.md).\nname: %s\n\nbodies:\n", file,
       r->name);

@@ -6,6 +6,8 @@
 
 #include <stddef.h>
 
+#include <libxml/tree.h>
+
 #include "appell/urdf.h"
 
 typedef struct ur_pose {
@@ -54,7 +56,32 @@ typedef struct ur_robot {
   ur_joint *joints;
   int njoints;
   int root;                    /* the link without a parent joint */
+  int *by_name;                /* link indices sorted by urdf_name (ur_index_links) */
 } ur_robot;
+
+/* Reading context: the file name and the one message (the first error wins). */
+typedef struct ur_ctx {
+  const char *file;
+  char *msg;
+  size_t msg_len;
+  int status;
+} ur_ctx;
+
+/* "FILE:LINE: <element name='NAME'>: what"; returns AP_ERR_ARG (urdf.c). */
+int ur_err(ur_ctx *c, const xmlNode *at, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Names and the tree (urdf_tree.c), each O(n log n) or O(n) in the number of links. Sort the
+ * links by name and refuse duplicate names (URDF's, and the scene's once other characters
+ * are '_'); find a link by its URDF name (-1 when none); refuse duplicate joint names; find
+ * the root and refuse a cycle or a second root. */
+int ur_index_links(ur_ctx *c, ur_robot *r, xmlNode *const *lnodes);
+int ur_find_link(const ur_robot *r, const char *urdf_name);
+int ur_check_joint_names(ur_ctx *c, const ur_robot *r, xmlNode *const *jnodes);
+int ur_check_tree(ur_ctx *c, ur_robot *r, xmlNode *const *jnodes, xmlNode *const *lnodes);
 
 /* Pose algebra (urdf_emit.c). */
 void ur_quat_mul(const double a[4], const double b[4], double out[4]);
