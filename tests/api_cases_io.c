@@ -58,4 +58,17 @@ void api_cases_io(void) {
   CASE(ap_urdf_to_scene, "nwheels -1",
        (ud = ap_urdf_def_default(), ud.wheels = one_wheel, ud.nwheels = -1,
         ap_urdf_to_scene(SCENE_PATH, &ud, &yaml, &ylen, msg, sizeof msg) == AP_ERR_ARG));
+  /* The ground of a constraint (include/appell/body.h); BM is the rolling disk (constraint 0
+   * rolling), SM a math-level model. */
+  static ap_ground_motion gm;
+  CASE(ap_model_constraint_ground, "m NULL", ap_model_constraint_ground(NULL, 0, &gm) == AP_ERR_ARG);
+  CASE(ap_model_constraint_ground, "math-level model",
+       ap_model_constraint_ground(SM, 0, &gm) == AP_ERR_ARG);
+  CASE(ap_model_constraint_ground, "c -1", ap_model_constraint_ground(BM, -1, &gm) == AP_ERR_ARG);
+  CASE(ap_model_constraint_ground, "c too large",
+       ap_model_constraint_ground(BM, 99, &gm) == AP_ERR_ARG);
+  CASE(ap_model_constraint_ground, "out NULL", ap_model_constraint_ground(BM, 0, NULL) == AP_ERR_ARG);
+  CASE(ap_model_constraint_ground, "the disk's rolling: the plane z = 0",
+       ap_model_constraint_ground(BM, 0, &gm) == AP_OK && gm.normal[2] == 1 &&
+           gm.sphere_radius == 0);
 }
