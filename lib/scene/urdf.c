@@ -128,6 +128,13 @@ static int read_inertial(ur_ctx *c, const xmlNode *n, ur_link *l) {
   for (int i = 0; i < 6; i++)
     if (numbers(c, it, keys[i], 1, (i == 1 || i == 2 || i == 4) ? &zero : NULL, &l->I[i]))
       return AP_ERR_ARG;
+  const double *I = l->I;   /* leading minors of [[ixx ixy ixz] [ixy iyy iyz] [ixz iyz izz]] */
+  double m1 = I[0], m2 = I[0] * I[3] - I[1] * I[1];
+  double m3 = I[0] * (I[3] * I[5] - I[4] * I[4]) - I[1] * (I[1] * I[5] - I[4] * I[2]) +
+              I[2] * (I[1] * I[4] - I[3] * I[2]);
+  if (!(m1 > 0 && m2 > 0 && m3 > 0))
+    return ur_err(c, it, "the inertia tensor is not positive definite (leading minors %g, %g, "
+                  "%g; all must be positive)", m1, m2, m3);
   return AP_OK;
 }
 

@@ -164,6 +164,8 @@ BAD = [
      '<joint name="wrist"', "link 'upper' is already the child of joint 'shoulder'"),
     ("bad_number", edit('<mass value="1"/>', '<mass value="1kg"/>'), '<mass value="1kg"/>',
      "<mass>: value='1kg' is not 1 finite number"),
+    ("inertia_not_pd", edit('ixx="0.02" iyy="0.025"', 'ixx="0.02" iyy="-0.025"'),
+     'iyy="-0.025"', "<inertia>: the inertia tensor is not positive definite"),
 ]
 
 
