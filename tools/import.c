@@ -37,24 +37,24 @@ typedef struct import_opts {
   const char *wheels[MAX_WHEELS];
   int nwheels;
   ap_urdf_wheel_shape shape;
-  char names[4096];
+  char names[4096];         /* the wheel names, each NUL-terminated */
+  size_t used;              /* bytes of names in use */
 } import_opts;
 
 /* Split "a,b" into o->wheels (copied into o->names). */
 static int add_wheels(import_opts *o, const char *list) {
-  size_t used = strlen(o->names) + (o->nwheels ? 1 : 0);
   for (const char *s = list; *s;) {
     size_t n = strcspn(s, ",");
-    if (n == 0 || o->nwheels >= MAX_WHEELS || used + n + 1 > sizeof o->names) {
+    if (n == 0 || o->nwheels >= MAX_WHEELS || o->used + n + 1 > sizeof o->names) {
       fprintf(stderr, "appell import: --wheels '%s': %s\n", list,
               n == 0 ? "an empty link name" : "too many wheels");
       return -1;
     }
-    char *dst = o->names + used;
+    char *dst = o->names + o->used;
     memcpy(dst, s, n);
     dst[n] = '\0';
     o->wheels[o->nwheels++] = dst;
-    used += n + 1;
+    o->used += n + 1;
     s += n + (s[n] == ',');
   }
   return 0;

@@ -224,3 +224,14 @@ def test_floating_root(tmp_path):
     assert np.max(np.abs(got["bodyz"] + G * t**2 / 2)) <= 10 * (RTOL * 45 + ATOL)
     assert np.max(np.abs(got["energy_error"])) <= 10 * RTOL * np.max(np.abs(got["potential"]))
     assert np.ptp(got["bodyqw"]) > 0.1   # it turns
+
+
+def test_wheels_repeated_option(tmp_path):
+    out = tmp_path / "dd.yaml"
+    run_cli("import", URDF / "diff_drive.urdf", "--wheels", "wheel_r", "--wheels", "wheel_l",
+            "--wheels", "wheel_r", "--out", out)
+    text = out.read_text()
+    assert "wheel_l_roll: {kind: rolling, body: wheel_l}" in text
+    assert "wheel_r_roll: {kind: rolling, body: wheel_r}" in text
+    r = run_cli("import", URDF / "diff_drive.urdf", "--wheels", "wheel_l,,wheel_r", check=False)
+    assert r.returncode == 2 and "an empty link name" in r.stderr and not r.stdout
