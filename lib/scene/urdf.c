@@ -22,6 +22,7 @@
 
 #include "appell/scene.h"
 #include "core/defcheck.h"
+#include "scene/scene_int.h"
 #include "scene/urdf_int.h"
 
 
@@ -128,13 +129,12 @@ static int read_inertial(ur_ctx *c, const xmlNode *n, ur_link *l) {
   for (int i = 0; i < 6; i++)
     if (numbers(c, it, keys[i], 1, (i == 1 || i == 2 || i == 4) ? &zero : NULL, &l->I[i]))
       return AP_ERR_ARG;
-  const double *I = l->I;   /* leading minors of [[ixx ixy ixz] [ixy iyy iyz] [ixz iyz izz]] */
-  double m1 = I[0], m2 = I[0] * I[3] - I[1] * I[1];
-  double m3 = I[0] * (I[3] * I[5] - I[4] * I[4]) - I[1] * (I[1] * I[5] - I[4] * I[2]) +
-              I[2] * (I[1] * I[4] - I[3] * I[2]);
-  if (!(m1 > 0 && m2 > 0 && m3 > 0))
+  const double *I = l->I;
+  double M[9] = {I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5]}, mn[3];
+  sc_leading_minors(M, mn);
+  if (!(mn[0] > 0 && mn[1] > 0 && mn[2] > 0))
     return ur_err(c, it, "the inertia tensor is not positive definite (leading minors %g, %g, "
-                  "%g; all must be positive)", m1, m2, m3);
+                  "%g; all must be positive)", mn[0], mn[1], mn[2]);
   return AP_OK;
 }
 
