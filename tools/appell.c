@@ -18,6 +18,7 @@ int cmd_linearize(int argc, char **argv);   /* tools/linearize.c */
 int cmd_sweep(int argc, char **argv);   /* tools/sweep.c */
 int cmd_view(int argc, char **argv);   /* tools/view.c */
 int cmd_export(int argc, char **argv);   /* tools/export_gltf.c */
+int cmd_import(int argc, char **argv);   /* tools/import.c */
 
 static const char usage[] =
     "usage: appell COMMAND [OPTIONS]\n"
@@ -33,6 +34,7 @@ static const char usage[] =
     "  sweep SCENE   run a scene over grids or random samples of its values, one CSV row a run\n"
     "  view SCENE    write a self-contained HTML page that plays a run in 3-D, with plots\n"
     "  export SCENE  write a run as a glTF 2.0 binary (.glb): meshes and their animation\n"
+    "  import URDF   convert a URDF robot description into a scene file\n"
     "\n"
     "`appell COMMAND --help` describes each command. Exit codes: 0 success, 2 bad input,\n"
     "3 numerical failure, 1 internal error or failed write, 128 + N stopped by signal N.\n"
@@ -151,9 +153,10 @@ int main(int argc, char **argv) {
   if (strcmp(cmd, "sweep") == 0) return finish(cmd_sweep(argc - 1, argv + 1));
   if (strcmp(cmd, "view") == 0) return finish(cmd_view(argc - 1, argv + 1));
   if (strcmp(cmd, "export") == 0) return finish(cmd_export(argc - 1, argv + 1));
+  if (strcmp(cmd, "import") == 0) return finish(cmd_import(argc - 1, argv + 1));
   static const char *const cmds[] = {"run", "check", "plot", "bench", "linearize", "sweep", "view",
-                                     "export"};
-  const char *s = cli_suggest(cmd, cmds, 8);
+                                     "export", "import"};
+  const char *s = cli_suggest(cmd, cmds, 9);
   fprintf(stderr, "appell: unknown command '%s'%s%s%s (see appell --help)\n", cmd,
           s ? " (did you mean '" : "", s ? s : "", s ? "'?)" : "");
   return EXIT_INPUT;

@@ -3,7 +3,8 @@
  *   appell export SCENE --run FILE.csv --format gltf --out FILE.glb
  *
  * One node per body at the scene's root (so a node's transform is the body's world pose), one
- * mesh per body (tools/view_mesh.c, vertex colours), one animation with a translation and a
+ * mesh per body (tools/view_mesh.c, vertex colours), a static node and mesh per ground
+ * surface (the plane about the motion or the ground sphere, world axes: view_ground.c), one animation with a translation and a
  * rotation channel per body sampled at the CSV's rows (LINEAR; quaternions x y z w as glTF
  * wants them), time = t - t0. All numbers are float32, as glTF stores them: the samples equal
  * the poses rebuilt from the CSV (view_frames.c) to float precision. A row whose float32 time
@@ -75,10 +76,10 @@ static void bounds(const float *x, int n, int ncomp, float *mn, float *mx) {
     }
 }
 
-/* Mesh of body b: its four accessors; writes the mesh's JSON to meshes. */
-static int body_mesh(glb *g, const view_body *vb, FILE *meshes, int b) {
-  view_mesh m;
-  if (view_mesh_body(vb, &m) != 0) return -1;
+/* Mesh m named name: its four accessors; writes the mesh's JSON to meshes (after the first
+ * when b > 0). */
+static void put_mesh(glb *g, const view_mesh *m_, const char *name, FILE *meshes, int b) {
+  const view_mesh m = *m_;
   float mn[3], mx[3];
   bounds(m.pos, m.nv, 3, mn, mx);
   int ap = accessor(g, m.pos, m.nv, "VEC3", 3, 0, 34962, mn, mx);
@@ -87,7 +88,18 @@ static int body_mesh(glb *g, const view_body *vb, FILE *meshes, int b) {
   int ai = accessor(g, m.index, m.ni, "SCALAR", 1, 1, 34963, NULL, NULL);
   fprintf(meshes, "%s{\"name\":\"%s\",\"primitives\":[{\"attributes\":{\"POSITION\":%d,"
           "\"NORMAL\":%d,\"COLOR_0\":%d},\"indices\":%d,\"material\":0}]}", b ? "," : "",
-          vb->name, ap, an, ac, ai);
+          name, ap, an, ac, ai);
+}
+
+/* Mesh of body b (its shape, visual or triad), then of ground b - nb (view_ground.c). */
+static int body_mesh(glb *g, const view_frames *f, FILE *meshes, int b) {
+  view_mesh m;
+  char name[32];
+  snprintf(name, sizeof name, "ground%.0d", b - f->nb);
+  if ((b < f->nb ? view_mesh_body(&f->bodies[b], &m) : view_mesh_ground(f, &f->ground[b - f->nb],
+                                                                       &m)) != 0)
+    return -1;
+  put_mesh(g, &m, b < f->nb ? f->bodies[b].name : name, meshes, b);
   view_mesh_free(&m);
   return 0;
 }
@@ -142,7 +154,7 @@ static void animation(glb *g, const view_frames *f, FILE *anim) {
 
 static void nodes_json(FILE *js, const view_frames *f) {
   fputs("\"scene\":0,\"scenes\":[{\"name\":\"appell\",\"nodes\":[", js);
-  for (int b = 0; b < f->nb; b++) fprintf(js, b ? ",%d" : "%d", b);
+  for (int b = 0; b < f->nb + f->ng; b++) fprintf(js, b ? ",%d" : "%d", b);
   fputs("]}],\"nodes\":[", js);
   for (int b = 0; b < f->nb; b++) {
     const double *p = f->pose + (size_t)b * 7;
@@ -151,6 +163,8 @@ static void nodes_json(FILE *js, const view_frames *f) {
             (double)(float)p[0], (double)(float)p[1], (double)(float)p[2], (double)(float)p[4],
             (double)(float)p[5], (double)(float)p[6], (double)(float)p[3]);
   }
+  for (int k = 0; k < f->ng; k++)   /* the grounds: static, in world axes */
+    fprintf(js, ",{\"name\":\"ground%.0d\",\"mesh\":%d}", k, f->nb + k);
   fputs("],", js);
 }
 
@@ -184,7 +198,7 @@ int view_write_gltf(FILE *out, const view_frames *f) {
   g.views = open_memstream(&views, &lv);
   FILE *fm = open_memstream(&meshes, &lm), *fa = open_memstream(&anim, &ln);
   int rc = g.js && g.views && fm && fa ? 0 : -1;
-  for (int b = 0; rc == 0 && b < f->nb; b++) rc = body_mesh(&g, &f->bodies[b], fm, b);
+  for (int b = 0; rc == 0 && b < f->nb + f->ng; b++) rc = body_mesh(&g, f, fm, b);
   if (rc == 0) animation(&g, f, fa);
   if (g.js) fclose(g.js);
   if (g.views) fclose(g.views);

@@ -25,6 +25,17 @@ typedef struct view_body {
   int force_col[3];        /* CSV columns of BODY.contact.Fx, .Fy, .Fz, or -1 */
 } view_body;
 
+/* A ground surface to draw (tools/view_ground.c): the plane normal . p = offset, or a sphere. */
+#define VIEW_MAX_GROUNDS 8
+typedef struct view_ground {
+  int sphere;              /* 0 plane, 1 sphere */
+  double normal[3];        /* plane: unit normal, out of the ground */
+  double offset;           /* plane: normal . p (m) */
+  double center[3];        /* sphere: centre (m) */
+  double radius;           /* sphere: radius (m) */
+  int inside;              /* sphere: rolled on from inside (a bowl) */
+} view_ground;
+
 /* Everything a page or an export shows, one frame per CSV row. */
 typedef struct view_frames {
   const char *scene;       /* the scene's name */
@@ -34,7 +45,15 @@ typedef struct view_frames {
   double *t;               /* nf times (s) */
   double *pose;            /* nf x nb x 7: origin x y z (m), quaternion w x y z (world) */
   double *contact;         /* nf x nb x 3: contact point (m), 0 for bodies without contact */
+  int ng;                  /* the distinct grounds of the rolling and knife-edge constraints */
+  view_ground ground[VIEW_MAX_GROUNDS];   /* (the plane z = 0 when the scene has none) */
 } view_frames;
+
+/* The scene's grounds into f->ground (view_ground.c). */
+void view_grounds(const ap_scene *sc, view_frames *f);
+/* The grounds as JSON: [{"kind":"plane","normal":[..],"offset":d} or {"kind":"sphere",
+ * "center":[..],"radius":r,"inside":0|1}, ...]. */
+void view_grounds_json(FILE *out, const view_frames *f);
 
 /* Read an appell CSV: 0, or an exit code with a message naming the file and line. */
 int view_csv_read(const char *cmd, const char *path, view_csv *c);
@@ -76,6 +95,10 @@ typedef struct view_mesh {
  * 0 or -1 out of memory. */
 int view_mesh_body(const view_body *b, view_mesh *m);
 void view_mesh_free(view_mesh *m);
+/* The mesh of ground g in world axes: a square of the plane about the motion's bounding box
+ * (projected onto it, with a margin), or a UV sphere (normals outward, inward for a bowl);
+ * 0 or -1 out of memory (view_ground.c). */
+int view_mesh_ground(const view_frames *f, const view_ground *g, view_mesh *m);
 
 /* The glTF binary of f (tools/export_gltf.c); 0, or -1 out of memory or on a failed write. */
 int view_write_gltf(FILE *out, const view_frames *f);

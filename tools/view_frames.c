@@ -179,6 +179,7 @@ int view_frames_build(const char *cmd, ap_scene *sc, const view_csv *csv, view_f
       rc = cli_exit_code(st);
     }
   }
+  if (rc == EXIT_OK) view_grounds(sc, f);
   if (rc == EXIT_INTERNAL) fprintf(stderr, "appell %s: out of memory\n", cmd);
   ap_data_free(d);
   free(col);

@@ -111,6 +111,8 @@ static void data_json(FILE *out, const view_frames *f, const view_csv *csv, cons
   fputs(",\"contact\":", out);
   doubles(out, f->contact, (size_t)f->nf * (size_t)f->nb * 3, 1);
   if (p->forces) forces_json(out, f, csv);
+  fputs(",\"grounds\":", out);
+  view_grounds_json(out, f);
   fputs(",\"plots\":[", out);
   for (int i = 0; i < p->nplots; i++) {
     int c = view_csv_column(csv, p->plots[i]);

@@ -15,6 +15,7 @@
 #include "appell/outfile.h"
 #include "appell/control.h"
 #include "appell/accuracy.h"
+#include "appell/urdf.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

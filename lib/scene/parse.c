@@ -172,13 +172,18 @@ static int check_inertia(sc_ctx *c, const sc_node *at, const double *I) {
       if (fabs(I[i + 3 * j] - I[j + 3 * i]) > 1e-12 * (fabs(I[0]) + fabs(I[4]) + fabs(I[8])))
         return sc_err(c, at, "the inertia tensor is not symmetric (entries %d,%d and %d,%d "
                       "differ: %g vs %g)", i, j, j, i, I[i + 3 * j], I[j + 3 * i]);
-  double m1 = I[0], m2 = I[0] * I[4] - I[1] * I[3];
-  double m3 = I[0] * (I[4] * I[8] - I[5] * I[7]) - I[3] * (I[1] * I[8] - I[2] * I[7]) +
-              I[6] * (I[1] * I[5] - I[2] * I[4]);
-  if (!(m1 > 0 && m2 > 0 && m3 > 0))
+  double m[3];
+  sc_leading_minors(I, m);
+  if (!(m[0] > 0 && m[1] > 0 && m[2] > 0))
     return sc_err(c, at, "the inertia tensor is not positive definite (leading minors %g, %g, "
-                  "%g; all must be positive)", m1, m2, m3);
+                  "%g; all must be positive)", m[0], m[1], m[2]);
   return AP_OK;
+}
+
+void sc_leading_minors(const double *I, double m[3]) {
+  m[0] = I[0], m[1] = I[0] * I[4] - I[1] * I[3];
+  m[2] = I[0] * (I[4] * I[8] - I[5] * I[7]) - I[3] * (I[1] * I[8] - I[2] * I[7]) +
+         I[6] * (I[1] * I[5] - I[2] * I[4]);
 }
 
 /* inertia: uniform | [Ixx, Iyy, Izz] | [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] | [[..],[..],[..]] */

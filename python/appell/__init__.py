@@ -69,11 +69,26 @@ def _sets(set):
     return tuple(set)
 
 
-def load(path, set=None):
+def load(path, set=None, wheels=None, wheel_shape="disk"):
     """Read, validate and compile a scene file; set overrides its values by key path
     ({"bodies.disk.mass": 2} or ["bodies.disk.mass=2"]). Bad input raises SceneError with
-    .filename, .line and .column."""
-    return _appell.load(_os.fspath(path), _sets(set))
+    .filename, .line and .column.
+
+    A URDF file (name ending in .urdf) is converted as `appell import` does (docs/urdf.md):
+    wheels names the links that roll on the ground, wheel_shape is "disk" or "torus"; its
+    errors carry the URDF's .line (.column None)."""
+    path = _os.fspath(path)
+    if str(path).lower().endswith(".urdf"):
+        if wheel_shape not in ("disk", "torus"):
+            raise ValueError(f"wheel_shape {wheel_shape!r}: expected 'disk' or 'torus'")
+        if isinstance(wheels, str):
+            wheels = wheels.split(",")
+        text = _appell.urdf(path, () if wheels is None else tuple(wheels),
+                            wheel_shape == "torus")
+        return _appell.loads(text, f"{path} (imported scene)", _sets(set))
+    if wheels is not None:
+        raise ValueError("wheels= is for URDF files (.urdf); a scene names its own wheels")
+    return _appell.load(path, _sets(set))
 
 
 def loads(text, name="scene", set=None):

@@ -78,5 +78,6 @@ PyObject *apx_set_inputs(PyObject *self, PyObject *args);
 PyObject *apx_get_inputs(PyObject *self, PyObject *sim);
 PyObject *apx_error_estimate(PyObject *self, PyObject *args);   /* _accuracy.c */
 PyObject *apx_pick(PyObject *self, PyObject *args);
+PyObject *apx_urdf(PyObject *self, PyObject *args, PyObject *kw);
 
 #endif

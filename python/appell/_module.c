@@ -12,12 +12,18 @@
 PyObject *apx_error = NULL;
 PyObject *apx_scene_error = NULL;
 
-/* "FILE:LINE:COLUMN: ..." -> the three parts; 0 when msg has no such prefix. */
+/* "FILE:LINE:COLUMN: ..." -> the three parts; 0 when msg has no such prefix. A URDF file's
+ * "FILE.urdf:LINE: ..." gives column 0 (None). */
 static int location(const char *msg, PyObject **file, long *line, long *col) {
   for (const char *c = strchr(msg, ':'); c; c = strchr(c + 1, ':')) {
     char *end1 = NULL, *end2 = NULL;
     long l = strtol(c + 1, &end1, 10);
     if (end1 == c + 1 || *end1 != ':') continue;
+    if (end1[1] == ' ' && l >= 1 && c - msg >= 5 && strncmp(c - 5, ".urdf", 5) == 0) {
+      *file = PyUnicode_DecodeUTF8(msg, c - msg, "replace");
+      *line = l, *col = 0;
+      return *file != NULL;
+    }
     long k = strtol(end1 + 1, &end2, 10);
     if (end2 == end1 + 1 || *end2 != ':' || l < 1 || k < 1) continue;
     *file = PyUnicode_DecodeUTF8(msg, c - msg, "replace");
@@ -48,7 +54,7 @@ static PyObject *raise_as(PyObject *cls, int status, const char *msg) {
   if (exc && set_attrs(exc, status, msg) != 0) Py_CLEAR(exc);
   if (exc && cls == apx_scene_error) {
     PyObject *l = located ? PyLong_FromLong(line) : Py_NewRef(Py_None);
-    PyObject *c = located ? PyLong_FromLong(col) : Py_NewRef(Py_None);
+    PyObject *c = located && col > 0 ? PyLong_FromLong(col) : Py_NewRef(Py_None);
     if (!l || !c || PyObject_SetAttrString(exc, "filename", located ? file : Py_None) ||
         PyObject_SetAttrString(exc, "line", l) || PyObject_SetAttrString(exc, "column", c))
       Py_CLEAR(exc);
@@ -177,6 +183,8 @@ static PyMethodDef module_methods[] = {
      "_error_estimate(model, settings, t0, q0, v0, table) -> dict (_accuracy.c)"},
     {"_pick", apx_pick, METH_VARARGS,
      "_pick(model, accuracy, settings, t0, q0, v0, t_end, dt) -> dict (_accuracy.c)"},
+    {"urdf", (PyCFunction)(void (*)(void))apx_urdf, METH_VARARGS | METH_KEYWORDS,
+     "urdf(path, wheels=(), torus=False) -> str: a URDF file as scene text (_urdf.c)"},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef module_def = {

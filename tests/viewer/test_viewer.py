@@ -20,6 +20,13 @@ CHECK is one of:
            column, row or option, and no output file
   gltf     the bicycle's glTF export passes the Khronos validator (no errors) and its animation
            samples equal the CSV's poses to float32 rounding
+  terrain  the tilted plane (ball_incline) and the bowl (ball_bowl): the page draws the ground
+           the scene defines (the plane's world matrix has the scene's normal as its z axis and
+           the ball's centre is its radius above the drawn plane; the sphere is drawn at the
+           scene's centre and radius, from inside, and the ball's centre is R - r from the drawn
+           centre), to 1e-9 in every frame; a pixel of the drawn ground differs from the
+           background; the glTF export has a ground mesh on the same surface (float32) and
+           passes the validator
 
 Exit 0 pass, 1 fail, 77 skip (only when chromium or node is not installed at all).
 """
@@ -326,6 +333,114 @@ def test_gltf(appell, scenes, work):
           f"({worst:.3g})")
 
 
+TERRAIN = {"ball_incline": ("plane", 0.1), "ball_bowl": ("sphere", 0.1)}
+
+
+def ground_distance(g, pos):
+    """Signed distance of pos from the drawn ground g (its world matrix, column-major)."""
+    m = g["m"]
+    if g["kind"] == "plane":
+        n, o = m[8:11], m[12:15]
+        return sum(n[i] * (pos[i] - o[i]) for i in range(3))
+    return g["radius"] - math.dist(pos, m[12:15])   # inside the bowl: R - |p - c|
+
+
+def check_ground_mesh(appell, scenes, work, name, kind, r_ball, glb_path, csv, node):
+    scene = os.path.join(scenes, name + ".yaml")
+    run(appell, "export", scene, "--run", csv, "--format", "gltf", "--out", glb_path)
+    js = ("const v = require(process.argv[1]); const fs = require('fs');"
+          "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[2])))"
+          ".then(r => console.log(JSON.stringify(r.issues)))")
+    modules = os.path.join(HERE, "node_modules", "gltf-validator")
+    r = subprocess.run([node, "-e", js, modules, glb_path], capture_output=True, text=True)
+    issues = json.loads(r.stdout) if r.returncode == 0 else {"numErrors": -1}
+    check(issues.get("numErrors") == 0, f"{name}: glTF validator errors: {issues}")
+    doc, binary = glb_parse(glb_path)
+    ground = [n for n in doc["nodes"] if n["name"] == "ground"]
+    check(len(ground) == 1, f"{name}: one ground node in the glTF")
+    pos = accessor(doc, binary, doc["meshes"][ground[0]["mesh"]]["primitives"][0]["attributes"]
+                   ["POSITION"])
+    return pos
+
+
+def test_terrain(appell, scenes, work):
+    node = shutil.which("node")
+    with cdp.Browser() as br:
+        for name, (kind, r_ball) in TERRAIN.items():
+            csv, html = make_page(appell, scenes, work, name, 1.0)
+            page = br.open("file://" + html, width=1000, height=700)
+            page.eval("new Promise(function (r) { requestAnimationFrame(function () {"
+                      " requestAnimationFrame(r); }); })")
+            check(not page.problems(), f"{name}: console messages: {page.problems()}")
+            names, rows = read_csv(csv)
+            check_frames(page, name, names, rows)
+            grounds = page.eval("appellView.grounds.map(function (g) { return {kind: g.kind,"
+                                " m: g.object.matrixWorld.elements, radius: g.kind == 'sphere' ?"
+                                " g.object.geometry.parameters.radius : 0,"
+                                " side: g.surface.material.side}; })")
+            check(len(grounds) == 1 and grounds[0]["kind"] == kind,
+                  f"{name}: the page draws one {kind}: {[g['kind'] for g in grounds]}")
+            g = grounds[0]
+            col = {n: i for i, n in enumerate(names)}
+            ball = names[1].split(".")[0]
+            worst = max(abs(ground_distance(g, [row[col[f"{ball}.pos.{c}"]] for c in "xyz"])
+                            - r_ball) for row in rows)
+            check(worst <= 1e-9, f"{name}: the ball is {worst:.3g} off the drawn ground")
+            if kind == "plane":
+                want = [0, -math.sin(math.radians(25)), math.cos(math.radians(25))]
+                err = max(abs(g["m"][8 + i] - want[i]) for i in range(3))
+                check(err <= 1e-12, f"{name}: drawn normal {g['m'][8:11]} (scene {want})")
+            else:
+                err = max(abs(g["m"][12 + i] - c) for i, c in enumerate([0, 0, 1]))
+                check(err <= 1e-12 and g["radius"] == 1 and g["side"] == 1,
+                      f"{name}: drawn sphere at {g['m'][12:15]}, radius {g['radius']}, side "
+                      f"{g['side']} (scene: centre (0, 0, 1), radius 1, inside: BackSide = 1)")
+            # A ground point away from the ball in the 3-D view: on the incline 0.25 m from the
+            # ball's contact point at frame 0, in the bowl 25 degrees up its wall: the first
+            # direction whose pixel is in the view and 1.5 ball radii from the ball's image.
+            page.eval("(appellView.setFrame(0), appellView.render(), 0)")
+            view_w = page.eval("appellView.renderer.domElement.clientWidth")
+            view_h = page.eval("appellView.renderer.domElement.clientHeight")
+            c0 = [rows[0][col[f"{ball}.pos.{c}"]] for c in "xyz"]
+            pc, ptop = (page.eval(f"appellView.project({p[0]}, {p[1]}, {p[2]})")
+                        for p in (c0, [c0[0], c0[1], c0[2] + r_ball]))
+            r_px = math.hypot(pc[0] - ptop[0], pc[1] - ptop[1])
+            if kind == "plane":
+                n = g["m"][8:11]
+                t1 = [1, 0, 0]
+                t2 = [n[1] * t1[2] - n[2] * t1[1], n[2] * t1[0] - n[0] * t1[2],
+                      n[0] * t1[1] - n[1] * t1[0]]
+                cands = [[c0[i] - r_ball * n[i] + 0.25 * (math.cos(a) * t1[i] +
+                          math.sin(a) * t2[i]) for i in range(3)]
+                         for a in [k * math.pi / 6 for k in range(12)]]
+            else:   # the bowl's wall 25 degrees up from its bottom
+                s25, c25 = math.sin(math.radians(25)), math.cos(math.radians(25))
+                cands = [[s25 * math.cos(a), s25 * math.sin(a), 1 - c25]
+                         for a in [k * math.pi / 6 for k in range(12)]]
+            at, px = None, None
+            for cand in cands:
+                q = page.eval(f"appellView.project({cand[0]}, {cand[1]}, {cand[2]})")
+                if (0 <= q[0] < view_w and 0 <= q[1] < view_h and
+                        math.hypot(q[0] - pc[0], q[1] - pc[1]) > 1.5 * r_px):
+                    at, px = cand, q
+                    break
+            check(at is not None, f"{name}: a ground point near the ball in the view")
+            w, h, pix = cdp.png_pixels(page.screenshot())
+            got = pix[int(px[1])][int(px[0])] if at else (0xdf, 0xe6, 0xee)
+            check(tuple(got[:3]) != (0xdf, 0xe6, 0xee), f"{name}: the ground point {at} at pixel "
+                  f"{px} shows the background colour {got}")
+            print(f"{name}: {kind} drawn, ball off the drawn ground by {worst:.2e}; ground pixel "
+                  f"{got}")
+            if node and os.path.isdir(os.path.join(HERE, "node_modules", "gltf-validator")):
+                pos = check_ground_mesh(appell, scenes, work, name, kind, r_ball,
+                                        os.path.join(work, name + ".glb"), csv, node)
+                gm = dict(g, m=g["m"][:12] + ([0, 0, 0] if kind == "plane" else [0, 0, 1]) +
+                          [1], radius=1)
+                off = max(abs(ground_distance(gm, p)) for p in pos)
+                check(off <= 1e-6, f"{name}: the glTF ground is {off:.3g} off the surface")
+                print(f"{name}: glTF ground mesh of {len(pos)} vertices, {off:.2e} off")
+
+
 def main():
     appell, scenes, work, what = sys.argv[1:5]
     os.makedirs(work, exist_ok=True)
@@ -333,7 +448,8 @@ def main():
         print("SKIP: chromium is not installed (scripts/setup installs Debian's chromium)")
         return 77
     {"pages": test_pages, "pixels": test_pixels, "events": test_events,
-     "gltf": test_gltf, "errors": test_errors}[what](appell, scenes, work)
+     "gltf": test_gltf, "errors": test_errors, "terrain": test_terrain}[what](appell, scenes,
+                                                                             work)
     print(f"{what}: {len(failures)} failures")
     return 1 if failures else 0
 

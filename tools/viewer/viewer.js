@@ -76,32 +76,71 @@
   sun.position.set(0.6, -0.8, 1.5);
   scene.add(sun);
 
-  var half = Math.ceil(Math.max(hi[0] - lo[0], hi[1] - lo[1], span) * 1.5 + 1);
-  var ground = new THREE.Mesh(new THREE.PlaneGeometry(4 * half, 4 * half),
-    new THREE.MeshLambertMaterial({ color: 0xf2f0ea, polygonOffset: true,
-      polygonOffsetFactor: 2, polygonOffsetUnits: 2 }));
-  ground.position.set(Math.round(centre.x), Math.round(centre.y), -5e-3 * span);
-  scene.add(ground);
-  /* The grid: lines every `step` over the motion and a margin, each line cut into segments of
-   * one step (a long line that crosses the camera's near plane is dropped by some software GL
-   * rasterizers). At most 120 cells a side. */
-  var step = Math.pow(10, Math.round(Math.log10(span / 3)));
-  var gx0 = lo[0] - span, gx1 = hi[0] + span, gy0 = lo[1] - span, gy1 = hi[1] + span;
-  while (Math.max(gx1 - gx0, gy1 - gy0) / step > 120) step *= 2;
-  gx0 = step * Math.floor(gx0 / step), gy0 = step * Math.floor(gy0 / step);
-  var ncx = Math.ceil((gx1 - gx0) / step), ncy = Math.ceil((gy1 - gy0) / step), seg = [];
-  for (var a = 0; a <= ncx; a++)
-    for (var b = 0; b < ncy; b++)
-      seg.push(gx0 + a * step, gy0 + b * step, 0, gx0 + a * step, gy0 + (b + 1) * step, 0);
-  for (b = 0; b <= ncy; b++)
-    for (a = 0; a < ncx; a++)
-      seg.push(gx0 + a * step, gy0 + b * step, 0, gx0 + (a + 1) * step, gy0 + b * step, 0);
-  var gridGeo = new THREE.BufferGeometry();
-  gridGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
-  var grid = new THREE.LineSegments(gridGeo, new THREE.LineBasicMaterial({ color: 0x9098a4 }));
-  grid.position.z = -1e-3 * span;
-  scene.add(grid);
-  ground.position.x = (gx0 + gx1) / 2, ground.position.y = (gy0 + gy1) / 2;
+  /* ---- the grounds (D.grounds: the planes normal . p = offset and the fixed spheres the
+   * contacts roll on; the plane z = 0 when there is none) ---- */
+  var groundMat = new THREE.MeshLambertMaterial({ color: 0xf2f0ea, polygonOffset: true,
+    polygonOffsetFactor: 2, polygonOffsetUnits: 2 });
+  var gridMat = new THREE.LineBasicMaterial({ color: 0x9098a4 });
+  /* A plane: the ground square and the grid in the plane's axes t1, t2 (t1 x t2 = n), placed
+   * by the matrix [t1 t2 n | offset n]; for z = 0, t1 = x and t2 = y. */
+  function drawPlane(g) {
+    var n = new THREE.Vector3().fromArray(g.normal).normalize();
+    var a = Math.abs(n.x) < 0.9 ? new THREE.Vector3(1, 0, 0) : new THREE.Vector3(0, 1, 0);
+    var t1 = a.addScaledVector(n, -a.dot(n)).normalize(), t2 = new THREE.Vector3().crossVectors(n, t1);
+    var ulo = [0, 0], uhi = [0, 0];
+    for (var i = 0; i < nf * nb; i++) {
+      var p = new THREE.Vector3(P[7 * i], P[7 * i + 1], P[7 * i + 2]), u = [p.dot(t1), p.dot(t2)];
+      for (var k = 0; k < 2; k++) { ulo[k] = Math.min(ulo[k], u[k]); uhi[k] = Math.max(uhi[k], u[k]); }
+    }
+    var grp = new THREE.Group();
+    grp.matrixAutoUpdate = false;
+    grp.matrix.makeBasis(t1, t2, n).setPosition(n.clone().multiplyScalar(g.offset));
+    var half = Math.ceil(Math.max(uhi[0] - ulo[0], uhi[1] - ulo[1], span) * 1.5 + 1);
+    var ground = new THREE.Mesh(new THREE.PlaneGeometry(4 * half, 4 * half), groundMat);
+    ground.position.z = -5e-3 * span;
+    grp.add(ground);
+    /* The grid: lines every `step` over the motion and a margin, each line cut into segments
+     * of one step (a long line that crosses the camera's near plane is dropped by some
+     * software GL rasterizers). At most 120 cells a side. */
+    var step = Math.pow(10, Math.round(Math.log10(span / 3)));
+    var gx0 = ulo[0] - span, gx1 = uhi[0] + span, gy0 = ulo[1] - span, gy1 = uhi[1] + span;
+    while (Math.max(gx1 - gx0, gy1 - gy0) / step > 120) step *= 2;
+    gx0 = step * Math.floor(gx0 / step), gy0 = step * Math.floor(gy0 / step);
+    var ncx = Math.ceil((gx1 - gx0) / step), ncy = Math.ceil((gy1 - gy0) / step), seg = [];
+    for (var a2 = 0; a2 <= ncx; a2++)
+      for (var b2 = 0; b2 < ncy; b2++)
+        seg.push(gx0 + a2 * step, gy0 + b2 * step, 0, gx0 + a2 * step, gy0 + (b2 + 1) * step, 0);
+    for (b2 = 0; b2 <= ncy; b2++)
+      for (a2 = 0; a2 < ncx; a2++)
+        seg.push(gx0 + a2 * step, gy0 + b2 * step, 0, gx0 + (a2 + 1) * step, gy0 + b2 * step, 0);
+    var gridGeo = new THREE.BufferGeometry();
+    gridGeo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(seg), 3));
+    var grid = new THREE.LineSegments(gridGeo, gridMat);
+    grid.position.z = -1e-3 * span;
+    grp.add(grid);
+    ground.position.x = (gx0 + gx1) / 2, ground.position.y = (gy0 + gy1) / 2;
+    scene.add(grp);
+    return { kind: 'plane', object: grp, surface: ground, grid: grid };
+  }
+  /* A sphere: seen from inside (a bowl) its far wall is drawn (BackSide), from outside (a
+   * dome) its near one; parallels and meridians every 15 degrees show its curvature. */
+  function drawSphere(g) {
+    var geo = new THREE.SphereGeometry(g.radius, 96, 48);
+    geo.rotateX(Math.PI / 2);   /* poles on the world z axis */
+    var mat = groundMat.clone();
+    mat.side = g.inside ? THREE.BackSide : THREE.FrontSide;
+    var mesh = new THREE.Mesh(geo, mat);
+    mesh.position.fromArray(g.center);
+    var lines = new THREE.SphereGeometry(g.radius * (g.inside ? 0.998 : 1.002), 24, 12);
+    lines.rotateX(Math.PI / 2);
+    mesh.add(new THREE.LineSegments(new THREE.EdgesGeometry(lines, 1), gridMat));
+    scene.add(mesh);
+    return { kind: 'sphere', object: mesh, surface: mesh };
+  }
+  var grounds = (D.grounds && D.grounds.length ? D.grounds :
+    [{ kind: 'plane', normal: [0, 0, 1], offset: 0 }]).map(function (g) {
+    return g.kind === 'sphere' ? drawSphere(g) : drawPlane(g);
+  });
   var axes = new THREE.AxesHelper(Math.max(0.3 * span, bodySize));
   scene.add(axes);
 
@@ -435,6 +474,7 @@
     data: D, times: T, poses: P, contacts: C, events: events, record: record, state: state,
     bodies: groups, traces: traces, arrows: arrows, plots: plots, camera: camera,
     controls: controls, renderer: renderer, scene: scene,
-    setFrame: setFrame, setTime: setTime, play: play, render: render, project: project
+    setFrame: setFrame, setTime: setTime, play: play, render: render, project: project,
+    grounds: grounds
   };
 })();
