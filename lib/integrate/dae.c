@@ -87,7 +87,11 @@ double ap_dae_rtol(double rtol) { return fmax(rtol / AP_DAE_TOL_FACTOR, fmin(rto
 
 /* Row-pivoted QR of M^T (M rows x cols) in the scratch: the rank, the row order (jpvt: the
  * first rank rows are the independent ones, as ap_partition chooses them) and the quality
- * |R_rr| / |R_11| of the last kept pivot against the first (1 when rank is 0). With floor,
+ * |R_rr|, the last kept pivot (1 when rank is 0), in the units of M's rows: review compares it
+ * with the best choice's of the same M. (Relative to the choice's own first pivot, as it was,
+ * one kept row always had quality 1: a loop locking a joint keeps one of its three rows, whose
+ * norm fell to zero as the mechanism turned, and IDA stopped at t = 0.2591 with steps of 5e-16
+ * s: tests/scenes/difftest/dae_locked_loop.yaml.) With floor,
  * pivots below rank_rtol times the model's length scale m->lscale (core/core.h: the scale of
  * the gradients of phi) do not count either: rows of phi that vanish identically (a wheel
  * contact whose height is fixed by the tree) have gradients of round-off size, and a test
@@ -104,8 +108,7 @@ static int row_qr(ap_dae *s, int rows, int cols, const double *M, double rank_rt
   while (rc == AP_OK && floor && *rank > 0 &&
          !(fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]) > rank_rtol * s->m->lscale))
     (*rank)--;
-  if (rc == AP_OK && *rank > 0)
-    *quality = fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]) / fabs(F[0]);
+  if (rc == AP_OK && *rank > 0) *quality = fabs(F[(*rank - 1) + (size_t)(*rank - 1) * cols]);
   return rc;
 }
 
@@ -378,8 +381,8 @@ int ap_dae_one(ap_dae *s, double tout, double *t, double *y) {
 /* The rows kept at the start can degrade along the motion: on the differential-drive robots
  * (examples/scenes/diff_drive*.yaml) the kept rows' smallest relative pivot falls linearly to
  * zero each time the heading passes a multiple of pi / 2, where the kept rows become dependent.
- * They are chosen again when it has fallen below 0.1 of that of the rows the QR would pick now
- * (a restart about every 2 s there). At 1e-3, as before, the caster robot reached kept rows of
+ * They are chosen again when their last pivot has fallen below 0.1 of that of the rows the QR
+ * would pick now (a restart about every 2 s there). At 1e-3, as before, the caster robot reached kept rows of
  * relative pivot 1e-5, and IDA's restart there failed (t = 17.67 s at rtol 1e-10): the state's
  * error along the nearly dependent direction is amplified by the inverse pivot. */
 static int review(ap_dae *s, int rows, int cols, const double *M, double rank_rtol, int floor,

@@ -84,6 +84,8 @@ static void save(const char *dir, const dt_model *m, const dt_result *r, char *t
   else printf("  saved %s\n", path);
 }
 
+static int no_shrink;   /* --no-shrink: report disagreements as found (recheck a campaign's seeds) */
+
 static int random_models(long models, unsigned long long seed, const char *dir, int quiet) {
   dt_opts o = dt_opts_default();
   tally t = {0};
@@ -103,7 +105,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
       printf("%s: %s (%d runs, worst %.2g %s)\n%s", name,
              (const char *[]){"agree", "refused", "stopped", "DISAGREE"}[r.verdict], r.runs,
              r.worst, r.worst_what, r.verdict == DT_AGREE ? "" : r.what);
-    if (r.verdict == DT_DISAGREE) {
+    if (r.verdict == DT_DISAGREE && !no_shrink) {
       o.expect_tree = -1;
       shrink(m, &o, text);
       dt_check((dt_write(m, NULL, text, TEXT_LEN), text), &o, &r);
@@ -143,8 +145,11 @@ static int one_scene(const char *path, tally *t) {
   printf("%s: %s (%d runs, worst %.2g %s)\n%s", path,
          (const char *[]){"agree", "refused", "stopped", "DISAGREE"}[r.verdict], r.runs, r.worst,
          r.worst_what, r.verdict == DT_AGREE ? "" : r.what);
-  /* a regression scene runs through in every mode, or is refused by every mode alike */
-  int expect = strstr(text, "\n# expect: refused\n") ? DT_REFUSED : DT_AGREE;
+  /* a regression scene runs through in every mode, or is refused by every mode alike, or
+   * (a motion that reaches a singular configuration) stops in every mode, the reference too */
+  int expect = strstr(text, "\n# expect: refused\n")   ? DT_REFUSED
+               : strstr(text, "\n# expect: stopped\n") ? DT_STOPPED
+                                                        : DT_AGREE;
   free(text);
   return r.verdict != expect;
 }
@@ -180,11 +185,13 @@ int main(int argc, char **argv) {
   int quiet = 0, a = 1;
   for (; a < argc && !strncmp(argv[a], "--", 2); a++) {
     if (!strcmp(argv[a], "--quiet")) quiet = 1;
+    else if (!strcmp(argv[a], "--no-shrink")) no_shrink = 1;
     else if (a + 1 < argc && !strcmp(argv[a], "--models")) models = atol(argv[++a]);
     else if (a + 1 < argc && !strcmp(argv[a], "--seed")) seed = strtoull(argv[++a], NULL, 10);
     else if (a + 1 < argc && !strcmp(argv[a], "--save")) dir = argv[++a];
     else {
-      fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] | "
+      fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] "
+              "[--no-shrink] | "
               "difftest SCENE|DIR ...\n");
       return 2;
     }
