@@ -86,9 +86,9 @@ int sc_nomem(sc_ctx *c);
 
 /* ---- reading (read.c) ----------------------------------------------------------------- */
 
-/* The leading minors m[0..2] of the 3 x 3 matrix I (column-major): all positive when the
- * symmetric I is positive definite (parse.c; the URDF import checks inertias with it too). */
-void sc_leading_minors(const double *I, double m[3]);
+/* The leading minors m[0..2] of the 3 x 3 matrix inertia (column-major): all positive when the
+ * symmetric matrix is positive definite (parse.c; the URDF import checks inertias with it too). */
+void sc_leading_minors(const double *inertia, double m[3]);
 /* Record an error at a node: "file:line:col: path: message". Returns AP_ERR_ARG. */
 int sc_err(sc_ctx *c, const sc_node *at, const char *fmt, ...)
 #if defined(__GNUC__)
