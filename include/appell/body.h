@@ -259,6 +259,15 @@ typedef struct ap_constraint_def {
   ap_constraint_fn user_constraint; /* user: A (rows x k, ld rows) and a0 (rows) */
   ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
   void *user;              /* passed to speed_fn and the user callbacks */
+  double mu;               /* rolling on a body not on a plane-contact joint: the friction
+                              coefficient of the contact modes (docs/contacts.md): the contact
+                              sticks while |F_t| <= mu F_n and slides otherwise; default -1:
+                              none (perfectly rough, as without contact modes) */
+  double mu_kinetic;       /* sliding friction coefficient (Coulomb, -mu_kinetic F_n s/|s|);
+                              default -1: mu */
+  int unilateral;          /* 1: the contact lifts off when F_n falls through 0 and touches
+                              down when the gap closes (a sticking plastic impact); 0: it
+                              holds (bilateral); default -1: 1 when mu >= 0, else 0 */
   int internal_check;       /* set by ap_constraint_def_default(), never by hand: a definition that
                               function did not make is refused with AP_ERR_ARG */
 } ap_constraint_def;

@@ -63,6 +63,7 @@ struct ap_sim {
   ap_sim_events *ev;        /* events and their records (event.c); NULL until one is added */
   double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
                                stepper stops at it); INFINITY when none */
+  struct ap_drv_contacts *cm; /* contact modes (contact_modes.c); NULL without them */
 };
 
 /* printf into s->msg; returns status. */
@@ -117,5 +118,13 @@ void ap_drv_events_free(ap_sim *s);
 /* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
  * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
 int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);
+/* Contact modes (contact_modes.c): the initial modes from (t0, q0, v0) before the state is put
+ * on the constraints, their switch events once the stepper exists, the stage that keeps the
+ * slip directions after each step, and freeing. Nothing when the model has no contact
+ * modes. */
+int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v0);
+int ap_drv_contacts_events(ap_sim *s);
+int ap_drv_stage_contacts(ap_sim *s, double *t);
+void ap_drv_contacts_free(ap_sim *s);
 
 #endif
