@@ -1,6 +1,6 @@
-/* Contact modes (docs/contacts.md): rolling, sliding and airborne contacts switched by events,
- * against closed forms. A uniform ball (radius r = 0.1 m, mass m = 2 kg, I = 2/5 m r^2) on a
- * free joint, gravity g = 9.81 m/s^2 along -z, in minimal and projected modes (dop853).
+/* Contact modes (docs/scenes.md "Friction, slip and lift-off"): rolling, sliding and airborne
+ * contacts switched by events, against closed forms. A uniform ball (radius r = 0.1 m, mass
+ * m = 2 kg, I = 2/5 m r^2) on a free joint, gravity g = 9.81 m/s^2 along -z, in minimal and projected modes (dop853).
  *
  * Bowling ball. Launched at v0 along x without spin on the plane z = 0 with mu: it slides, the
  * friction -mu m g e_x at the contact point (-r e_z) gives v' = -mu g and, about the centre,

@@ -260,9 +260,10 @@ typedef struct ap_constraint_def {
   ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
   void *user;              /* passed to speed_fn and the user callbacks */
   double mu;               /* rolling on a body not on a plane-contact joint: the friction
-                              coefficient of the contact modes (docs/contacts.md): the contact
-                              sticks while |F_t| <= mu F_n and slides otherwise; default -1:
-                              none (perfectly rough, as without contact modes) */
+                              coefficient of the contact modes (docs/scenes.md "Friction,
+                              slip and lift-off"): the contact sticks while |F_t| <= mu F_n
+                              and slides otherwise; default -1: none (perfectly rough, as
+                              without contact modes) */
   double mu_kinetic;       /* sliding friction coefficient (Coulomb, -mu_kinetic F_n s/|s|);
                               default -1: mu */
   int unilateral;          /* 1: the contact lifts off when F_n falls through 0 and touches
@@ -500,6 +501,16 @@ AP_API void ap_quat_from_axis_angle(const double axis[3], double angle, double q
 AP_API void ap_quat_mul(const double a[4], const double b[4], double out[4]);
 AP_API void ap_quat_to_matrix(const double q[4], double R[9]);
 AP_API void ap_quat_from_matrix(const double R[9], double q[4]);
+
+/* Contact modes (rolling constraints with mu >= 0 or unilateral; docs/scenes.md "Friction,
+ * slip and lift-off"): set the mode of each such contact in d from the state (d->t and d->q
+ * set, v the speeds or NULL): airborne when unilateral and its gap exceeds tol (m), else sliding when it has a friction
+ * coefficient and v makes its contact point slip faster than tol (1 + max |v_i|) (m/s), else
+ * rolling. The modes then shape every evaluation with d (rows dropped, friction); simulations
+ * choose them so at creation. Returns the number of contacts with modes (0: none), or
+ * AP_ERR_ARG (m not a body model, d not made for m, tol not positive) or a failure of the
+ * position stage. */
+AP_API int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double tol);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,6 @@
 /* Contact modes of a simulation: rolling, sliding and airborne contacts switched by events
- * (docs/contacts.md; the rows each mode drops and the Coulomb force: model/con_friction.c).
+ * (docs/scenes.md "Friction, slip and lift-off"; the rows each mode drops and the Coulomb
+ * force: model/con_friction.c).
  *
  * At creation (before the initial state is put on the constraints) each contact with modes
  * starts airborne when it is unilateral and its gap exceeds init_tol, sliding when it has a
@@ -51,9 +52,7 @@ static const ap_mcon *con(const ap_sim *s, int ci) { return &ap_bm(s->m)->cons[c
 static double *scratch(const ap_data *d) { return ap_bm_scratch(d); }
 
 static double mu_of(const ap_mcon *c) { return c->def.mu; }
-static int unilateral(const ap_mcon *c) {
-  return c->def.unilateral == 1 || (c->def.unilateral < 0 && c->def.mu >= 0);
-}
+static int unilateral(const ap_mcon *c) { return ap_cfr_unilateral(c); }
 
 void ap_drv_contacts_free(ap_sim *s) {
   if (!s->cm) return;
@@ -76,31 +75,12 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (!s->cm || !s->cm->ci || !s->cm->ev) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
-  double *S = scratch(d), vmax = 0.0;
   d->t = t0, d->speeds_from_e = 0;
   memcpy(d->q, q0, sizeof(double) * (size_t)s->n);
-  memcpy(d->v, v0, sizeof(double) * (size_t)s->k);
-  for (int i = 0; i < s->k; i++) vmax = fmax(vmax, fabs(v0[i]));
-  ap_basis basis = d->basis;
-  d->basis = AP_BASIS_NONE;
-  int rc = ap_fwd_position(s->m, d);
-  d->basis = basis;
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
-                                      d->msg);
-  for (int ci = 0; ci < M->nc; ci++) {
-    const ap_mcon *c = &M->cons[ci];
-    if (c->fric < 0) continue;
-    double sl[2], gap = ap_contact_gap(M, S, c), *dir = ap_cfr_slip_dir(M, S, c);
-    ap_cfr_slip(M, S, c, v0, sl);
-    int mode = AP_CM_ROLLING;
-    if (unilateral(c) && gap > s->def.init_tol) mode = AP_CM_AIRBORNE;
-    else if (mu_of(c) >= 0 && hypot(sl[0], sl[1]) > s->def.init_tol * (1.0 + vmax)) {
-      mode = AP_CM_SLIDING;
-      dir[0] = sl[0] / hypot(sl[0], sl[1]), dir[1] = sl[1] / hypot(sl[0], sl[1]);
-    }
-    ap_cfr_set_mode(M, S, c, mode);
-    s->cm->ci[s->cm->nc++] = ci;
-  }
+  int rc = ap_body_contact_modes(s->m, d, v0, s->def.init_tol);
+  if (rc < 0) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
+  for (int ci = 0; ci < M->nc; ci++)
+    if (M->cons[ci].fric >= 0) s->cm->ci[s->cm->nc++] = ci;
   return AP_OK;
 }
 

@@ -1,6 +1,6 @@
 /* Contact modes of rolling contacts: the rows each mode drops, and the Coulomb force of the
  * sliding ones with their normal forces solved together with the accelerations (model/
- * con_friction.h; docs/contacts.md).
+ * con_friction.h; docs/scenes.md "Friction, slip and lift-off").
  *
  * Sliding contact j has slip velocity s_j = (t1 . (vP - Vg), t2 . (vP - Vg)) = T_j [v; 1], T_j
  * its two tangent rows (kept before they are zeroed), and friction force -mu_k F_n,j s^_j at
@@ -24,7 +24,7 @@
 
 #include "model/con_friction.h"
 
-#define FR_HEAD 4   /* mode, F_n, slip direction (2) */
+#define FR_HEAD 6   /* mode, F_n, slip direction (2), direction of the last friction (2) */
 static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }
 
 static double *block(const ap_bmodel *M, const double *S, const ap_mcon *c) {
@@ -201,7 +201,8 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
     chol_solve(k, w->Lg, x);
   }
   for (int a = 0; a < na; a++)
-    for (int c = 0; c < na; c++) w->Sm[a + (size_t)c * na] = arow_dot(M, d, w, a, w->X + (size_t)c * k);
+    for (int c = 0; c < na; c++)
+      w->Sm[a + (size_t)c * na] = arow_dot(M, d, w, a, w->X + (size_t)c * k);
   if (chol(na, w->Sm) != 0) {
     AP_BM_MSG(d, "model '%s': sliding contacts: the %d active constraint rows are dependent at "
               "t = %.17g (the normal forces are not unique)", m->name, na, d->t);
@@ -225,6 +226,7 @@ static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c,
   double ns = hypot(s[0], s[1]), *dir = ap_cfr_slip_dir(M, S, c);
   if (ns > 1e-13 * (1.0 + vmag)) s[0] /= ns, s[1] /= ns;
   else s[0] = dir[0], s[1] = dir[1];
+  dir[2] = s[0], dir[3] = s[1];   /* for ap_cfr_friction_force */
   const double *T = block(M, S, c) + FR_HEAD;
   for (int j = 0; j < k; j++) F[j] = -mu * (s[0] * T[j] + s[1] * T[k + 1 + j]);
   memcpy(w->z, F, sizeof(double) * (size_t)k);
@@ -266,4 +268,48 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
     block(M, S, sl[j])[1] = w.lamN[j];
   }
   return AP_OK;
+}
+
+/* ---- choosing the modes from a state ------------------------------------------------------ */
+
+int ap_cfr_unilateral(const ap_mcon *c) {
+  return c->def.unilateral == 1 || (c->def.unilateral < 0 && c->def.mu >= 0);
+}
+
+int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double tol) {
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !(tol > 0)) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  if (M->nfric == 0) return 0;
+  double *S = ap_bm_scratch(d), vmax = 0.0;
+  ap_basis basis = d->basis;
+  d->basis = AP_BASIS_NONE;
+  int rc = ap_fwd_position(m, d);
+  d->basis = basis;
+  if (rc != AP_OK) return rc;
+  for (int i = 0; v && i < M->k; i++) vmax = fmax(vmax, fabs(v[i]));
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    if (c->fric < 0) continue;
+    double sl[2] = {0, 0}, *dir = ap_cfr_slip_dir(M, S, c);
+    if (v) ap_cfr_slip(M, S, c, v, sl);
+    double ns = hypot(sl[0], sl[1]);
+    int mode = AP_CM_ROLLING;
+    if (ap_cfr_unilateral(c) && ap_contact_gap(M, S, c) > tol) mode = AP_CM_AIRBORNE;
+    else if (c->def.mu >= 0 && ns > tol * (1.0 + vmax)) {
+      mode = AP_CM_SLIDING;
+      dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+    }
+    ap_cfr_set_mode(M, S, c, mode);
+  }
+  return M->nfric;
+}
+
+void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,
+                           const double *t1, const double *t2, double *F) {
+  if (ap_cfr_mode(M, S, c) != AP_CM_SLIDING) return;
+  const double *b = block(M, S, c);
+  double mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu;
+  if (!t1) F[0] -= mu * fn * b[4], F[1] -= mu * fn * b[5];
+  else
+    for (int i = 0; i < 3; i++) F[i] -= mu * fn * (b[4] * t1[i] + b[5] * t2[i]);
 }

@@ -35,6 +35,12 @@ void ap_cfr_slip(const ap_bmodel *M, double *S, const ap_mcon *c, const double *
  * end of the velocity stage, Q, h, gamma and the position stage complete). AP_ERR_SINGULAR
  * with a message when the normal forces have no unique solution (Painleve). */
 int ap_cfr_friction(const ap_model *m, ap_data *d, double *S);
+/* A sliding contact's Coulomb force -mu_k fn s^ (s^ of the last evaluation, tangents t1, t2)
+ * added to F (3; with t1 NULL: to F (2) in tangent coordinates); nothing in the other modes. */
+void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,
+                           const double *t1, const double *t2, double *F);
+/* 1 when contact c lifts off (def.unilateral, or by default when it has a friction coefficient). */
+int ap_cfr_unilateral(const ap_mcon *c);
 /* The gap of contact c whatever its mode (m; contact.c), after the position stage. */
 double ap_contact_gap(const ap_bmodel *M, double *S, const ap_mcon *c);
 

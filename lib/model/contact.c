@@ -448,6 +448,7 @@ static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
     v3_axpy(lam[0], n, F);
   }
   if (c->nhol) v3_axpy(lam[c->hrow], gn, F);
+  if (c->fric >= 0) ap_cfr_friction_force(M, S, c, lam[c->hrow], t1, t2, F);   /* sliding */
 }
 
 static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,

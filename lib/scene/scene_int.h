@@ -283,6 +283,13 @@ int sc_state_fn(const ap_state_args *a, double *f, double *df, void *user);
 int sc_check_state_exprs(sc_ctx *c, const sc_scene *s, const ap_model *m, double t,
                          const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
+/* friction and unilateral of a rolling constraint (parse_friction.c). */
+int sc_parse_friction(sc_ctx *c, const sc_node *n, ap_constraint_def *d);
+/* 1 when constraint k (a scene's s) has contact modes (parse_friction.c). */
+int sc_con_has_modes(const sc_con *k);
+int sc_scene_has_modes(const sc_scene *s);
+/* The kind of constraint k for listings (kinds by ap_constraint_kind), with its modes. */
+const char *sc_con_kind_text(const sc_con *k, const char *const *kinds);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
 /* The keys of initial: for a joint of this kind (NULL-terminated). */
