@@ -24,8 +24,9 @@
  * The lift-off event's angle is checked to 1e-9, then the free flight (a parabola from the
  * event's state) to 1e-9.
  *
- * Without a change of mode a contact with modes runs bit for bit as the same contact without
- * them (a rolling ball with mu = 10). */
+ * A bouncing ball (restitution), a ball on a slope with mu 1 % below and above what rolling
+ * needs (test_bounce, test_incline: closed forms in their comments). Without a change of mode
+ * a contact with modes runs bit for bit as the same contact without them (mu = 10). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,34 +34,29 @@
 
 #include <appell/appell.h>
 
+#include "bodysys.h"
 #include "check.h"
 
 #define G 9.81
 static const double R = 0.1, MASS = 2.0;
 
+static double GRAV[3] = {0, 0, -G};   /* gravity of the next ball() */
+static double RESTITUTION = 0.0;      /* restitution of the next ball() */
+
 /* The ball on a free joint; ground sphere of radius Rg about the origin when Rg > 0. */
 static ap_model *ball(double mu, int unilateral, double Rg) {
-  ap_builder *b = NULL;
-  ap_model *m = NULL;
-  if (ap_builder_create("ball", &b) != AP_OK) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "ball", bd.shape.kind = AP_SHAPE_SPHERE, bd.shape.radius = R;
-  int rc = ap_body_def_uniform(&bd, MASS);
-  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
   ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0, c.mu = mu, c.unilateral = unilateral;
-  c.ground.sphere_radius = Rg;
-  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &c, NULL);
-  ap_effect_def e = ap_effect_def_default();
-  e.gravity[0] = 0, e.gravity[1] = 0, e.gravity[2] = -G;
-  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
-  if (rc == AP_OK) rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) printf("  build: %s\n", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
+  c.name = "roll", c.mu = mu, c.unilateral = unilateral;
+  c.ground.sphere_radius = Rg, c.restitution = RESTITUTION;
+  return bs_free_ball(AP_SHAPE_SPHERE, R, MASS, &c, GRAV);
+}
+
+/* The velocity after the sticking impact of the ball (v: vx vy vz wx wy wz) on the floor with
+ * the contact point leaving at vz_after: vx+ = (5 vx + 2 r wy) / 7, vy+ = (5 vy - 2 r wx) / 7,
+ * w+ = (-vy+ / r, vx+ / r, wz) (angular momentum about the contact point kept). */
+static void sticking_impact(const double *v, double vz_after, double *ex) {
+  ex[0] = (5 * v[0] + 2 * R * v[4]) / 7, ex[1] = (5 * v[1] - 2 * R * v[3]) / 7;
+  ex[2] = vz_after, ex[3] = -ex[1] / R, ex[4] = ex[0] / R, ex[5] = v[5];
 }
 
 static ap_sim *start(const ap_model *m, ap_mode mode, const double *q, const double *v) {
@@ -124,8 +120,7 @@ static void test_drop(ap_mode mode) {
   if (!m) return;
   double q[7] = {0.2, -0.1, R + h, 1, 0, 0, 0}, v[6] = {1.3, -0.6, 0.0, 4.0, 7.0, 11.0};
   double ex[6];
-  ex[0] = (5 * v[0] + 2 * R * v[4]) / 7, ex[1] = (5 * v[1] - 2 * R * v[3]) / 7, ex[2] = 0.0;
-  ex[3] = -ex[1] / R, ex[4] = ex[0] / R, ex[5] = v[5];
+  sticking_impact(v, 0.0, ex);
   ap_sim *s = start(m, mode, q, v);
   if (!s) return ap_model_free(m);
   AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_AIRBORNE);
@@ -201,6 +196,124 @@ static void test_dome(ap_mode mode) {
   ap_model_free(m);
 }
 
+/* Restitution e = 0.5: the dropped spinning ball of test_drop leaves the floor at
+ * vz+ = e sqrt(2 g h) with the same tangential velocities as the sticking plastic impact (for a
+ * sphere the normal and tangential parts of the projection decouple: g is diagonal), and
+ * touches down again 2 vz+ / g later, where it bounces at e^2 sqrt(2 g h). */
+static void test_bounce(ap_mode mode) {
+  double h = 0.05, e = 0.5, tc = sqrt(2 * h / G), vz = sqrt(2 * G * h);
+  RESTITUTION = e;
+  ap_model *m = ball(10.0, -1, 0.0);
+  RESTITUTION = 0.0;
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double q[7] = {0.2, -0.1, R + h, 1, 0, 0, 0}, v[6] = {1.3, -0.6, 0.0, 4.0, 7.0, 11.0};
+  double ex[6];
+  sticking_impact(v, e * vz, ex);
+  ap_sim *s = start(m, mode, q, v);
+  if (!s) return ap_model_free(m);
+  double t2 = tc + 2 * e * vz / G;
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 0.5 * (tc + t2)), AP_OK);   /* mid-flight after a bounce */
+  AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_AIRBORNE);
+  const double *vp = ap_sim_v(s);
+  double err = 0.0;
+  for (int i = 0; i < 6; i++)
+    err = fmax(err, fabs(vp[i] - ex[i] + (i == 2 ? G * (0.5 * (t2 - tc)) : 0.0)));
+  AP_CHECK_EQ_INT(ap_sim_advance(s, t2 + 1e-3), AP_OK);
+  ap_event_record r1, r2;
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 2);
+  AP_CHECK_EQ_INT(ap_sim_event_get(s, 0, &r1), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_event_get(s, 1, &r2), AP_OK);
+  double vz2 = ap_sim_v(s)[2] + G * 1e-3;
+  printf("  bouncing ball (%s, e = %g): touchdowns at %.15g, %.15g s (errors %.1e, %.1e), "
+         "velocity after the first %.1e off, second bounce at %.15g m/s (error %.1e)\n",
+         mode_name(mode), e, r1.t, r2.t, fabs(r1.t - tc), fabs(r2.t - t2), err, vz2,
+         fabs(vz2 - e * e * vz));
+  AP_CHECK_NEAR(r1.t, tc, 1e-12);
+  AP_CHECK_NEAR(r2.t, t2, 1e-12);
+  AP_CHECK_LE(err, 1e-12);
+  AP_CHECK_NEAR(vz2, e * e * vz, 1e-12);
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
+/* A ball released at rest on the plane under gravity tilted by a = 20 deg (down-slope along
+ * +x): rolling needs |F_t| / F_n = 2/7 tan(a). With mu 1 % below that it slides from the start:
+ * x'' = g (sin a - mu cos a), w_y' = 5 mu g cos a / (2 r), the slip g (sin a - 7/2 mu cos a) t
+ * grows and never returns to 0; 1 % above, it rolls: x'' = 5/7 g sin a. After 0.5 s, to 1e-9. */
+static void test_incline(ap_mode mode) {
+  double a = 20 * 3.14159265358979323846 / 180, need = 2.0 / 7.0 * tan(a), T = 0.5;
+  GRAV[0] = G * sin(a), GRAV[2] = -G * cos(a);
+  for (int above = 0; above < 2; above++) {
+    double mu = need * (above ? 1.01 : 0.99);
+    ap_model *m = ball(mu, -1, 0.0);
+    AP_CHECK(m != NULL);
+    if (!m) continue;
+    double q[7] = {0, 0, R, 1, 0, 0, 0}, v[6] = {0, 0, 0, 0, 0, 0};
+    ap_sim *s = start(m, mode, q, v);
+    if (!s) {
+      ap_model_free(m);
+      continue;
+    }
+    int mode0 = ap_sim_contact_mode(s, 0);
+    AP_CHECK_EQ_INT(ap_sim_advance(s, T), AP_OK);
+    double acc = above ? 5.0 / 7.0 * G * sin(a) : G * (sin(a) - mu * cos(a));
+    double wacc = above ? acc / R : 5 * mu * G * cos(a) / (2 * R);
+    double ex = 0.5 * acc * T * T, x = ap_sim_q(s)[0], wy = ap_sim_v(s)[4];
+    printf("  ball on a 20 deg slope (%s), mu %s what rolling needs: %s, x(%.1f) = %.15g "
+           "(error %.1e), w_y error %.1e, %d events\n", mode_name(mode),
+           above ? "1 % above" : "1 % below", mode0 ? "slides from the start" : "rolls", T, x,
+           fabs(x - ex), fabs(wy - wacc * T), ap_sim_event_count(s));
+    AP_CHECK_EQ_INT(mode0, above ? AP_CONTACT_ROLLING : AP_CONTACT_SLIDING);
+    AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), mode0);
+    AP_CHECK_EQ_INT(ap_sim_event_count(s), 0);
+    AP_CHECK_NEAR(x, ex, 1e-9);
+    AP_CHECK_NEAR(wy, wacc * T, 1e-9);
+    ap_sim_free(s);
+    ap_model_free(m);
+  }
+  GRAV[0] = 0, GRAV[2] = -G;
+}
+
+/* The normal force of a sliding body that is not a sphere: a thin uniform disk (r = 0.3 m,
+ * 1.5 kg) on a free joint, its axis 50 deg from the vertical, sliding and spinning with
+ * mu = 0.3. Its friction has a moment that changes the contact's normal acceleration, so F_n
+ * comes from the coupled solve (1 + u != 1). The Coulomb force the model applies is
+ * mu F_n(coupled); the normal force the reactions give back, A^T lambda = g v' + h - Q, is
+ * Newton's law for the vertical, m (a_z + g). Their ratio |F_t| / F_n must be mu: a normal
+ * force taken without the coupling (lambda0) would not match. Checked to 1e-12 at 4 times. */
+static void test_sliding_disk(ap_mode mode) {
+  double r = 0.3, mass = 1.5, mu = 0.3, tilt = 50 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "slide", c.mu = mu;
+  ap_model *m = bs_free_ball(AP_SHAPE_DISK, r, mass, &c, g);
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double q[7] = {0, 0, r * sin(tilt), cos(tilt / 2), sin(tilt / 2), 0, 0};
+  double v[6] = {1.0, 0.5, 0.0, 0.0, 0.0, 6.0}, worst = 0.0, fn = 0.0;
+  ap_sim *s = start(m, mode, q, v);
+  if (!s) return ap_model_free(m);
+  AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_SLIDING);
+  int n = 0;
+  for (int i = 1; i <= 4 && ap_sim_advance(s, 0.02 * i) == AP_OK; i++) {
+    if (ap_sim_contact_mode(s, 0) != AP_CONTACT_SLIDING) break;
+    const double *lambda = NULL;
+    ap_contact_force f;
+    AP_CHECK_EQ_INT(ap_sim_reactions(s, &lambda), AP_OK);
+    AP_CHECK_EQ_INT(ap_body_contact_force(m, ap_sim_data(s), lambda, 0, &f), AP_OK);
+    double newton = mass * (ap_sim_data(s)->vdot[2] + G);
+    worst = fmax(worst, fmax(fabs(f.friction_ratio - mu), fabs(f.normal - newton) / newton));
+    fn = f.normal, n++;
+  }
+  printf("  sliding disk (%s, axis 50 deg from vertical, mu %g): F_n %.6g N (m g = %.6g), "
+         "|F_t| / F_n - mu and F_n against m (a_z + g): worst %.1e over %d times\n",
+         mode_name(mode), mu, fn, mass * G, worst, n);
+  AP_CHECK_EQ_INT(n, 4);
+  AP_CHECK_LE(worst, 1e-12);
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 /* A rolling ball with mu = 10 never slips: the same run as without modes, bit for bit. */
 static void test_bitwise(void) {
   ap_model *m0 = ball(-1.0, -1, 0.0), *m1 = ball(10.0, 0, 0.0);
@@ -229,6 +342,9 @@ int main(void) {
     test_bowling(mode);
     test_drop(mode);
     test_dome(mode);
+    test_bounce(mode);
+    test_incline(mode);
+    test_sliding_disk(mode);
   }
   test_bitwise();
   return ap_check_finish("test_contact_modes");

@@ -22,6 +22,7 @@
 
 #include <appell/appell.h>
 
+#include "bodysys.h"
 #include "fdcheck.h"
 
 #define PI RS_PI_
@@ -32,28 +33,12 @@ static const double ALPHA = 25 * PI / 180, OFFSET = 0.3, RADIUS = 0.1, MASS = 2.
 /* A ball (shape kind) on a free joint rolling on the plane n . p = d under gravity g. */
 static ap_model *ball(ap_shape_kind shape, const double *n, double d, const double *g,
                       char *msg) {
-  ap_builder *b = NULL;
-  ap_model *m = NULL;
-  if (ap_builder_create("ball on a plane", &b) != AP_OK) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = RADIUS;
-  int rc = ap_body_def_uniform(&bd, MASS);
-  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
   ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
+  c.name = "roll";
   if (n) memcpy(c.ground.normal, n, sizeof c.ground.normal);
   c.ground.offset = d;
-  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &c, NULL);
-  ap_effect_def e = ap_effect_def_default();
-  memcpy(e.gravity, g, sizeof e.gravity);
-  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
-  if (rc == AP_OK) rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) snprintf(msg, 512, "%s", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
+  msg[0] = '\0';   /* a failure is printed by bodysys */
+  return bs_free_ball(shape, RADIUS, MASS, &c, g);
 }
 
 /* Q = Rx(a): columns e_x, (0, cos a, sin a), n = (0, -sin a, cos a). */

@@ -143,6 +143,40 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
   ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_SLIDING);
 }
 
+/* Touchdown: the contact's rows back (rolling); the restart's projection is then the sticking
+ * plastic impact. With restitution e > 0 the impact is the projection onto the rows with the
+ * normal one's target e |vn| instead of 0 (vn < 0 the closing speed of the contact point), in
+ * the same metric: a sphere keeps its angular momentum about the contact point and bounces at
+ * e |vn|, airborne again; a bounce slower than AP_CM_BOUNCE_MIN (1 + max |v_i|) ends in
+ * rolling (plastic), which bounds the number of bounces (e^N |vn| < that speed). */
+#define AP_CM_BOUNCE_MIN 1e-6
+static int touchdown(ap_sim *s, const ap_mcon *c, double t, const double *q, double *v) {
+  const ap_bmodel *M = ap_bm(s->m);
+  ap_data *d = s->d;
+  double *S = scratch(d), e = c->def.restitution, vn = 0.0, vmax = 0.0;
+  ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
+  if (!(e > 0)) return AP_OK;
+  ap_basis basis = d->basis;
+  int sfe = d->speeds_from_e, r = c->row + c->hrow;
+  d->t = t, d->speeds_from_e = 0, d->basis = AP_BASIS_ORTHONORMAL;
+  memcpy(d->q, q, sizeof(double) * (size_t)s->n);
+  int rc = ap_partition(s->m, d);
+  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
+  if (rc == AP_OK) {
+    vn = d->a0[r];
+    for (int j = 0; j < s->k; j++) vn += d->A[r + (size_t)j * s->b] * v[j];
+    for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
+  }
+  if (rc == AP_OK && -e * vn > AP_CM_BOUNCE_MIN * (1.0 + vmax)) {
+    d->a0[r] += e * vn;                 /* A_n v + a0_n = -e vn after the impact */
+    rc = ap_core_project_here(s->m, d, v, NULL);
+    if (rc == AP_OK) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
+  }
+  d->basis = basis, d->speeds_from_e = sfe;
+  s->ev_stamp = -1;
+  return rc;
+}
+
 static int on_switch(const ap_event_record *rec, double *q, double *v, void *user) {
   const cm_event *e = user;
   ap_sim *s = e->cm->s;
@@ -165,16 +199,46 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
       fn = contact_forces(s->d, c, ft);
       if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
       break;
-    default:   /* touchdown: sticking plastic impact, by the restart's projection */
-      ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
+    default:
+      if (touchdown(s, c, rec->t, q, v) != AP_OK) return -1;
       break;
   }
   return 0;
 }
 
+/* At creation: a rolling contact whose sticking force already lies outside its cone slides
+ * from the start (along -F_t), one whose normal force is negative flies (unilateral). */
+static int initial_cone(ap_sim *s) {
+  struct ap_drv_contacts *cm = s->cm;
+  const ap_bmodel *M = ap_bm(s->m);
+  double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL, ft[2];
+  if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  memcpy(q, s->q, sizeof(double) * (size_t)s->n);
+  memcpy(v, s->v, sizeof(double) * (size_t)s->k);
+  int rc = forces_at(s, s->t, q, v), changed = 0;
+  for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
+    const ap_mcon *c = con(s, cm->ci[i]);
+    if (ap_cfr_mode(M, scratch(s->d), c) != AP_CM_ROLLING) continue;
+    double fn = contact_forces(s->d, c, ft);
+    if (unilateral(c) && fn < 0) {
+      ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
+    } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
+      slide_against(s, c, ft), changed = 1;
+    }
+  }
+  if (rc != AP_OK) rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
+                                    s->d->msg);
+  if (rc == AP_OK && changed) rc = ap_drv_restart_state(s, s->t, q, v);
+  if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
+  free(q);
+  return rc;
+}
+
 int ap_drv_contacts_events(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   if (!cm) return AP_OK;
+  int rc0 = initial_cone(s);
+  if (rc0 != AP_OK) return rc0;
   for (int i = 0; i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
     for (int kind = 0; kind < EV_N; kind++) {

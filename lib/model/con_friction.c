@@ -281,6 +281,7 @@ int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double
   const ap_bmodel *M = ap_bm(m);
   if (M->nfric == 0) return 0;
   double *S = ap_bm_scratch(d), vmax = 0.0;
+  int off = 0;
   ap_basis basis = d->basis;
   d->basis = AP_BASIS_NONE;
   int rc = ap_fwd_position(m, d);
@@ -300,8 +301,9 @@ int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double
       dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
     }
     ap_cfr_set_mode(M, S, c, mode);
+    off += mode != AP_CM_ROLLING;
   }
-  return M->nfric;
+  return off;
 }
 
 void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,

@@ -409,6 +409,9 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
     FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) need a rolling contact "
          "of a body that is not on a plane-contact joint (a free body, a wheel on its axle): "
          "the plane-contact joint cannot leave the ground", nm, d->mu, d->unilateral);
+  if (!(d->restitution >= 0 && d->restitution <= 1) || (d->restitution > 0 && !modes))
+    FAIL("constraint '%s': restitution %g: it must lie in [0, 1], on a unilateral contact "
+         "(unilateral or friction given)", nm, d->restitution);
   if (modes && (!(d->mu <= 1e300) || (d->mu_kinetic >= 0 && !(d->mu_kinetic <= d->mu)) ||
                 isnan(d->mu_kinetic)))
     FAIL("constraint '%s': friction mu = %g, mu_kinetic = %g: mu must be a finite number >= 0 "

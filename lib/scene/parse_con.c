@@ -20,7 +20,7 @@ static const char *const ground_kinds[] = {"fixed", "turntable", "translating", 
 static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_speed", "user",
                                         "coincident", "point_on_line", "point_on_plane", NULL};
 static const char *const con_keys[][8] = {
-    {"kind", "body", "no_spin", "ground", "friction", "unilateral", NULL},
+    {"kind", "body", "no_spin", "ground", "friction", "unilateral", "restitution", NULL},
     {"kind", "body", "point", "direction", "wheel", "ground", NULL},
     {"kind", "joint", "speed", "value", NULL},
     {"kind", NULL},

@@ -1,6 +1,7 @@
 /* Scene keys of the contact modes of a rolling constraint (docs/scenes.md "Friction, slip and
- * lift-off"): `friction: {mu: 0.8, mu_kinetic: 0.6}` and `unilateral: true|false` into the
- * constraint's ap_constraint_def (mu, mu_kinetic, unilateral; the model checks the rest). */
+ * lift-off"): `friction: {mu: 0.8, mu_kinetic: 0.6}`, `unilateral: true|false` and
+ * `restitution: 0.5` into the constraint's ap_constraint_def (mu, mu_kinetic, unilateral,
+ * restitution; the model checks the rest), and the listings' and outputs' view of them. */
 #include <math.h>
 
 #include "scene/scene_int.h"
@@ -10,6 +11,10 @@ static const char *const friction_keys[] = {"mu", "mu_kinetic", NULL};
 int sc_parse_friction(sc_ctx *c, const sc_node *n, ap_constraint_def *d) {
   const sc_node *f = sc_map_get(n, "friction"), *u = sc_map_get(n, "unilateral");
   if (u && sc_get_bool(c, n, "unilateral", &d->unilateral)) return AP_ERR_ARG;
+  if (sc_get_number(c, n, "restitution", &d->restitution)) return AP_ERR_ARG;
+  const sc_node *e = sc_map_get(n, "restitution");
+  if (e && !(d->restitution >= 0 && d->restitution <= 1))
+    return sc_err(c, e, "restitution must lie between 0 and 1 (got %g)", d->restitution);
   if (!f) return AP_OK;
   if (sc_expect(c, f, SC_MAP) || sc_check_keys(c, f, friction_keys)) return AP_ERR_ARG;
   if (!sc_map_get(f, "mu")) return sc_err(c, f, "friction needs mu (e.g. {mu: 0.8})");
