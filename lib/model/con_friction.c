@@ -257,7 +257,7 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   double small = solve_nopivot(p, w.Mp, w.lamN);
   if (small < 0) {
     AP_BM_MSG(d, "model '%s': contact '%s' slides in a state where the normal force has no "
-              "solution or several (Painleve's paradox: 1 + u = %.3g <= 0, the friction "
+              "solution or several (Painleve's paradox: 1 + u = %.6g <= 0, the friction "
               "pushes the contact into the ground harder than the normal force can resist) at "
               "t = %.17g: lower mu_kinetic or model the impact", m->name, sl[0]->name,
               p == 1 ? 1.0 + w.U[(int)w.nidx[0]] : small, d->t);
