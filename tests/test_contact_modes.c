@@ -1,6 +1,7 @@
 /* Contact modes (docs/scenes.md "Friction, slip and lift-off"): rolling, sliding and airborne
  * contacts switched by events, against closed forms. A uniform ball (radius r = 0.1 m, mass
- * m = 2 kg, I = 2/5 m r^2) on a free joint, gravity g = 9.81 m/s^2 along -z, in minimal and projected modes (dop853).
+ * m = 2 kg, I = 2/5 m r^2) on a free joint, gravity g = 9.81 m/s^2 along -z, in minimal and
+ * projected modes (dop853).
  *
  * Bowling ball. Launched at v0 along x without spin on the plane z = 0 with mu: it slides, the
  * friction -mu m g e_x at the contact point (-r e_z) gives v' = -mu g and, about the centre,
@@ -24,8 +25,10 @@
  * The lift-off event's angle is checked to 1e-9, then the free flight (a parabola from the
  * event's state) to 1e-9.
  *
- * Painleve's paradox (test_painleve). A bouncing ball (restitution), a ball on a slope with mu 1 % below and above what rolling
- * needs (test_bounce, test_incline: closed forms in their comments). Without a change of mode
+ * Painleve's paradox (test_painleve), a disk in a steady turn with mu 1 % below and above what
+ * the turn needs (test_disk_turn), a bouncing ball (restitution), a ball on a slope with mu 1 %
+ * below and above what rolling needs (test_bounce, test_incline: closed forms in their
+ * comments). Without a change of mode
  * a contact with modes runs bit for bit as the same contact without them (mu = 10). */
 #include <math.h>
 #include <stdio.h>
@@ -321,7 +324,8 @@ static void test_sliding_disk(ap_mode mode) {
  * a0 + N/m [1 + r_x (r_x + mu s r_z) / k^2], so the normal force is the frictionless one over
  * 1 + u = [1 + r_x (r_x + mu s r_z) / k^2] / [1 + r_x^2 / k^2]. Sliding toward +x (s = +1)
  * that is -0.43 < 0: no consistent normal force, the simulation refuses to start with the
- * number in its message (printed to 6 digits, checked to 1e-5); toward -x it is 2.4 and it starts, sliding. */
+ * number in its message (printed to 6 digits, checked to 1e-5); toward -x it is 2.4 and it
+ * starts, sliding. */
 static void test_painleve(void) {
   double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
   ap_constraint_def cd = ap_constraint_def_default();
@@ -378,6 +382,66 @@ static void test_painleve(void) {
   ap_model_free(m);
 }
 
+/* A rolling disk in a steady turn (thin uniform disk r = 0.3 m, 1.5 kg on a free joint, lean
+ * 0.3 rad from upright, heading rate Omega = 3 rad/s, w_a and w_n from the steady relation of
+ * bs_disk_steady_rates): the centre keeps its height and runs round a horizontal circle, its
+ * velocity vc turning at Omega, so the ground's horizontal force is m Omega |vc| and the
+ * friction the turn needs is Omega |vc| / g. With mu 1 % above it the disk rolls on (no event
+ * over 1 s, the contact's friction ratio Omega |vc| / g to 1e-9); 1 % below it slides from the
+ * start. */
+static void test_disk_turn(ap_mode mode) {
+  bs_disk p = bs_disk_default();
+  double th = 0.3, Om = 3.0, wa, wn, psi = 0.4, g[3] = {0, 0, -G};
+  bs_disk_steady_rates(&p, th, Om, &wa, &wn);
+  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3], R[9];
+  for (int i = 0; i < 3; i++) {
+    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
+    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
+  }
+  for (int i = 0; i < 3; i++) R[i] = e1[i], R[3 + i] = -bu[i], R[6 + i] = a[i];  /* columns */
+  double q[7] = {0.1, -0.2, p.r * cos(th), 0, 0, 0, 0}, v[6], w[3];
+  ap_quat_from_matrix(R, q + 3);
+  for (int i = 0; i < 3; i++) w[i] = wa * bu[i] + wn * a[i], v[3 + i] = w[i];
+  v[0] = p.r * (w[1] * bu[2] - w[2] * bu[1]);   /* vc = r w x bu: the contact point at rest */
+  v[1] = p.r * (w[2] * bu[0] - w[0] * bu[2]);
+  v[2] = p.r * (w[0] * bu[1] - w[1] * bu[0]);
+  double need = Om * hypot(v[0], v[1]) / G;
+  for (int above = 0; above < 2; above++) {
+    ap_constraint_def c = ap_constraint_def_default();
+    c.name = "roll", c.mu = need * (above ? 1.01 : 0.99);
+    ap_model *m = bs_free_ball(AP_SHAPE_DISK, p.r, p.m, &c, g);
+    AP_CHECK(m != NULL);
+    if (!m) continue;
+    ap_sim *s = start(m, mode, q, v);
+    if (!s) {
+      ap_model_free(m);
+      continue;
+    }
+    int mode0 = ap_sim_contact_mode(s, 0);
+    double ratio = NAN;
+    if (above) {
+      AP_CHECK_EQ_INT(ap_sim_advance(s, 1.0), AP_OK);
+      const double *lambda = NULL;
+      ap_contact_force f;
+      AP_CHECK_EQ_INT(ap_sim_reactions(s, &lambda), AP_OK);
+      AP_CHECK_EQ_INT(ap_body_contact_force(m, ap_sim_data(s), lambda, 0, &f), AP_OK);
+      ratio = f.friction_ratio;
+      AP_CHECK_NEAR(ratio, need, 1e-9);
+      AP_CHECK_EQ_INT(ap_sim_event_count(s), 0);
+      AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_ROLLING);
+    }
+    printf("  disk in a steady turn (%s), mu %s the %.9g it needs: %s%s", mode_name(mode),
+           above ? "1 % above" : "1 % below", need,
+           mode0 ? "slides from the start" : "rolls", above ? "" : "\n");
+    if (above)
+      printf(", after 1 s still rolling, friction ratio %.12g (error %.1e), %d events\n", ratio,
+             fabs(ratio - need), ap_sim_event_count(s));
+    AP_CHECK_EQ_INT(mode0, above ? AP_CONTACT_ROLLING : AP_CONTACT_SLIDING);
+    ap_sim_free(s);
+    ap_model_free(m);
+  }
+}
+
 /* A rolling ball with mu = 10 never slips: the same run as without modes, bit for bit. */
 static void test_bitwise(void) {
   ap_model *m0 = ball(-1.0, -1, 0.0), *m1 = ball(10.0, 0, 0.0);
@@ -409,6 +473,7 @@ int main(void) {
     test_bounce(mode);
     test_incline(mode);
     test_sliding_disk(mode);
+    test_disk_turn(mode);
   }
   test_painleve();
   test_bitwise();
