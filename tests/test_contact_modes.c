@@ -199,6 +199,44 @@ static void test_dome(ap_mode mode) {
   ap_model_free(m);
 }
 
+/* Slip onset off a dome: the ball of test_dome with mu = 0.5. Rolling, its centre accelerates
+ * along the circle at 5/7 g sin th, so the friction is F_t = m g sin th - m 5/7 g sin th =
+ * 2/7 m g sin th, and F_n = m g (17 cos th - 10 cos th0) / 7 (test_dome): the ratio
+ * 2 sin th / (17 cos th - 10 cos th0) reaches mu before F_n vanishes. The slip event's angle
+ * against the root of 2 sin th = mu (17 cos th - 10 cos th0) (bisection), to 1e-9. */
+static void test_dome_slip(ap_mode mode) {
+  double Rg = 1.0, L = Rg + R, th0 = 0.01, mu = 0.5, lo = th0, hi = acos(10.0 / 17 * cos(th0));
+  for (int i = 0; i < 200; i++) {
+    double mid = 0.5 * (lo + hi);
+    if (2 * sin(mid) - mu * (17 * cos(mid) - 10 * cos(th0)) < 0) lo = mid;
+    else hi = mid;
+  }
+  ap_model *m = ball(mu, -1, Rg);
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double q[7] = {L * sin(th0), 0, L * cos(th0), 1, 0, 0, 0}, v[6] = {0, 0, 0, 0, 0, 0};
+  ap_sim *s = start(m, mode, q, v);
+  if (!s) return ap_model_free(m);
+  int rc = AP_OK;
+  for (int k = 1; k <= 400 && rc == AP_OK && ap_sim_event_count(s) == 0; k++)
+    rc = ap_sim_advance(s, 0.01 * k);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  ap_event_record r;
+  if (ap_sim_event_get(s, 0, &r) == AP_OK) {
+    double th = atan2(r.q[0], r.q[2]);
+    printf("  ball off a dome with mu %g (%s): slips at %.15g rad, closed form %.15g (error "
+           "%.1e), then %s\n", mu, mode_name(mode), th, lo, fabs(th - lo),
+           ap_sim_contact_mode(s, 0) == AP_CONTACT_SLIDING ? "slides" : "does not slide");
+    AP_CHECK(strcmp(r.name, "roll.slip") == 0);
+    AP_CHECK_NEAR(th, lo, 1e-9);
+    AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_SLIDING);
+  } else {
+    AP_CHECK(0);
+  }
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 /* Restitution e = 0.5: the dropped spinning ball of test_drop leaves the floor at
  * vz+ = e sqrt(2 g h) with the same tangential velocities as the sticking plastic impact (for a
  * sphere the normal and tangential parts of the projection decouple: g is diagonal), and
@@ -470,6 +508,7 @@ int main(void) {
     test_bowling(mode);
     test_drop(mode);
     test_dome(mode);
+    test_dome_slip(mode);
     test_bounce(mode);
     test_incline(mode);
     test_sliding_disk(mode);
