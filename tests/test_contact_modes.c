@@ -480,6 +480,52 @@ static void test_disk_turn(ap_mode mode) {
   }
 }
 
+/* Refusals, each with the constraint's name: a NaN or infinite mu, mu_kinetic above mu, a
+ * restitution outside [0, 1] or without lift-off, friction on a plane-contact joint (which
+ * cannot leave the ground), and DAE mode. */
+static void test_refusals(void) {
+  double g[3] = {0, 0, -G};
+  struct { double mu, muk, e; int uni; } bad[] = {
+      {0.5, -1, 0, -1}, {0.5, 0.8, 0, -1}, {0.5, -1, 1.5, -1}, {-1, -1, 0.5, 0},
+      {NAN, -1, 0, -1}, {INFINITY, -1, 0, -1}};
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    ap_constraint_def c = ap_constraint_def_default();
+    c.name = "roll", c.mu = bad[i].mu, c.mu_kinetic = bad[i].muk, c.restitution = bad[i].e;
+    c.unilateral = bad[i].uni;
+    ap_builder *b = NULL;
+    ap_model *m = NULL;
+    AP_CHECK_EQ_INT(ap_builder_create("bad", &b), AP_OK);
+    ap_body_def bd = ap_body_def_default();
+    bd.name = "ball", bd.shape.kind = AP_SHAPE_SPHERE, bd.shape.radius = R;
+    AP_CHECK_EQ_INT(ap_body_def_uniform(&bd, MASS), AP_OK);
+    AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
+    ap_joint_def j = ap_joint_def_default();
+    j.kind = i == 0 ? AP_JOINT_PLANE_CONTACT : AP_JOINT_FREE, j.child = 0;
+    AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
+    c.body = 0;
+    AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &c, NULL), AP_OK);
+    int rc = ap_builder_compile(b, &m);
+    const char *msg = ap_builder_message(b);
+    printf("  refused (%d): %s\n", rc, msg);
+    AP_CHECK(rc != AP_OK && m == NULL && strstr(msg, "'roll'") != NULL);
+    ap_model_free(m);
+    ap_builder_free(b);
+  }
+  ap_model *m = ball(0.5, -1, 0.0);
+  double q[7] = {0, 0, R, 1, 0, 0, 0}, v[6] = {0};
+  ap_sim_def def = ap_sim_def_default();
+  def.mode = AP_MODE_DAE;
+  ap_sim *s = NULL;
+  char msg[512] = "";
+  int rc = m ? ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg) : AP_ERR_ARG;
+  printf("  DAE mode: %s\n", msg);
+  AP_CHECK_EQ_INT(rc, AP_ERR_UNSUPPORTED);
+  AP_CHECK(strstr(msg, "DAE") != NULL);
+  ap_sim_free(s);
+  ap_model_free(m);
+  (void)g;
+}
+
 /* A rolling ball with mu = 10 never slips: the same run as without modes, bit for bit. */
 static void test_bitwise(void) {
   ap_model *m0 = ball(-1.0, -1, 0.0), *m1 = ball(10.0, 0, 0.0);
@@ -515,6 +561,7 @@ int main(void) {
     test_disk_turn(mode);
   }
   test_painleve();
+  test_refusals();
   test_bitwise();
   return ap_check_finish("test_contact_modes");
 }

@@ -404,7 +404,7 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
     FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0 only; "
          "for this ground (%s) put the body on a free joint (or a wheel on its axle)", nm,
          B->name, c->plane == 2 ? "a sphere" : "a tilted or raised plane");
-  int modes = d->mu >= 0 || d->unilateral == 1;
+  int modes = d->mu >= 0 || d->unilateral == 1 || isnan(d->mu);   /* NaN: refused below */
   if (modes && (knife || J->kind == AP_JOINT_PLANE_CONTACT))
     FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) need a rolling contact "
          "of a body that is not on a plane-contact joint (a free body, a wheel on its axle): "
