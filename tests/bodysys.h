@@ -46,6 +46,12 @@ ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rto
 ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
                        const ap_constraint_def *c, const double *g);
 
+/* A uniform sphere (body "ball") on the given joint with the contact c (its body set to the
+ * ball), which must not compile: the builder's status (AP_OK, failure counted, when it did
+ * compile) and its message in msg. */
+int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,
+                    char *msg, size_t len);
+
 /* T + V of a body model at (q, v) (d->t as set by the caller); NaN on failure. */
 double bs_energy(const ap_model *m, ap_data *d, const double *q, const double *v);
 
