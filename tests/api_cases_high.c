@@ -74,6 +74,9 @@ static void cases_body_queries(void) {
   CASE(ap_body_energy, "m NULL", ap_body_energy(NULL, BD, &T, &V) == AP_ERR_ARG);
   CASE(ap_body_energy, "d NULL", ap_body_energy(BM, NULL, &T, &V) == AP_ERR_ARG);
   CASE(ap_body_energy, "outputs NULL (optional)", ap_body_energy(BM, BD, NULL, NULL) == AP_OK);
+  CASE(ap_body_contact_modes, "m NULL", ap_body_contact_modes(NULL, BD, NULL, 1e-6) == AP_ERR_ARG);
+  CASE(ap_body_contact_modes, "d NULL", ap_body_contact_modes(BM, NULL, NULL, 1e-6) == AP_ERR_ARG);
+  CASE(ap_body_contact_modes, "tol 0", ap_body_contact_modes(BM, BD, NULL, 0.0) == AP_ERR_ARG);
   CASE(ap_body_energy, "d of another model", ap_body_energy(BM, TD, &T, &V) == AP_ERR_ARG);
   CASE(ap_body_effect_count, "m NULL", ap_body_effect_count(NULL, BD, 0) == -1);
   CASE(ap_body_effect_count, "d NULL", ap_body_effect_count(BM, NULL, 0) == -1);

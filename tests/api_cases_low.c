@@ -311,6 +311,8 @@ static void cases_sim(void) {
   CASE(ap_sim_event_get, "s NULL", ap_sim_event_get(NULL, 0, &er) == AP_ERR_ARG);
   CASE(ap_sim_event_get, "i out of range", ap_sim_event_get(S, 0, &er) == AP_ERR_ARG);
   CASE(ap_sim_event_get, "out NULL", ap_sim_event_get(S, 0, NULL) == AP_ERR_ARG);
+  CASE(ap_sim_contact_mode, "s NULL", ap_sim_contact_mode(NULL, 0) == AP_ERR_ARG);
+  CASE(ap_sim_contact_mode, "no contact modes", ap_sim_contact_mode(S, 0) == AP_ERR_ARG);
   bad = simdef();
   CASE(ap_crosscheck, "m NULL",
        ap_crosscheck(NULL, &bad, 0, q, v, 1, 2, &rep, msg, sizeof msg) == AP_ERR_ARG);

@@ -186,6 +186,52 @@ void bs_disk_read(const double *q, const double *v, double *th, double *thd, dou
   *thd = -azd / cos(*th);
 }
 
+/* ---- a free ball on the ground ------------------------------------------------------------ */
+
+ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
+                       const ap_constraint_def *c, const double *g) {
+  ap_builder *b = builder("ball");
+  if (!b) return NULL;
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = radius;
+  int good = ok(b, ap_body_def_uniform(&bd, mass), "ball inertia") &&
+             ok(b, ap_builder_add_body(b, &bd, NULL), "ball");
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_FREE, j.child = 0;
+  good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "free joint");
+  ap_constraint_def cc = *c;
+  cc.body = 0;
+  good = good && ok(b, ap_builder_add_constraint(b, &cc, NULL), "contact");
+  ap_effect_def e = ap_effect_def_default();
+  memcpy(e.gravity, g, sizeof e.gravity);
+  good = good && ok(b, ap_builder_add_effect(b, &e, NULL), "gravity");
+  if (!good) return ap_builder_free(b), NULL;
+  return bs_compile(b);
+}
+
+int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,
+                    char *msg, size_t len) {
+  ap_builder *b = NULL;
+  ap_model *m = NULL;
+  int rc = ap_builder_create("refused", &b);
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "ball", bd.shape.kind = AP_SHAPE_SPHERE, bd.shape.radius = radius;
+  if (rc == AP_OK) rc = ap_body_def_uniform(&bd, mass);
+  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = joint, j.child = 0;
+  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
+  ap_constraint_def cc = *c;
+  cc.body = 0;
+  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &cc, NULL);
+  if (rc == AP_OK) rc = ap_builder_compile(b, &m);
+  snprintf(msg, len, "%s", b ? ap_builder_message(b) : "");
+  if (m) fail("bs_ball_refused", "the model compiled"), rc = AP_OK;
+  ap_model_free(m);
+  ap_builder_free(b);
+  return rc;
+}
+
 /* ---- heavy symmetric top ----------------------------------------------------------------- */
 
 bs_top bs_top_default(void) {

@@ -40,6 +40,18 @@ int bs_add_body(ap_builder *b, const char *name, double mass, const double *com,
 ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rtol,
                  double atol, const double *q0, const double *v0);
 
+/* A ball (body "ball", a uniform solid of the shape, radius (m), mass (kg)) on a free joint
+ * with the contact c (its body set to the ball) and gravity g (m/s^2); NULL (failure counted)
+ * when it does not build. */
+ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
+                       const ap_constraint_def *c, const double *g);
+
+/* A uniform sphere (body "ball") on the given joint with the contact c (its body set to the
+ * ball), which must not compile: the builder's status (AP_OK, failure counted, when it did
+ * compile) and its message in msg. */
+int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,
+                    char *msg, size_t len);
+
 /* T + V of a body model at (q, v) (d->t as set by the caller); NaN on failure. */
 double bs_energy(const ap_model *m, ap_data *d, const double *q, const double *v);
 

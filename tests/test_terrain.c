@@ -22,6 +22,7 @@
 
 #include <appell/appell.h>
 
+#include "bodysys.h"
 #include "fdcheck.h"
 
 #define PI RS_PI_
@@ -32,28 +33,12 @@ static const double ALPHA = 25 * PI / 180, OFFSET = 0.3, RADIUS = 0.1, MASS = 2.
 /* A ball (shape kind) on a free joint rolling on the plane n . p = d under gravity g. */
 static ap_model *ball(ap_shape_kind shape, const double *n, double d, const double *g,
                       char *msg) {
-  ap_builder *b = NULL;
-  ap_model *m = NULL;
-  if (ap_builder_create("ball on a plane", &b) != AP_OK) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = RADIUS;
-  int rc = ap_body_def_uniform(&bd, MASS);
-  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
   ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0;
+  c.name = "roll";
   if (n) memcpy(c.ground.normal, n, sizeof c.ground.normal);
   c.ground.offset = d;
-  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &c, NULL);
-  ap_effect_def e = ap_effect_def_default();
-  memcpy(e.gravity, g, sizeof e.gravity);
-  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
-  if (rc == AP_OK) rc = ap_builder_compile(b, &m);
-  if (rc != AP_OK) snprintf(msg, 512, "%s", ap_builder_message(b));
-  ap_builder_free(b);
-  return m;
+  msg[0] = '\0';   /* a failure is printed by bodysys */
+  return bs_free_ball(shape, RADIUS, MASS, &c, g);
 }
 
 /* Q = Rx(a): columns e_x, (0, cos a, sin a), n = (0, -sin a, cos a). */
@@ -382,27 +367,17 @@ static void test_impact(void) {
 static void test_refusals(void) {
   double n[3] = {0, -0.5, 1};
   for (int c = 0; c < 2; c++) {
-    ap_builder *b = NULL;
-    ap_model *m = NULL;
-    AP_CHECK_EQ_INT(ap_builder_create("refused", &b), AP_OK);
-    ap_body_def bd = ap_body_def_default();
-    bd.name = "ball", bd.shape.kind = AP_SHAPE_SPHERE, bd.shape.radius = RADIUS;
-    AP_CHECK_EQ_INT(ap_body_def_uniform(&bd, MASS), AP_OK);
-    AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
-    ap_joint_def j = ap_joint_def_default();
-    j.kind = c ? AP_JOINT_FREE : AP_JOINT_PLANE_CONTACT, j.child = 0;
-    AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
     ap_constraint_def k = ap_constraint_def_default();
-    k.name = "roll", k.body = 0;
+    k.name = "roll";
     memcpy(k.ground.normal, n, sizeof n);
     if (c) k.ground.kind = AP_GROUND_TURNTABLE, k.ground.omega = 1.0;
-    AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &k, NULL), AP_OK);
-    AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_ERR_ARG);
-    const char *msg = ap_builder_message(b);
+    char msg[512];
+    int rc = bs_ball_refused(c ? AP_JOINT_FREE : AP_JOINT_PLANE_CONTACT, RADIUS, MASS, &k, msg,
+                             sizeof msg);
+    AP_CHECK_EQ_INT(rc, AP_ERR_ARG);
     printf("  refused: %s\n", msg);
     AP_CHECK(strstr(msg, "roll") != NULL);
     AP_CHECK(strstr(msg, c ? "moving ground" : "plane-contact joint") != NULL);
-    ap_builder_free(b);
   }
 }
 

@@ -150,7 +150,7 @@ static int report(ap_scene *sc, const char *file) {
   settings(sc, &run);
   printf("initial      %s", rep[0] ? rep : "consistent as given\n");
   printf("energy       %s\n", ap_scene_conserves_energy(sc) ? "conserved" : "not conserved "
-         "(drivers, damping, applied forces or a moving ground)");
+         "(drivers, damping, applied forces, a moving ground, contacts that slide or touch down)");
   free(q0);
   return code;
 }

@@ -345,6 +345,8 @@ static int start(run_state *rs, const run_opts *o) {
     const char *name = ap_scene_output_name(rs->sc, i);
     size_t len = strlen(name), sl = strlen(".contact.Fz");
     rs->lift[i] = len > sl && strcmp(name + len - sl, ".contact.Fz") == 0;
+    const char *mode = i + 2 < nc ? ap_scene_output_name(rs->sc, i + 2) : "";
+    if (rs->lift[i] && strstr(mode, ".contact.mode")) rs->lift[i] = 0;   /* it does lift off */
   }
   int rc = ap_scene_initial_state(rs->sc, q0, v0, report, sizeof report, msg, sizeof msg);
   if (rc != AP_OK) {

@@ -283,6 +283,20 @@ typedef struct ap_constraint_def {
   ap_constraint_fn user_constraint; /* user: A (rows x k, ld rows) and a0 (rows) */
   ap_gamma_fn user_gamma;  /* user: gamma = -(A' v + a0') (rows) */
   void *user;              /* passed to speed_fn and the user callbacks */
+  double mu;               /* rolling on a body not on a plane-contact joint: the friction
+                              coefficient of the contact modes (docs/scenes.md "Friction,
+                              slip and lift-off"): the contact sticks while |F_t| <= mu F_n
+                              and slides otherwise; default -1: none (perfectly rough, as
+                              without contact modes) */
+  double mu_kinetic;       /* sliding friction coefficient (Coulomb, -mu_kinetic F_n s/|s|);
+                              default -1: mu */
+  int unilateral;          /* 1: the contact lifts off when F_n falls through 0 and touches
+                              down when the gap closes (a sticking plastic impact); 0: it
+                              holds (bilateral); default -1: 1 when mu >= 0, else 0 */
+  double restitution;      /* unilateral contacts: coefficient of restitution e of the normal
+                              part of the touchdown impact, 0 <= e <= 1 (the contact point
+                              leaves at e times its closing speed; the tangential part
+                              sticks); default 0: plastic */
   int internal_check;       /* set by ap_constraint_def_default(), never by hand: a definition that
                               function did not make is refused with AP_ERR_ARG */
 } ap_constraint_def;
@@ -527,6 +541,16 @@ AP_API void ap_quat_from_axis_angle(const double axis[3], double angle, double q
 AP_API void ap_quat_mul(const double a[4], const double b[4], double out[4]);
 AP_API void ap_quat_to_matrix(const double q[4], double R[9]);
 AP_API void ap_quat_from_matrix(const double R[9], double q[4]);
+
+/* Contact modes (rolling constraints with mu >= 0 or unilateral; docs/scenes.md "Friction,
+ * slip and lift-off"): set the mode of each such contact in d from the state (d->t and d->q
+ * set, v the speeds or NULL): airborne when unilateral and its gap exceeds tol (m), else sliding when it has a friction
+ * coefficient and v makes its contact point slip faster than tol (1 + max |v_i|) (m/s), else
+ * rolling. The modes then shape every evaluation with d (rows dropped, friction); simulations
+ * choose them so at creation. Returns the number of contacts set sliding or airborne (0: all
+ * roll, or the model has no contact modes), or AP_ERR_ARG (m not a body model, d not made for
+ * m, tol not positive) or a failure of the position stage. */
+AP_API int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double tol);
 
 #ifdef __cplusplus
 }

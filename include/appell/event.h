@@ -106,6 +106,19 @@ AP_API int ap_sim_event_count(const ap_sim *s);
 /* Record i (0 <= i < ap_sim_event_count); AP_ERR_ARG when out of range or out is NULL. */
 AP_API int ap_sim_event_get(const ap_sim *s, int i, ap_event_record *out);
 
+/* Contact modes (docs/scenes.md "Friction, slip and lift-off"): a rolling contact with a
+ * friction coefficient (mu) or unilateral is rolling, sliding or airborne; its switches are
+ * events named CONSTRAINT.slip, .stick, .lift_off, .touchdown (AP_EVENT_SWITCH), recorded like
+ * any other. */
+typedef enum ap_contact_mode {
+  AP_CONTACT_ROLLING = 0,  /* no slip, on the ground */
+  AP_CONTACT_SLIDING = 1,  /* Coulomb friction -mu_kinetic F_n s/|s| at the contact point */
+  AP_CONTACT_AIRBORNE = 2  /* off the ground */
+} ap_contact_mode;
+/* The current mode of constraint `constraint` (its index in the model); AP_ERR_ARG when s is
+ * NULL or the constraint has no contact modes. */
+AP_API int ap_sim_contact_mode(const ap_sim *s, int constraint);
+
 #ifdef __cplusplus
 }
 #endif

@@ -233,6 +233,17 @@ static int setup(ap_lin *L, const ap_lin_def *def, double t, const double *q, co
   return bind_inputs(L);
 }
 
+/* Contacts with modes (friction, lift-off) that slide or fly at (t, q, v); 0 without them. */
+static int contacts_off(const ap_model *m, double t, const double *q, const double *v) {
+  ap_data *d = NULL;
+  if (!ap_model_is_body_model(m) || ap_data_create(m, &d) != AP_OK) return 0;
+  d->t = t;
+  memcpy(d->q, q, sizeof(double) * (size_t)ap_model_n(m));
+  int off = ap_body_contact_modes(m, d, v, 1e-6);
+  ap_data_free(d);
+  return off;
+}
+
 int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, const double *q,
                   const double *v, ap_lin **out) {
   if (!out) return AP_ERR_ARG;
@@ -242,6 +253,13 @@ int ap_lin_create(const ap_model *m, const ap_lin_def *def, double t, const doub
   if (!L) return AP_ERR_NOMEM;
   L->m = m;
   int rc = setup(L, def, t, q, v);
+  int off = rc == AP_OK && v ? contacts_off(m, t, q, v) : 0;
+  if (off > 0) {   /* contact modes: the linearization is about the rolling motion */
+    rc = AP_ERR_UNSUPPORTED;
+    ap_an_msg(L, "linearizer for model '%s': at this state %d contact%s with friction or "
+              "lift-off slide%s or fly: a linearization is about motions where every contact "
+              "rolls", ap_model_name(m), off, off == 1 ? "" : "s", off == 1 ? "s" : "");
+  }
   if (rc != AP_OK && rc != AP_ERR_NOMEM && L->msg[0] == '\0')
     ap_an_msg(L, "linearizer for model '%s': %s", ap_model_name(m), ap_strerror(rc));
   *out = L;   /* even on failure, so that ap_lin_message can tell why; free it */

@@ -201,6 +201,8 @@ static int setup_dae(ap_sim *s) {
   return rc;
 }
 
+static int make_stepper(ap_sim *s, double t0);
+
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   int rc = check_initial(s, t0, q0, v0);
   ap_drv_pipeline_build(s);
@@ -212,7 +214,8 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
    * the step tolerance (docs/vehicles.md "Redundant rows"). */
   s->d->manifold_rtol = 100 * (s->def.rtol + 1e-12);
   s->d->basis = s->def.mode == AP_MODE_MINIMAL ? AP_BASIS_PARTITIONED : AP_BASIS_ORTHONORMAL;
-  rc = consistent_coordinates(s, t0, q0, s->q);   /* s->q: free until the first evaluation */
+  rc = ap_drv_contacts_init(s, t0, q0, v0);       /* contact modes: before the projections */
+  if (rc == AP_OK) rc = consistent_coordinates(s, t0, q0, s->q);  /* s->q: free until then */
   if (rc == AP_OK) rc = consistent_speeds(s, t0, s->q, v0, 1);
   if (rc != AP_OK) return rc;
   q0 = s->q;
@@ -234,6 +237,12 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc == AP_OK) rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   if (s->def.mode == AP_MODE_DAE) return setup_dae(s);
+  return make_stepper(s, t0);
+}
+
+/* The stepper for s->ny at (t0, s->y) (at creation, and when a contact-mode switch changed the
+ * number of free speeds). */
+static int make_stepper(ap_sim *s, double t0) {
   ap_drv_growth_cap(s, s->d->growth);
   /* h_fixed goes to fixed-step methods only: for an adaptive one it would switch error
    * control off. */
@@ -248,7 +257,7 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
     o.proj = ap_drv_proj;
     s->native_q = nphi > 0;
   }
-  if (s->native_q) {                   /* gn_project_q's scratch */
+  if (s->native_q && !s->gn) {          /* gn_project_q's scratch */
     size_t n = (size_t)s->n, np = (size_t)nphi;
     s->gn = calloc(2 * np * n + np + ap_la_work_size(s->n, nphi) + n, sizeof *s->gn);
     s->gn_iwork = calloc(ap_la_iwork_size(s->n, nphi), sizeof *s->gn_iwork);
@@ -272,6 +281,7 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
 static int state_from(ap_sim *s, double t, double *y) {
   int ny = s->n + (s->def.mode == AP_MODE_MINIMAL ? s->d->l : s->k);
   if (s->dae) ny = s->ny;
+  if (ny != s->ny && s->cm) s->ny = ny;   /* a contact-mode switch: restart_state remakes */
   if (ny != s->ny)
     return ap_drv_fail(s, AP_ERR_RANK, "system '%s': the number of free speeds changed from "
                        "%d to %d at t = %.17g (at an event)", s->m->name, s->ny - s->n,
@@ -310,6 +320,11 @@ int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v) 
   if (rc != AP_OK) return rc;
   s->stats.restarts++;
   if (s->dae) return restart_dae(s, t, y);
+  if (s->cm) {   /* contact modes: the state size may have changed with the rows */
+    ap_step_free(s->st);
+    s->st = NULL;
+    return make_stepper(s, t);
+  }
   ap_drv_growth_cap(s, s->d->growth);
   rc = ap_step_reset(s->st, t, y);
   return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", ap_step_message(s->st));
@@ -344,6 +359,7 @@ int ap_sim_create(const ap_model *m, const ap_sim_def *def, double t0, const dou
     s->def = *def;
     s->def.method = def->mode == AP_MODE_DAE ? "ida" : s->meth->name;
     rc = setup(s, t0, q0, v0);
+    if (rc == AP_OK) rc = ap_drv_contacts_events(s);
   }
   if (rc != AP_OK) {
     if (msg && msg_len) snprintf(msg, msg_len, "%s", s->msg);
@@ -360,6 +376,7 @@ void ap_sim_free(ap_sim *s) {
   ap_dae_free(s->dae);
   ap_drv_events_free(s);
   ap_drv_ctrl_free(s);
+  ap_drv_contacts_free(s);
   ap_data_free(s->d);
   free(s->gn);
   free(s->gn_iwork);

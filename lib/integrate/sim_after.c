@@ -136,10 +136,12 @@ static const ap_drv_stage stage_dae = {"DAE checks", stage_dae_checks};
 static const ap_drv_stage stage_rows = {"DAE rows", stage_dae_rows};
 static const ap_drv_stage stage_event_state = {"event state", ap_drv_stage_event_state};
 static const ap_drv_stage stage_controller = {"controller", ap_drv_stage_controller};
+static const ap_drv_stage stage_contacts = {"contact modes", ap_drv_stage_contacts};
 
 void ap_drv_pipeline_build(ap_sim *s) {
   int n = 0;
   if (s->ev) s->stages[n++] = &stage_events;   /* made by the first ap_sim_add_event */
+  if (s->cm) s->stages[n++] = &stage_contacts;   /* contact modes (contact_modes.c) */
   switch (s->def.mode) {
     case AP_MODE_DAE:
       s->stages[n++] = &stage_dae;

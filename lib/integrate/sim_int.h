@@ -71,6 +71,7 @@ struct ap_sim {
   double t_ahead;           /* the next crossing of an event of t alone, found ahead (the
                                stepper stops at it); INFINITY when none */
   ap_sim_ctrl *ctrl;        /* inputs and controller (sim_input.c); NULL until declared */
+  struct ap_drv_contacts *cm; /* contact modes (contact_modes.c); NULL without them */
 };
 
 /* printf into s->msg; returns status. */
@@ -129,6 +130,14 @@ int ap_drv_weights_create(ap_sim *s, size_t ny);
 /* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
  * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
 int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);
+/* Contact modes (contact_modes.c): the initial modes from (t0, q0, v0) before the state is put
+ * on the constraints, their switch events once the stepper exists, the stage that keeps the
+ * slip directions after each step, and freeing. Nothing when the model has no contact
+ * modes. */
+int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v0);
+int ap_drv_contacts_events(ap_sim *s);
+int ap_drv_stage_contacts(ap_sim *s, double *t);
+void ap_drv_contacts_free(ap_sim *s);
 
 /* Inputs and controllers (sim_input.c): free them with the simulation; the time the next
  * internal step must stop at, for an advance to tout (events of t alone, controller

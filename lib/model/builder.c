@@ -45,6 +45,8 @@ ap_constraint_def ap_constraint_def_default(void) {
   def.axes = 7u;
   def.joint = AP_NONE;
   def.ground.kind = AP_GROUND_FIXED;
+  def.mu = def.mu_kinetic = -1.0;
+  def.unilateral = -1;
   return def;
 }
 

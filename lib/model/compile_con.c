@@ -53,6 +53,7 @@ int ap_compile_constraints(ap_builder *b, ap_bmodel *M) {
     snprintf(c->name, sizeof c->name, "%s", nm);
     c->def = b->cons[i].def;
     c->wheel = -2;
+    c->fric = -1;
     if ((int)c->def.kind < 0 || (int)c->def.kind >= AP_CON_NKINDS)
       FAIL("constraint '%s': unknown kind %d", nm, (int)c->def.kind);
     c->kind = ap_con_kinds[c->def.kind];

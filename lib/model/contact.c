@@ -34,6 +34,7 @@
 #include <string.h>
 
 #include "model/builder.h"
+#include "model/con_friction.h"
 #include "model/con_kind.h"
 
 static const ap_sc EX[3] = {1, 0, 0}, EY[3] = {0, 1, 0}, EZ[3] = {0, 0, 1};
@@ -280,6 +281,9 @@ static int contact_rows(const ap_model *m, ap_data *d, int ci, double t, const a
   (void)d, (void)t, (void)q;
   if (M->cons[ci].plane) plane_rows(M, S, &M->cons[ci], A, a0);
   else contact_rows_g(M, S, ci, ap_con_scratch(M, S, ci), A, a0);
+#ifndef AP_SC_COMPLEX
+  if (M->cons[ci].fric >= 0) ap_cfr_rows(M, S, &M->cons[ci], A, a0);   /* contact modes */
+#endif
   return AP_OK;
 }
 
@@ -288,13 +292,31 @@ static int contact_gamma(const ap_model *m, ap_data *d, int ci, double t, const 
   const ap_bmodel *M = ap_bm(m);
   (void)d, (void)t, (void)q, (void)v;
   ap_con_contact_gamma(M, S, ci, ap_con_scratch(M, S, ci), 1, gamma);
+#ifndef AP_SC_COMPLEX
+  if (M->cons[ci].fric >= 0) ap_cfr_gamma(M, S, &M->cons[ci], gamma);
+#endif
   return AP_OK;
 }
 
 static ap_sc contact_hol(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, int r, ap_sc *row) {
   (void)r;
+#ifndef AP_SC_COMPLEX
+  if (c->fric >= 0 && ap_cfr_mode(M, S, c) == AP_CM_AIRBORNE) {   /* no contact row */
+    for (int col = 0; col < M->K1; col++) row[col] = 0.0;
+    return 0.0;
+  }
+#endif
   return contact_hol_row(M, S, c, row);
 }
+
+#ifndef AP_SC_COMPLEX
+/* The gap of contact c (its contact row's value whatever its mode), m; the position stage
+ * (kinematics and the contact geometry) must hold. */
+double ap_contact_gap(const ap_bmodel *M, double *S, const ap_mcon *c) {
+  double *row = S + M->off_tmp + 6 * (size_t)M->K1;
+  return contact_hol_row(M, S, c, row);
+}
+#endif
 
 const AP_SC(ap_con_eval) AP_SC(ap_con_contact_eval) = {NULL, contact_rows, contact_gamma,
                                                        contact_hol};
@@ -382,10 +404,24 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
     FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0 only; "
          "for this ground (%s) put the body on a free joint (or a wheel on its axle)", nm,
          B->name, c->plane == 2 ? "a sphere" : "a tilted or raised plane");
+  int modes = d->mu >= 0 || d->unilateral == 1 || isnan(d->mu);   /* NaN: refused below */
+  if (modes && (knife || J->kind == AP_JOINT_PLANE_CONTACT))
+    FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) need a rolling contact "
+         "of a body that is not on a plane-contact joint (a free body, a wheel on its axle): "
+         "the plane-contact joint cannot leave the ground", nm, d->mu, d->unilateral);
+  if (!(d->restitution >= 0 && d->restitution <= 1) || (d->restitution > 0 && !modes))
+    FAIL("constraint '%s': restitution %g: it must lie in [0, 1], on a unilateral contact "
+         "(unilateral or friction given)", nm, d->restitution);
+  if (modes && (!(d->mu <= 1e300) || (d->mu_kinetic >= 0 && !(d->mu_kinetic <= d->mu)) ||
+                isnan(d->mu_kinetic)))
+    FAIL("constraint '%s': friction mu = %g, mu_kinetic = %g: mu must be a finite number >= 0 "
+         "(or absent: perfectly rough) and mu_kinetic between 0 and mu", nm, d->mu,
+         d->mu_kinetic);
   if (J->kind == AP_JOINT_PLANE_CONTACT) return AP_OK;
   c->wheel = M->nwheel++;
   c->hrow = c->nrows++;
   c->nhol = 1;
+  if (modes) c->fric = M->nfric++;
   return AP_OK;
 }
 
@@ -415,6 +451,7 @@ static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
     v3_axpy(lam[0], n, F);
   }
   if (c->nhol) v3_axpy(lam[c->hrow], gn, F);
+  if (c->fric >= 0) ap_cfr_friction_force(M, S, c, lam[c->hrow], t1, t2, F);   /* sliding */
 }
 
 static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,

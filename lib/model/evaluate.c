@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "linalg/linalg.h"
+#include "model/con_friction.h"
 #include "model/con_kind.h"
 #include "model/tree_model.h"   /* the tree path's layout and queries (m->ops) */
 
@@ -518,6 +519,7 @@ static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, in
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
   out->force[2] = out->normal;
+  if (c->fric >= 0) ap_cfr_friction_force(M, S, c, out->normal, NULL, NULL, out->force);
   finish_force(c, lam, out);
   if (c->plane) {   /* a tilted plane or a sphere: tangents and normal to world axes */
     double t0 = out->force[0], t1 = out->force[1], n[3], e1[3], e2[3];

@@ -11,6 +11,7 @@
  * ap_bm_position_cs, ap_bm_velocity_cs and ap_bm_phi_cs, the model's ev.position_cs,
  * ev.velocity_cs and ev.phi_cs. The projection after steps and the public queries are in
  * evaluate.c (double only). */
+#include "model/con_friction.h"
 #include "model/model.h"
 
 int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S) {
@@ -37,6 +38,9 @@ int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S) {
   ap_kin_bias(M, S, d->h);
   int rc = M->ne ? ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q) : AP_OK;
   if (rc == AP_OK && M->b) rc = ap_con_gamma(m, d, d->t, d->q, d->v, S, d->gamma);
+#ifndef AP_SC_COMPLEX
+  if (rc == AP_OK && M->nfric) rc = ap_cfr_friction(m, d, S);   /* sliding contacts */
+#endif
   return rc;
 }
 

@@ -50,6 +50,7 @@ void ap_kin_layout(ap_bmodel *M) {
   M->off_cnt = L->e[ap_arena_add(L, "effect counters", (size_t)M->ne)].offset;
   M->off_tmp = L->e[ap_arena_add(L, "assembly scratch", tmp)].offset;
   M->off_proj = L->e[ap_arena_add(L, "loop projection", proj)].offset;
+  M->off_fric = L->e[ap_arena_add(L, "contact modes", ap_cfr_scratch_size(M))].offset;
   M->scratch = L->total;
 }
 #endif

@@ -133,6 +133,8 @@ typedef struct ap_mcon {
                                  inside: the normal gside (o - gc) / |o - gc|) */
   double gn[3], gt1[3], gt2[3], goff, gc[3], grad;
   int gside;
+  int fric;                   /* rolling with contact modes (def.mu or def.unilateral): index of
+                                 its block in the contact-mode scratch (con_friction.c); -1 */
   int wheel;                  /* contact at the shape's lowest point (rolling, knife edge with
                                  def.wheel): index of its geometry block when the body is not on
                                  a plane-contact joint, -1 when the joint carries the geometry;
@@ -167,6 +169,8 @@ typedef struct ap_bmodel {
   int rheonomic;              /* drives or timed constraints: time-dependent terms exist */
   double lscale;              /* length scale for the loop tolerance (m) */
   int max_user_rows;
+  int nfric;                  /* contacts with modes (ap_mcon.fric) */
+  size_t off_fric;            /* their scratch block (con_friction.c), empty when nfric = 0 */
   size_t off_body, off_joint, off_con, off_wheel, off_cnt, off_tmp, off_proj, scratch;
   size_t body_stride, proj_work, proj_iwork;
   ap_arena layout;            /* the sections of the scratch (ap_kin_layout): off_* and scratch
@@ -376,6 +380,8 @@ void ap_kin_point_motion(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *r,
 void ap_kin_apply(int K1, const ap_sc *J, const ap_sc *v, ap_sc *out);
 /* Scratch size of the model's layout (sets the offsets in M). */
 void ap_kin_layout(ap_bmodel *M);
+/* Doubles of the contact-mode scratch block (con_friction.c); 0 without contact modes. */
+size_t ap_cfr_scratch_size(const ap_bmodel *M);
 
 /* ---- constraints (constraint.c) --------------------------------------------------------- */
 

@@ -180,6 +180,10 @@ static int refuse(sc_ctx *c, const sc_scene *s, ap_data *d, const char *what) {
                 d && d->msg[0] ? ": " : "", d ? d->msg : "");
 }
 
+/* The gap (m) and slip speed (relative) above which a contact with modes starts airborne or
+ * sliding: the simulation's default init_tol, which chooses again at creation. */
+#define SC_MODE_TOL 1e-6
+
 /* Speeds: complete the unknown ones, or project when the given ones over-determine. */
 static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_data *d,
                              double *v, const int *given, char *rep, size_t rlen) {
@@ -188,6 +192,12 @@ static int consistent_speeds(sc_ctx *c, const sc_scene *s, const ap_model *m, ap
   if (!v_in) return sc_nomem(c);
   memcpy(v_in, v, sizeof(double) * (size_t)k);
   int rc = ap_body_complete_speeds(m, d, d->q, given, v);
+  if (rc == AP_ERR_INCONSISTENT && sc_scene_has_modes(s)) {   /* contacts that slip: sliding */
+    memcpy(v, v_in, sizeof(double) * (size_t)k);
+    if (ap_body_contact_modes(m, d, v_in, SC_MODE_TOL) > 0)
+      rc = ap_body_complete_speeds(m, d, d->q, given, v);
+    if (rc == AP_OK) append(rep, rlen, "contacts whose given speeds slip start sliding\n");
+  }
   if (rc == AP_ERR_INCONSISTENT) {
     memcpy(v, v_in, sizeof(double) * (size_t)k);
     rc = ap_fwd_position(m, d);
@@ -223,7 +233,10 @@ static int consistent_state(sc_ctx *c, const sc_scene *s, const ap_model *m, ap_
   double change = 0.0;
   d->t = s->run.t0;
   memcpy(d->q, q, sizeof(double) * (size_t)n);
-  int rc = ap_body_project_q(m, d, q, &change);
+  /* contact modes: a unilateral contact given off the ground starts airborne (not closed) */
+  int rc = sc_scene_has_modes(s) ? ap_body_contact_modes(m, d, NULL, SC_MODE_TOL) : AP_OK;
+  if (rc < 0) return refuse(c, s, d, "the model cannot be evaluated there");
+  rc = ap_body_project_q(m, d, q, &change);
   if (rc != AP_OK) return refuse(c, s, d, "the coordinates cannot be put on their manifold");
   if (change > 1e-12)
     append(rep, rlen, "coordinates corrected by %.3g (unit quaternions, loop closures)\n",

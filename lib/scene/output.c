@@ -18,6 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "appell/event.h"
 #include "scene/scene_int.h"
 
 static const double two_pi = 6.28318530717958647692;
@@ -101,9 +102,12 @@ int sc_out_names(sc_out *o, const sc_scene *s, const ap_model *m) {
     rc = push(o, "lambda.", ap_model_constraint_name(m, i));
   static const char *const cf[] = {".contact.Fx", ".contact.Fy", ".contact.Fz",
                                    ".contact.friction_ratio"};
-  for (int i = 0; rc == AP_OK && (ch & SC_OUT_CONTACT_FORCES) && i < s->nc; i++)
+  for (int i = 0; rc == AP_OK && (ch & SC_OUT_CONTACT_FORCES) && i < s->nc; i++) {
     for (int j = 0; rc == AP_OK && j < 4 && s->cons[i].def.kind == AP_CON_ROLLING; j++)
       rc = push(o, s->bodies[s->cons[i].def.body].name, cf[j]);
+    if (rc == AP_OK && sc_con_has_modes(&s->cons[i]))   /* 0 rolling, 1 sliding, 2 airborne */
+      rc = push(o, s->bodies[s->cons[i].def.body].name, ".contact.mode");
+  }
   char buf[160];
   for (int i = 0; rc == AP_OK && i < sc_named_count(s, m); i++)
     rc = push(o, sc_named_column(s, i, buf, sizeof buf), "");
@@ -187,10 +191,11 @@ int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_s
     if (!o->rows) o->E0 = T + V;
     row[c++] = T, row[c++] = V, row[c++] = T + V, row[c++] = T + V - o->E0;
   }
-  if (ch & SC_OUT_RESIDUAL) {
-    d->basis = AP_BASIS_NONE;
-    if ((rc = ap_fwd_position(m, d)) != AP_OK) return rc;
-    row[c++] = ap_constraint_residual(d, d->v);
+  if (ch & SC_OUT_RESIDUAL) {   /* contact modes: the rows of the simulation's modes */
+    const ap_data *dr = sc_scene_has_modes(s) ? ap_sim_data(sim) : d;
+    if (dr == d) d->basis = AP_BASIS_NONE;
+    if (dr == d && (rc = ap_fwd_position(m, d)) != AP_OK) return rc;
+    row[c++] = ap_constraint_residual(dr, d->v);
   }
   if ((ch & SC_OUT_REACTIONS) && b > 0) {
     const double *lambda = NULL;
@@ -206,6 +211,7 @@ int sc_out_row(sc_out *o, const sc_scene *s, const ap_model *m, ap_data *d, ap_s
       if ((rc = ap_body_contact_force(m, ap_sim_data(sim), lambda, i, &f)) != AP_OK) return rc;
       row[c++] = f.force[0] + 0.0, row[c++] = f.force[1] + 0.0, row[c++] = f.force[2];
       row[c++] = f.friction_ratio;
+      if (sc_con_has_modes(&s->cons[i])) row[c++] = ap_sim_contact_mode(sim, i);
     }
   }
   if (s->nnamed || (ch & SC_OUT_DRIVEN)) {

@@ -20,7 +20,7 @@ static const char *const ground_kinds[] = {"fixed", "turntable", "translating", 
 static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_speed", "user",
                                         "coincident", "point_on_line", "point_on_plane", NULL};
 static const char *const con_keys[][8] = {
-    {"kind", "body", "no_spin", "ground", NULL},
+    {"kind", "body", "no_spin", "ground", "friction", "unilateral", "restitution", NULL},
     {"kind", "body", "point", "direction", "wheel", "ground", NULL},
     {"kind", "joint", "speed", "value", NULL},
     {"kind", NULL},
@@ -164,6 +164,7 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
                                           fabs(d->direction[2]) > 0))
     return sc_err(c, sc_map_get(n, "direction"), "the direction must not be zero");
   if (d->kind == AP_CON_KNIFE_EDGE && parse_knife_wheel(c, s, n, d)) return AP_ERR_ARG;
+  if (d->kind == AP_CON_ROLLING && sc_parse_friction(c, n, d)) return AP_ERR_ARG;
   const sc_node *g = sc_map_get(n, "ground");
   if (d->kind != AP_CON_ROLLING && d->kind != AP_CON_KNIFE_EDGE) return AP_OK;
   k->ground = s->ground;

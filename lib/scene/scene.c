@@ -306,6 +306,7 @@ static int ground_moves(const ap_ground_motion *g, const sc_ground *sg) {
 int ap_scene_conserves_energy(const ap_scene *sc) {
   if (!sc) return 0;
   const sc_scene *s = &sc->s;
+  if (sc_scene_has_modes(s)) return 0;   /* sliding and touchdown impacts dissipate */
   for (int j = 0; j < s->nj; j++)
     for (int i = 0; i < 3; i++)
       if (s->joints[j].def.drive[i]) return 0;
@@ -376,7 +377,7 @@ const char *ap_scene_element_kind(const ap_scene *sc, ap_scene_section sec, int 
     case AP_SCENE_BODIES:
       return sc->s.bodies[i].def.shape.kind ? shapes[sc->s.bodies[i].def.shape.kind] : "no shape";
     case AP_SCENE_JOINTS: return sc_joint_kind_name(sc->s.joints[i].def.kind);
-    case AP_SCENE_CONSTRAINTS: return cons[sc->s.cons[i].def.kind];
+    case AP_SCENE_CONSTRAINTS: return sc_con_kind_text(&sc->s.cons[i], cons);
     case AP_SCENE_EFFECTS:
       return sc->s.effs[i].is_torque ? "joint_torque" : effs[sc->s.effs[i].def.kind];
     case AP_SCENE_CHANNELS: return "channel";

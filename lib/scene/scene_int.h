@@ -330,6 +330,13 @@ int sc_state_gather(const ap_model *m, const ap_data *d, const ap_state_input *i
                     const int *index, int nin, const double *q, const double *v, double *x);
 int sc_state_at(const ap_model *m, ap_data *d, double t, const double *q, const double *v);
 int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g);
+/* friction and unilateral of a rolling constraint (parse_friction.c). */
+int sc_parse_friction(sc_ctx *c, const sc_node *n, ap_constraint_def *d);
+/* 1 when constraint k (a scene's s) has contact modes (parse_friction.c). */
+int sc_con_has_modes(const sc_con *k);
+int sc_scene_has_modes(const sc_scene *s);
+/* The kind of constraint k for listings (kinds by ap_constraint_kind), with its modes. */
+const char *sc_con_kind_text(const sc_con *k, const char *const *kinds);
 void sc_ground_bind(sc_ground *g);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
 /* The keys of initial: for a joint of this kind (NULL-terminated). */

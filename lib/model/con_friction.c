@@ -1,0 +1,317 @@
+/* Contact modes of rolling contacts: the rows each mode drops, and the Coulomb force of the
+ * sliding ones with their normal forces solved together with the accelerations (model/
+ * con_friction.h; docs/scenes.md "Friction, slip and lift-off").
+ *
+ * Sliding contact j has slip velocity s_j = (t1 . (vP - Vg), t2 . (vP - Vg)) = T_j [v; 1], T_j
+ * its two tangent rows (kept before they are zeroed), and friction force -mu_k F_n,j s^_j at
+ * the material contact point, i.e. the generalized force F_n,j f_j with f_j = -mu_k T_j^T s^_j
+ * (s^_j = s_j / |s_j|, or the driver's slip direction while |s_j| is round-off). With the
+ * active rows A (the reactions A^T lambda, lambda's entry n_j the normal force F_n,j):
+ *
+ *     g v' = Q - h + A^T lambda + sum_j f_j F_n,j,      A v' = gamma
+ *  => lambda = lambda0 - sum_j u_j F_n,j,   S = A g^-1 A^T,
+ *     lambda0 = S^-1 (gamma - A g^-1 (Q - h)),   u_j = S^-1 A g^-1 f_j,
+ *     (I + U) F_n = lambda0_n,                   U_ij = (u_j)_{n_i}.
+ *
+ * Then Q += sum_j f_j F_n,j and the Appell solve gives the same v'. For one contact 1 + u is
+ * the Painleve indicator: with it <= 0 the sliding motion has no solution or two (Painleve's
+ * paradox) and the evaluation stops, saying so; with several, I + U must have positive leading
+ * minors (elimination without pivoting). A sphere has u = 0 (its friction has no moment about
+ * its centre along the normal). Cost: only while a contact slides; a model without modes has
+ * an empty block and never calls this. Double build only. */
+#include <math.h>
+#include <string.h>
+
+#include "model/con_friction.h"
+
+#define FR_HEAD 6   /* mode, F_n, slip direction (2), direction of the last friction (2) */
+static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }
+
+static double *block(const ap_bmodel *M, const double *S, const ap_mcon *c) {
+  return (double *)S + M->off_fric + (size_t)c->fric * fr_stride(M);
+}
+
+size_t ap_cfr_scratch_size(const ap_bmodel *M) {
+  if (!M->nfric) return 0;
+  size_t k = (size_t)M->k, b = (size_t)M->b, nf = (size_t)M->nfric;
+  return nf * fr_stride(M) + k * k + k * b + b * b + 2 * k + 3 * b + b * nf + k * nf +
+         nf * nf + 2 * nf;
+}
+
+int ap_cfr_mode(const ap_bmodel *M, const double *S, const ap_mcon *c) {
+  return (int)block(M, S, c)[0];
+}
+
+void ap_cfr_set_mode(const ap_bmodel *M, double *S, const ap_mcon *c, int mode) {
+  block(M, S, c)[0] = mode;
+}
+
+double *ap_cfr_slip_dir(const ap_bmodel *M, double *S, const ap_mcon *c) {
+  return block(M, S, c) + 2;
+}
+
+double ap_cfr_normal_force(const ap_bmodel *M, const double *S, const ap_mcon *c) {
+  return block(M, S, c)[1];
+}
+
+/* Row r of c dropped by its mode. */
+static int dropped(const ap_bmodel *M, const double *S, const ap_mcon *c, int r) {
+  int mode = ap_cfr_mode(M, S, c);
+  return mode == AP_CM_AIRBORNE || (mode == AP_CM_SLIDING && r != c->hrow);
+}
+
+void ap_cfr_rows(const ap_bmodel *M, double *S, const ap_mcon *c, double *A, double *a0) {
+  int k = M->k, b = M->b;
+  double *T = block(M, S, c) + FR_HEAD;
+  for (int r = 0; r < 2; r++) {
+    for (int col = 0; col < k; col++) T[r * (k + 1) + col] = A[c->row + r + (size_t)col * b];
+    T[r * (k + 1) + k] = a0[c->row + r];
+  }
+  if (ap_cfr_mode(M, S, c) == AP_CM_ROLLING) return;
+  for (int r = 0; r < c->nrows; r++) {
+    if (!dropped(M, S, c, r)) continue;
+    for (int col = 0; col < k; col++) A[c->row + r + (size_t)col * b] = 0.0;
+    a0[c->row + r] = 0.0;
+  }
+}
+
+void ap_cfr_gamma(const ap_bmodel *M, const double *S, const ap_mcon *c, double *gamma) {
+  if (ap_cfr_mode(M, S, c) == AP_CM_ROLLING) return;
+  for (int r = 0; r < c->nrows; r++)
+    if (dropped(M, S, c, r)) gamma[c->row + r] = 0.0;
+}
+
+void ap_cfr_slip(const ap_bmodel *M, double *S, const ap_mcon *c, const double *v, double *s) {
+  int k = M->k;
+  const double *T = block(M, S, c) + FR_HEAD;
+  for (int r = 0; r < 2; r++) {
+    double x = T[r * (k + 1) + k];
+    for (int col = 0; col < k; col++) x += T[r * (k + 1) + col] * v[col];
+    s[r] = x;
+  }
+}
+
+/* ---- small dense solves (column-major, n of a few dozen at most) --------------------------- */
+
+/* Cholesky A = L L^T in the lower triangle; -1 when not positive definite. */
+static int chol(int n, double *A) {
+  for (int j = 0; j < n; j++) {
+    double dj = A[j + (size_t)j * n];
+    for (int p = 0; p < j; p++) dj -= A[j + (size_t)p * n] * A[j + (size_t)p * n];
+    if (!(dj > 0)) return -1;
+    dj = sqrt(dj);
+    A[j + (size_t)j * n] = dj;
+    for (int i = j + 1; i < n; i++) {
+      double x = A[i + (size_t)j * n];
+      for (int p = 0; p < j; p++) x -= A[i + (size_t)p * n] * A[j + (size_t)p * n];
+      A[i + (size_t)j * n] = x / dj;
+    }
+  }
+  return 0;
+}
+
+static void chol_solve(int n, const double *L, double *x) {
+  for (int i = 0; i < n; i++) {
+    for (int p = 0; p < i; p++) x[i] -= L[i + (size_t)p * n] * x[p];
+    x[i] /= L[i + (size_t)i * n];
+  }
+  for (int i = n - 1; i >= 0; i--) {
+    for (int p = i + 1; p < n; p++) x[i] -= L[p + (size_t)i * n] * x[p];
+    x[i] /= L[i + (size_t)i * n];
+  }
+}
+
+/* M x = y by elimination without pivoting; the smallest pivot, or -1 at the first pivot
+ * <= 1e-12 (then x is not written). */
+static double solve_nopivot(int n, double *Mx, double *y) {
+  double small = INFINITY;
+  for (int j = 0; j < n; j++) {
+    double p = Mx[j + (size_t)j * n];
+    if (!(p > 1e-12)) return -1.0;
+    small = fmin(small, p);
+    for (int i = j + 1; i < n; i++) {
+      double f = Mx[i + (size_t)j * n] / p;
+      for (int c = j; c < n; c++) Mx[i + (size_t)c * n] -= f * Mx[j + (size_t)c * n];
+      y[i] -= f * y[j];
+    }
+  }
+  for (int i = n - 1; i >= 0; i--) {
+    for (int c = i + 1; c < n; c++) y[i] -= Mx[i + (size_t)c * n] * y[c];
+    y[i] /= Mx[i + (size_t)i * n];
+  }
+  return small;
+}
+
+/* ---- the sliding contacts' forces ------------------------------------------------------------ */
+
+typedef struct fr_work {
+  double *Lg, *X, *Sm, *y, *z, *rhs, *lam0, *U, *F, *Mp, *lamN, *act, *nidx;
+  int na;
+} fr_work;
+
+static fr_work carve(const ap_bmodel *M, double *S) {
+  size_t k = (size_t)M->k, b = (size_t)M->b, nf = (size_t)M->nfric;
+  fr_work w;
+  w.Lg = S + M->off_fric + nf * fr_stride(M);
+  w.X = w.Lg + k * k, w.Sm = w.X + k * b, w.y = w.Sm + b * b, w.z = w.y + k;
+  w.rhs = w.z + k, w.lam0 = w.rhs + b, w.act = w.lam0 + b, w.U = w.act + b;
+  w.F = w.U + b * nf, w.Mp = w.F + k * nf, w.lamN = w.Mp + nf * nf, w.nidx = w.lamN + nf;
+  w.na = 0;
+  return w;
+}
+
+/* The active rows (not dropped by a mode) into w->act; the normal row of sliding contact j
+ * (in the order of M->cons) at w->nidx[j]; returns the number of sliding contacts. */
+static int active_rows(const ap_bmodel *M, const double *S, fr_work *w) {
+  int p = 0;
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    int sliding = c->fric >= 0 && ap_cfr_mode(M, S, c) == AP_CM_SLIDING;
+    for (int r = 0; r < c->nrows; r++) {
+      if (c->fric >= 0 && dropped(M, S, c, r)) continue;
+      if (sliding && r == c->hrow) w->nidx[p++] = w->na;
+      w->act[w->na++] = c->row + r;
+    }
+  }
+  return p;
+}
+
+/* Row a of the active rows of A dotted with x (k). */
+static double arow_dot(const ap_bmodel *M, const ap_data *d, const fr_work *w, int a,
+                       const double *x) {
+  int r = (int)w->act[a];
+  double s = 0.0;
+  for (int j = 0; j < M->k; j++) s += d->A[r + (size_t)j * M->b] * x[j];
+  return s;
+}
+
+/* w->Lg = chol(g), X = g^-1 A^T, Sm = chol(A g^-1 A^T), lam0. */
+static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
+  const ap_bmodel *M = ap_bm(m);
+  int k = M->k, na = w->na;
+  memcpy(w->Lg, d->g, sizeof(double) * (size_t)k * k);
+  if (chol(k, w->Lg) != 0) {
+    AP_BM_MSG(d, "model '%s': sliding contacts: the metric g is not positive definite at "
+              "t = %.17g", m->name, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  for (int a = 0; a < na; a++) {
+    double *x = w->X + (size_t)a * k;
+    for (int j = 0; j < k; j++) x[j] = d->A[(int)w->act[a] + (size_t)j * M->b];
+    chol_solve(k, w->Lg, x);
+  }
+  for (int a = 0; a < na; a++)
+    for (int c = 0; c < na; c++)
+      w->Sm[a + (size_t)c * na] = arow_dot(M, d, w, a, w->X + (size_t)c * k);
+  if (chol(na, w->Sm) != 0) {
+    AP_BM_MSG(d, "model '%s': sliding contacts: the %d active constraint rows are dependent at "
+              "t = %.17g (the normal forces are not unique)", m->name, na, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  for (int j = 0; j < k; j++) w->y[j] = d->Q[j] - d->h[j];
+  chol_solve(k, w->Lg, w->y);
+  for (int a = 0; a < na; a++)
+    w->lam0[a] = d->gamma[(int)w->act[a]] - arow_dot(M, d, w, a, w->y);
+  chol_solve(na, w->Sm, w->lam0);
+  return AP_OK;
+}
+
+/* f_j of sliding contact c into F (k), u_j into U (na). */
+static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c, fr_work *w,
+                    double *F, double *U) {
+  int k = M->k;
+  double s[2], mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu, vmag = 0.0;
+  ap_cfr_slip(M, S, c, d->v, s);
+  for (int j = 0; j < k; j++) vmag = fmax(vmag, fabs(d->v[j]));
+  double ns = hypot(s[0], s[1]), *dir = ap_cfr_slip_dir(M, S, c);
+  if (ns > 1e-13 * (1.0 + vmag)) s[0] /= ns, s[1] /= ns;
+  else s[0] = dir[0], s[1] = dir[1];
+  dir[2] = s[0], dir[3] = s[1];   /* for ap_cfr_friction_force */
+  const double *T = block(M, S, c) + FR_HEAD;
+  for (int j = 0; j < k; j++) F[j] = -mu * (s[0] * T[j] + s[1] * T[k + 1 + j]);
+  memcpy(w->z, F, sizeof(double) * (size_t)k);
+  chol_solve(k, w->Lg, w->z);
+  for (int a = 0; a < w->na; a++) U[a] = arow_dot(M, d, w, a, w->z);
+  chol_solve(w->na, w->Sm, U);
+}
+
+int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
+  const ap_bmodel *M = ap_bm(m);
+  fr_work w = carve(M, S);
+  int p = active_rows(M, S, &w), k = M->k;
+  if (p == 0) return AP_OK;
+  int rc = frictionless(m, d, &w);
+  if (rc != AP_OK) return rc;
+  const ap_mcon *sl[64];
+  int ns = 0;
+  for (int ci = 0; ci < M->nc && ns < 64; ci++)
+    if (M->cons[ci].fric >= 0 && ap_cfr_mode(M, S, &M->cons[ci]) == AP_CM_SLIDING)
+      sl[ns++] = &M->cons[ci];
+  for (int j = 0; j < p; j++)
+    coulomb(M, d, S, sl[j], &w, w.F + (size_t)j * k, w.U + (size_t)j * w.na);
+  for (int i = 0; i < p; i++) {
+    w.lamN[i] = w.lam0[(int)w.nidx[i]];
+    for (int j = 0; j < p; j++)
+      w.Mp[i + (size_t)j * p] = (i == j) + w.U[(int)w.nidx[i] + (size_t)j * w.na];
+  }
+  double small = solve_nopivot(p, w.Mp, w.lamN);
+  if (small < 0) {
+    AP_BM_MSG(d, "model '%s': contact '%s' slides in a state where the normal force has no "
+              "solution or several (Painleve's paradox: 1 + u = %.6g <= 0, the friction "
+              "pushes the contact into the ground harder than the normal force can resist) at "
+              "t = %.17g: lower mu_kinetic or model the impact", m->name, sl[0]->name,
+              p == 1 ? 1.0 + w.U[(int)w.nidx[0]] : small, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  for (int j = 0; j < p; j++) {
+    for (int i = 0; i < k; i++) d->Q[i] += w.F[(size_t)j * k + i] * w.lamN[j];
+    block(M, S, sl[j])[1] = w.lamN[j];
+  }
+  return AP_OK;
+}
+
+/* ---- choosing the modes from a state ------------------------------------------------------ */
+
+int ap_cfr_unilateral(const ap_mcon *c) {
+  return c->def.unilateral == 1 || (c->def.unilateral < 0 && c->def.mu >= 0);
+}
+
+int ap_body_contact_modes(const ap_model *m, ap_data *d, const double *v, double tol) {
+  if (!ap_model_is_body_model(m) || !ap_core_data_ok(m, d) || !(tol > 0)) return AP_ERR_ARG;
+  const ap_bmodel *M = ap_bm(m);
+  if (M->nfric == 0) return 0;
+  double *S = ap_bm_scratch(d), vmax = 0.0;
+  int off = 0;
+  ap_basis basis = d->basis;
+  d->basis = AP_BASIS_NONE;
+  int rc = ap_fwd_position(m, d);
+  d->basis = basis;
+  if (rc != AP_OK) return rc;
+  for (int i = 0; v && i < M->k; i++) vmax = fmax(vmax, fabs(v[i]));
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    if (c->fric < 0) continue;
+    double sl[2] = {0, 0}, *dir = ap_cfr_slip_dir(M, S, c);
+    if (v) ap_cfr_slip(M, S, c, v, sl);
+    double ns = hypot(sl[0], sl[1]);
+    int mode = AP_CM_ROLLING;
+    if (ap_cfr_unilateral(c) && ap_contact_gap(M, S, c) > tol) mode = AP_CM_AIRBORNE;
+    else if (c->def.mu >= 0 && ns > tol * (1.0 + vmax)) {
+      mode = AP_CM_SLIDING;
+      dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+    }
+    ap_cfr_set_mode(M, S, c, mode);
+    off += mode != AP_CM_ROLLING;
+  }
+  return off;
+}
+
+void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,
+                           const double *t1, const double *t2, double *F) {
+  if (ap_cfr_mode(M, S, c) != AP_CM_SLIDING) return;
+  const double *b = block(M, S, c);
+  double mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu;
+  if (!t1) F[0] -= mu * fn * b[4], F[1] -= mu * fn * b[5];
+  else
+    for (int i = 0; i < 3; i++) F[i] -= mu * fn * (b[4] * t1[i] + b[5] * t2[i]);
+}
