@@ -335,6 +335,14 @@ static void test_kron_modes(void) {
   ap_scene_free(sc);
 }
 
+/* Under AddressSanitizer its own strdup allocates without calling malloc (tests/alloc.h), so
+ * the live count is off by those blocks; LeakSanitizer checks for leaks in that build. */
+#if defined(__SANITIZE_ADDRESS__)
+#define COUNTS_LIVE_BLOCKS 0
+#else
+#define COUNTS_LIVE_BLOCKS 1
+#endif
+
 static void test_nomem(void) {
   char file[1200], msg[1024];
   snprintf(file, sizeof file, "%s/examples/scenes/kron_two_pendulums.yaml", srcdir);
@@ -348,7 +356,8 @@ static void test_nomem(void) {
     ap_scene_free(sc);
     tried++;
     if (rc != AP_OK) failed++;
-    if ((rc != AP_OK && rc != AP_ERR_NOMEM && !strstr(msg, "memory")) || n_live != live ||
+    if ((rc != AP_OK && rc != AP_ERR_NOMEM && !strstr(msg, "memory")) ||
+        (COUNTS_LIVE_BLOCKS && n_live != live) ||
         (rc == AP_OK && !sc)) {
       if (bad++ < 5) fprintf(stderr, "  allocation %ld: rc %d, %ld blocks leaked: %s\n", i, rc,
                              n_live - live, msg);
