@@ -1,7 +1,7 @@
 /* Tests of the core: the Appell solve against Gauss's principle (KKT conditions), basis
  * independence, Christoffel terms, reactions, redundant and inconsistent rows, callbacks that
- * fail on purpose, model validation, initial-speed projection, quasi-velocities, and no heap
- * allocation inside ap_forward. */
+ * fail on purpose, model validation, initial-speed projection, a row that no speed moves,
+ * quasi-velocities, and no heap allocation inside ap_forward. */
 #define _GNU_SOURCE
 #include <math.h>
 #include <stdlib.h>
@@ -386,6 +386,42 @@ static void test_initial_speeds(void) {
   ap_model_free(m);
 }
 
+/* A row of A at round-off (1e-20 of the scale 1 of a math-level system) with a0 = 0.3: the
+ * relative rank test keeps a lone row by its own pivot (minimum-norm speeds |a0| / |A| ~ 1e20);
+ * refused at creation in every mode, with the row and the numbers. The same row with a0 of its
+ * own round-off size vanishes identically and is accepted, as is a small row that is not
+ * round-off (1e-6: speeds of 3e5 are the model's). */
+static void test_vanishing_row(void) {
+  rand_sys s;
+  rand_fill(&s, 1, 0);
+  for (int j = 0; j < RK; j++) s.A[j * RB] *= 1e-20;
+  s.a0[0] = 0.3, s.gam[0] = 0.0;
+  ap_model *m = rand_model(&s);
+  double q0[RK] = {0}, v0[RK] = {0};
+  ap_mode modes[4] = {AP_MODE_MINIMAL, AP_MODE_PROJECTED, AP_MODE_PLAIN, AP_MODE_DAE};
+  ap_sim_def def = ap_sim_def_default();
+  ap_sim *sim = NULL;
+  char msg[512] = "";
+  for (int i = 0; i < 4; i++) {
+    def.mode = modes[i];
+    AP_CHECK_EQ_INT(ap_sim_create(m, &def, 0.0, q0, v0, &sim, msg, sizeof msg),
+                    AP_ERR_INCONSISTENT);
+    AP_CHECK(sim == NULL && strstr(msg, "'left-wheel' is contradictory") &&
+             strstr(msg, "0.3") && strstr(msg, "rank_rtol 1e-10"));
+  }
+  double scale[2] = {1.0, 1e14}, a0[2] = {1e-20, 0.3};   /* |A_r| ~ 1e-20, then ~ 1e-6 */
+  def.mode = AP_MODE_MINIMAL;
+  for (int c = 0; c < 2; c++) {
+    double an = 0.0;
+    for (int j = 0; j < RK; j++) s.A[j * RB] *= scale[c], an = hypot(an, s.A[j * RB]);
+    s.a0[0] = a0[c];
+    for (int j = 0; j < RK; j++) v0[j] = -a0[c] * s.A[j * RB] / (an * an);   /* A v + a0 = 0 */
+    AP_CHECK_EQ_INT(ap_sim_create(m, &def, 0.0, q0, v0, &sim, msg, sizeof msg), AP_OK);
+    ap_sim_free(sim);
+  }
+  ap_model_free(m);
+}
+
 /* CVODE in projected mode: BDF projects natively (no restarts, history kept), Adams is refused
  * with a message saying why. The sleigh against its closed form (docs/references.md §2). */
 static void test_cvode_projected(void) {
@@ -432,5 +468,6 @@ int main(void) {
   test_quasi_velocities();
   test_validation();
   test_initial_speeds();
+  test_vanishing_row();
   return ap_check_finish("core");
 }

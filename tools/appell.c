@@ -127,7 +127,7 @@ int cli_unknown(const char *cmd, const char *arg, const char *const *known) {
 static int finish(int code) {
   if (fflush(stdout) == 0 && !ferror(stdout)) return code;
   if (errno != EPIPE) fprintf(stderr, "appell: writing standard output failed: %s\n",
-                              strerror(errno ? errno : EIO));
+                              CLI_STRERROR(errno ? errno : EIO));
   return code == EXIT_OK ? EXIT_INTERNAL : code;
 }
 

@@ -146,7 +146,7 @@ static int plot(const char *fig, const row *rows, int nrows, const char *scene) 
   fflush(NULL);
   FILE *g = popen("gnuplot 2>&1", "w");
   if (!g) {
-    fprintf(stderr, "appell bench: cannot run gnuplot (%s)\n", strerror(errno));
+    fprintf(stderr, "appell bench: cannot run gnuplot (%s)\n", CLI_STRERROR(errno));
     return EXIT_INTERNAL;
   }
   fprintf(g, "set terminal %s size 900,600 noenhanced\nset output '%s'\n",
@@ -339,7 +339,7 @@ int cmd_bench(int argc, char **argv) {
   if (csv) {
     FILE *f = fopen(csv, "w");
     if (!f) {
-      fprintf(stderr, "appell bench: cannot write %s: %s\n", csv, strerror(errno));
+      fprintf(stderr, "appell bench: cannot write %s: %s\n", csv, CLI_STRERROR(errno));
       code = EXIT_INTERNAL;
       goto done;
     }

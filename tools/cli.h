@@ -38,6 +38,12 @@ int cli_unknown(const char *cmd, const char *arg, const char *const *known);
 /* The closest of words to word by edit distance, or NULL. */
 const char *cli_suggest(const char *word, const char *const *words, int count);
 
+/* The text of errno value err (strerror_r, thread-safe unlike strerror) in buf (len bytes);
+ * "error N" when the C library has none (tools/errtext.c). CLI_STRERROR(err) gives it a
+ * buffer that lives until the end of the enclosing block, for use inside one message call. */
+const char *cli_errno_text(int err, char *buf, size_t len);
+#define CLI_STRERROR(err) cli_errno_text((err), (char[128]){0}, 128)
+
 /* ---- appell run's output target and signals (tools/output.c) ---- */
 
 #include <stdio.h>

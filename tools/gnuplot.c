@@ -14,11 +14,11 @@ int cli_safe_name(const char *s) { return !strpbrk(s, "'\"\n\r\\"); }
 
 int cli_gnuplot(const char *cmd, void (*script)(FILE *g, const void *user), const void *user) {
   int fd[2];
-  if (pipe(fd) != 0) return fprintf(stderr, "appell %s: pipe: %s\n", cmd, strerror(errno)), -1;
+  if (pipe(fd) != 0) return fprintf(stderr, "appell %s: pipe: %s\n", cmd, CLI_STRERROR(errno)), -1;
   pid_t pid = fork();
   if (pid < 0) {
     close(fd[0]), close(fd[1]);
-    return fprintf(stderr, "appell %s: fork: %s\n", cmd, strerror(errno)), -1;
+    return fprintf(stderr, "appell %s: fork: %s\n", cmd, CLI_STRERROR(errno)), -1;
   }
   if (pid == 0) {
     dup2(fd[0], STDIN_FILENO);
@@ -27,7 +27,7 @@ int cli_gnuplot(const char *cmd, void (*script)(FILE *g, const void *user), cons
     if (null >= 0) dup2(null, STDOUT_FILENO), close(null);
     execlp("gnuplot", "gnuplot", (char *)NULL);
     fprintf(stderr, "appell %s: cannot run gnuplot (%s); install the Debian package "
-            "gnuplot-nox\n", cmd, strerror(errno));
+            "gnuplot-nox\n", cmd, CLI_STRERROR(errno));
     _exit(127);
   }
   close(fd[0]);

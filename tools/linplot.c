@@ -55,7 +55,7 @@ static FILE *open_out(out_file *o, const char *file) {
   }
   o->f = fdopen(o->o.fd, "w");
   if (!o->f) {
-    fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, strerror(errno));
+    fprintf(stderr, "appell linearize: cannot write %s: %s\n", file, CLI_STRERROR(errno));
     ap_out_finish(&o->o, 0, NULL, 0);
   }
   return o->f;
@@ -67,7 +67,7 @@ static int close_out(out_file *o) {
   if (fclose(o->f) != 0 && !bad) bad = 1, err = errno;
   o->o.fd = -1;   /* closed with the FILE */
   char msg[2 * AP_OUT_PATH_MAX + 300];
-  if (bad) snprintf(msg, sizeof msg, "%s: %s", o->o.path, strerror(err ? err : EIO));
+  if (bad) snprintf(msg, sizeof msg, "%s: %s", o->o.path, CLI_STRERROR(err ? err : EIO));
   if (ap_out_finish(&o->o, !bad, msg, sizeof msg) == AP_OK && !bad) return 0;
   fprintf(stderr, "appell linearize: cannot write %s\n", msg);
   return -1;
@@ -171,7 +171,7 @@ int lin_check_plot(const char *fig, const char *scene) {
                    dir), -1;
   if (access(dir, W_OK) != 0)
     return fprintf(stderr, "appell linearize: --plot %s: cannot write in %s: %s\n", fig, dir,
-                   strerror(errno)), -1;
+                   CLI_STRERROR(errno)), -1;
   return 0;
 }
 
@@ -186,7 +186,7 @@ int lin_plot(const char *fig, const char *param, const ap_lin_sweep *sw, const c
   lin_job job = {tmp, param, sw, title, o};
   int rc = cli_gnuplot("linearize", lin_script, &job);
   if (rc == 0 && rename(tmp, fig) != 0) {
-    fprintf(stderr, "appell linearize: cannot write %s: %s\n", fig, strerror(errno));
+    fprintf(stderr, "appell linearize: cannot write %s: %s\n", fig, CLI_STRERROR(errno));
     rc = -1;
   }
   if (rc != 0) remove(tmp);

@@ -199,7 +199,7 @@ int cli_out_open(cli_out *o) {
     ap_out_finish(&o->file, 0, NULL, 0);
     arm(&o->file, 0);
     return fprintf(stderr, "appell %s: cannot write %s: %s\n", command, o->file.path,
-                   strerror(err)), EXIT_INTERNAL;
+                   CLI_STRERROR(err)), EXIT_INTERNAL;
   }
   return EXIT_OK;
 }
@@ -223,7 +223,7 @@ int cli_out_finish(cli_out *o, int code, int keep) {
   if (o->kind == CLI_OUT_STDOUT) clearerr(stdout);   /* reported here, not again at exit */
   if (o->err && o->err != EPIPE)
     fprintf(stderr, "appell %s: writing %s failed: %s%s\n", command, cli_out_name(o),
-            strerror(o->err), o->kind == CLI_OUT_FILE ? " (the partial file is removed)" : "");
+            CLI_STRERROR(o->err), o->kind == CLI_OUT_FILE ? " (the partial file is removed)" : "");
   if (o->err && code == EXIT_OK)
     code = o->err == EPIPE ? 128 + SIGPIPE : EXIT_INTERNAL;
   if (o->kind != CLI_OUT_FILE) return code;

@@ -88,7 +88,7 @@ typedef struct header {
 
 static int read_header(const char *csv, header *h) {
   FILE *f = fopen(csv, "r");
-  if (!f) return fprintf(stderr, "appell plot: cannot open %s: %s\n", csv, strerror(errno)), -1;
+  if (!f) return fprintf(stderr, "appell plot: cannot open %s: %s\n", csv, CLI_STRERROR(errno)), -1;
   size_t cap = 0, cap2 = 0;
   char *row = NULL;
   ssize_t len = getline(&h->line, &cap, f), len2 = len > 0 ? getline(&row, &cap2, f) : -1;

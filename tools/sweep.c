@@ -433,7 +433,7 @@ static int open_checkpoint(sweep_state *s, const cli_out *out) {
     fflush(s->ck);   /* on disk before any run: a resume finds the sweep's header */
   }
   if (code == EXIT_OK && !s->ck)
-    code = (fprintf(stderr, "appell sweep: %s: %s\n", s->ck_path, strerror(errno)), EXIT_INTERNAL);
+    code = (fprintf(stderr, "appell sweep: %s: %s\n", s->ck_path, CLI_STRERROR(errno)), EXIT_INTERNAL);
   free(header);
   return code;
 }
@@ -452,7 +452,7 @@ static int keep_batch(sweep_state *s, long n) {
   ap_batch_messages_free(n, s->events);
   if (fflush(s->ck) != 0 || ferror(s->ck) || fsync(fileno(s->ck)) != 0)
     return fprintf(stderr, "appell sweep: cannot write the checkpoint %s: %s\n",
-                   s->ck_path[0] ? s->ck_path : "(temporary)", strerror(errno)), EXIT_INTERNAL;
+                   s->ck_path[0] ? s->ck_path : "(temporary)", CLI_STRERROR(errno)), EXIT_INTERNAL;
   return EXIT_OK;
 }
 

@@ -48,7 +48,7 @@ void sweep_csv_quote(FILE *f, const char *text) {
 
 static int read_file(shard_file *sf) {
   FILE *f = fopen(sf->name, "rb");
-  if (!f) return fprintf(stderr, "appell sweep: %s: cannot open: %s\n", sf->name, strerror(errno)), -1;
+  if (!f) return fprintf(stderr, "appell sweep: %s: cannot open: %s\n", sf->name, CLI_STRERROR(errno)), -1;
   size_t cap = 1 << 16;
   sf->text = malloc(cap + 1);
   while (sf->text) {

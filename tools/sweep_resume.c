@@ -27,7 +27,7 @@ long sweep_checkpoint_rows(const char *path, const char *header, const char *id,
   FILE *f = fopen(path, "r+");
   if (!f)
     return fprintf(stderr, "appell sweep: --resume: %s: cannot open the checkpoint: %s\n", path,
-                   strerror(errno)), -1;
+                   CLI_STRERROR(errno)), -1;
   char *line = NULL;
   size_t cap = 0;
   ssize_t len = getline(&line, &cap, f);
@@ -35,7 +35,7 @@ long sweep_checkpoint_rows(const char *path, const char *header, const char *id,
   if (len < 0 && !ferror(f)) {   /* killed before its header reached the disk: start it */
     free(line);
     bad = fputs(header, f) < 0 || fclose(f) != 0;
-    if (bad) fprintf(stderr, "appell sweep: --resume: %s: %s\n", path, strerror(errno));
+    if (bad) fprintf(stderr, "appell sweep: --resume: %s: %s\n", path, CLI_STRERROR(errno));
     return bad ? -1 : 0;
   }
   if (len < 0 || strcmp(line, header) != 0) {
@@ -57,7 +57,7 @@ long sweep_checkpoint_rows(const char *path, const char *header, const char *id,
   }
   free(line);
   if (!bad && (fflush(f) != 0 || ftruncate(fileno(f), pos) != 0)) {
-    fprintf(stderr, "appell sweep: --resume: %s: %s\n", path, strerror(errno));
+    fprintf(stderr, "appell sweep: --resume: %s: %s\n", path, CLI_STRERROR(errno));
     bad = 1;
   }
   fclose(f);

@@ -62,7 +62,7 @@ int view_csv_read(const char *cmd, const char *path, view_csv *c) {
   memset(c, 0, sizeof *c);
   FILE *f = fopen(path, "r");
   if (!f) {
-    fprintf(stderr, "appell %s: cannot read %s: %s\n", cmd, path, strerror(errno));
+    fprintf(stderr, "appell %s: cannot read %s: %s\n", cmd, path, CLI_STRERROR(errno));
     return EXIT_INPUT;
   }
   size_t len = 0;

@@ -45,7 +45,9 @@ typedef struct ap_sim_def {
                               counts when its largest entry exceeds rank_rtol times the model's
                               length scale (the largest frame offset, contact point or shape
                               size, m; 1 for math-level systems): smaller ones vanish
-                              identically (docs/api.md "Tolerances") */
+                              identically; a row of A whose norm is below that at t0 while
+                              its a0 is not round-off is refused by ap_sim_create
+                              (docs/api.md "Tolerances") */
   double switch_growth;    /* minimal mode: re-partition when max|R11^-1 R12| exceeds this;
                               default 2 */
   double init_tol;         /* initial speeds violating A v + a0 = 0 by more than this (in the

@@ -7,6 +7,7 @@
  * body model with implicit holonomic rows tells rows redundant for every q from rows redundant
  * only where those rows hold, by the rank at a nearby state off them (nearby_rank).
  * ap_core_judge_redundant: the latter kind, judged at an accepted state against manifold_rtol.
+ * ap_core_refuse_vanishing_rows: rows that no speed moves but a0 does (an absolute rank floor).
  * Nothing here allocates. */
 #include <math.h>
 #include <stdio.h>
@@ -176,4 +177,33 @@ int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
     name_redundant(m, d, s->jpvt, rr, verdict, bad_a ? d->resid_a0 : d->resid_gamma);
   }
   return AP_ERR_INCONSISTENT;
+}
+
+/* A row of A whose norm is below rank_rtol times the model's length scale m->lscale (the scale
+ * of A's entries: lever arms in m per rad, 1 for translational speeds; as the DAE mode's and
+ * the Gauss-Newton projection's floors) vanishes: no speed moves it. Its a0 must then vanish
+ * too, relative to the terms of its equation A v + a0 = 0, which are a0 alone: within
+ * AP_CONSISTENCY_RTOL of AP_A0_FLOOR_M_PER_S + max|a0| (the scale of ap_core_row_scale with
+ * A_r v of round-off size). Otherwise the row is contradictory: a drive demands a speed of the
+ * row that no free speed can give, and the relative rank tests, which keep a lone row by its
+ * own pivot, gave minimum-norm speeds |a0| / |A_r| of 1e15 rad/s (campaign seed 1004576,
+ * tests/scenes/difftest/seed_1004576.yaml). Dense path only (the tree path forms no A);
+ * A and a0 must be current (after ap_partition). */
+int ap_core_refuse_vanishing_rows(const ap_model *m, ap_data *d) {
+  if (ap_core_st(d) || m->b == 0) return AP_OK;
+  double floor_a = d->rank_rtol * m->lscale;
+  double floor_a0 = AP_CONSISTENCY_RTOL * (AP_A0_FLOOR_M_PER_S + max_abs(d->a0, (size_t)m->b));
+  for (int r = 0; r < m->b; r++) {
+    double norm = 0.0;
+    for (int c = 0; c < m->k; c++) norm = hypot(norm, d->A[r + (size_t)c * m->b]);
+    if (norm > floor_a || !(fabs(d->a0[r]) > floor_a0)) continue;
+    ap_core_msg(d, "system '%s': constraint row '%s' is contradictory at t = %.17g: its row of "
+                "A has norm %.3g, below rank_rtol %.3g times the model's length scale %.3g m "
+                "(no speed moves it), while its free term a0 is %.3g (more than %.3g): the "
+                "drives demand a speed no free speed can give (|a0| / |A| = %.3g)", m->name,
+                m->constraint_names[r], d->t, norm, d->rank_rtol, m->lscale, d->a0[r],
+                floor_a0, norm > 0 ? fabs(d->a0[r]) / norm : HUGE_VAL);
+    return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
 }

@@ -153,11 +153,16 @@ static int choose_rows(ap_dae *s, double rank_rtol) {
 }
 
 /* The impulses start at 0 and their derivatives at the multipliers: lambda for the kept rows by
- * least squares on A_s^T lambda = g v' + h - Q (= F_v at lambda = 0), mu = 0. */
+ * least squares on A_s^T lambda = g v' + h - Q (= F_v at lambda = 0), mu = 0. Called at
+ * creation and at every restart (ap_dae_restart, mid-run): its vector is made at the first
+ * call, and the solve's LAPACK workspace is row_qr's (s->qr, s->jpvt: sized for
+ * max(b, nphi) x max(n, k) >= bs x k, unused between row choices), so a restart allocates
+ * nothing and cannot fail for memory. */
 static int initial_multipliers(ap_dae *s, double t0) {
   int n = s->n, k = s->k, bs = s->bs;
-  N_Vector rr = N_VNew_Serial(s->ny, s->ctx);   /* N_VClone crashes when it cannot allocate */
-  if (!rr) return AP_ERR_NOMEM;
+  if (!s->rr) s->rr = N_VNew_Serial(s->ny, s->ctx);   /* N_VClone crashes when out of memory */
+  if (!s->rr) return AP_ERR_NOMEM;
+  N_Vector rr = s->rr;
   double *y = N_VGetArrayPointer(s->yy), *y1 = N_VGetArrayPointer(s->yp);
   double *r = N_VGetArrayPointer(rr);
   memset(y + n + k, 0, sizeof(double) * (size_t)(bs + s->nps));
@@ -167,18 +172,10 @@ static int initial_multipliers(ap_dae *s, double t0) {
     for (int c = 0; c < bs; c++)
       for (int i = 0; i < k; i++)
         s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b];
-    size_t lw = ap_la_work_size(bs, k);
-    double *work = calloc(lw, sizeof *work);
-    int *iwork = calloc(ap_la_iwork_size(bs, k) + 1, sizeof *iwork);
     double resid = 0.0;
-    rc = work && iwork ? ap_la_lstsq_At(bs, k, s->jA, r + n, 0.0, y1 + n + k, &resid, work,
-                                        iwork)
-                       : AP_ERR_NOMEM;
-    free(work);
-    free(iwork);
+    rc = ap_la_lstsq_At(bs, k, s->jA, r + n, 0.0, y1 + n + k, &resid, s->qr, s->jpvt);
   }
   if (rc == AP_OK) ap_dae_multiplier_scales(s);
-  N_VDestroy(rr);
   if (rc != AP_OK && !s->msg[0])
     snprintf(s->msg, sizeof s->msg, "initial multipliers: %s",
              s->res_status ? s->res_msg : "least-squares solve failed");
@@ -484,6 +481,7 @@ void ap_dae_free(ap_dae *s) {
   if (s->yp) N_VDestroy(s->yp);
   if (s->id) N_VDestroy(s->id);
   if (s->dk) N_VDestroy(s->dk);
+  if (s->rr) N_VDestroy(s->rr);
   ap_nvp_free(s->pool);
   if (s->ctx) SUNContext_Free(&s->ctx);
   free(s->Phi_q);

@@ -26,6 +26,8 @@ struct ap_dae {
   N_Vector yy, yp, id;      /* from pool, with every vector IDA clones (nvpool.c) */
   struct ap_nvpool *pool;
   N_Vector dk;              /* dense output for events (ap_dae_dky), made at the first use */
+  N_Vector rr;              /* the residual at a (re)start (initial_multipliers), made at
+                               creation: a restart mid-run allocates nothing */
   SUNMatrix J;
   SUNLinearSolver LS;
   int n, k, b, bs, nphi, nps, ny;  /* ny = n + k + bs + nps */

@@ -147,6 +147,7 @@ static int consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
    * are refused with their names; consistent ones are dropped (the partition, the orthonormal
    * basis and the DAE's kept rows make the same choice) and named in the warning. */
   int rc = ap_partition(s->m, d);
+  if (rc == AP_OK && refuse) rc = ap_core_refuse_vanishing_rows(s->m, d);
   if (rc != AP_OK) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   if (s->m->b == 0) return AP_OK;
   if (s->def.mode == AP_MODE_PLAIN && d->redundant_manifold > 0)
