@@ -20,7 +20,7 @@
 static ap_sc bq_atan2(ap_sc y, ap_sc x) {
 #ifdef AP_SC_COMPLEX
   double a = creal(x), b = creal(y);
-  return CMPLX(atan2(b, a), (a * cimag(y) - b * cimag(x)) / (a * a + b * b));
+  return atan2(b, a) + (a * cimag(y) - b * cimag(x)) / (a * a + b * b) * _Complex_I;
 #else
   return atan2(y, x);
 #endif
