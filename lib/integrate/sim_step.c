@@ -61,9 +61,26 @@ static long stage_count(const ap_data *d) {
   return d->cnt.position + d->cnt.velocity + d->cnt.acceleration + d->cnt.partitions;
 }
 
+/* ydot from the data's qdot and edd (minimal) or vdot. */
+static void rhs_out(const ap_sim *s, double *ydot) {
+  const ap_data *d = s->d;
+  memcpy(ydot, d->qdot, sizeof(double) * (size_t)s->n);
+  if (s->def.mode == AP_MODE_MINIMAL)
+    memcpy(ydot + s->n, d->edd, sizeof(double) * (size_t)d->l);
+  else
+    memcpy(ydot + s->n, d->vdot, sizeof(double) * (size_t)s->k);
+}
+
+/* The right-hand side at (t, y). When the data still holds a successful evaluation at exactly
+ * (t, y) in the same basis (ap_drv_evaluated_at; a change of the inputs voids it: sim_input.c),
+ * its derivatives are returned as they are: a stepper restarted at the accepted state after the
+ * pipeline evaluated it there (ap_drv_evaluate_current, after a controller's restart) asks for
+ * that same slope. Not while a condition estimate is wanted (the evaluation makes it). */
 int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
   ap_sim *s = user;
   ap_data *d = s->d;
+  if (!d->estimate_cond && (int)d->basis == s->ev_basis && ap_drv_evaluated_at(s, t, y))
+    return rhs_out(s, ydot), 0;
   if (check_trial(s, t, y) != AP_OK) return -1;
   ap_drv_load_state(s, t, y);
   int rc = ap_forward(s->m, d);
@@ -79,12 +96,9 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
              s->growth_cap, t);
     return 1;                                    /* recoverable: a shorter step */
   }
-  memcpy(ydot, d->qdot, sizeof(double) * (size_t)s->n);
-  if (s->def.mode == AP_MODE_MINIMAL)
-    memcpy(ydot + s->n, d->edd, sizeof(double) * (size_t)d->l);
-  else
-    memcpy(ydot + s->n, d->vdot, sizeof(double) * (size_t)s->k);
+  rhs_out(s, ydot);
   s->ev_stamp = stage_count(d), s->ev_t = t;    /* the data now describes (t, y) */
+  s->ev_basis = (int)d->basis;
   memcpy(s->yev, y, sizeof(double) * (size_t)s->ny);
   return 0;
 }
