@@ -262,7 +262,8 @@ static int restart_if_pending(ap_sim *s, double t) {
   ap_sim_ctrl *c = s->ctrl;
   if (!c->pending) return AP_OK;
   c->pending = 0;
-  s->ev_stamp = -1;   /* the data's evaluation had the old inputs */
+  s->ev_inputs_old = 1;   /* the data's evaluation had the old inputs (its position stage holds) */
+  if (s->dae) s->ev_stamp = -1;
   if (!s->dae) {
     int rc = ap_step_jump(s->st, t, s->y);
     s->stats.restarts++;
