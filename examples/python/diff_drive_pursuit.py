@@ -3,17 +3,19 @@
     python3 examples/python/diff_drive_pursuit.py [--t-end 30] [--period 0.01]
 
 The path is the wavy road y = A sin(x / lam) (A = 0.5 m, lam = 2 m); the robot
-(examples/scenes/diff_drive_control.yaml, wheel radius r = 0.1 m, track b = 0.5 m) starts
-0.3 m off it. Every period (10 ms) the controller reads the measured pose (chassis.x, .y,
-.heading) and wheel rates, and
+(examples/scenes/diff_drive_servo.yaml, wheel radius r = 0.1 m, track b = 0.5 m) starts
+0.3 m off it. Its inputs are the set-points of the two wheel motors (rate motors, torque
+kd (set-point - rate)). Every period (10 ms) the controller reads the measured pose (chassis.x,
+.y, .heading), and
   1. pure pursuit: the goal is the first path point ahead at the look-ahead distance L from the
      axle midpoint; the arc through it has curvature kappa = 2 sin(alpha) / L (alpha: the
      goal's bearing from the heading), so the wanted turn rate is omega = v kappa at speed v;
   2. the wheel rates that give (v, omega): w_r,l = (v +- omega b / 2) / r;
-  3. each wheel's torque drives its rate there: tau = kw (w_wanted - w), held 10 ms.
+  3. commands those rates as the motors' set-points, held 10 ms (each motor then drives its
+     wheel towards its set-point continuously).
 The cross-track error (distance from the axle midpoint to the path) falls from 0.3 m within a
 few seconds and then stays near a millimetre: pure pursuit follows a circle exactly in steady
-state, and what is left comes from the road's changing curvature and the wheels' torque loop."""
+state, and what is left comes from the road's changing curvature and the motors' lag."""
 
 import argparse
 import math
@@ -25,7 +27,7 @@ import appell
 
 AMP, LAM = 0.5, 2.0                     # the path y = AMP sin(x / LAM), m
 R_WHEEL, TRACK = 0.1, 0.5               # m
-SPEED, LOOKAHEAD, KW = 0.5, 0.4, 2.0    # m/s, m, N m s/rad
+SPEED, LOOKAHEAD = 0.5, 0.4             # m/s, m
 
 
 def path_points(x_end=40.0, ds=0.002):
@@ -39,7 +41,7 @@ def cross_track(P, x, y):
 
 
 def pure_pursuit(P):
-    """The controller f(t, state) -> the two wheel torques (a dict by input name)."""
+    """The controller f(t, state) -> the two wheel-rate set-points (a dict by input name)."""
     def f(t, s):
         x, y, h = s["chassis.x"], s["chassis.y"], s["chassis.heading"]
         d = np.hypot(P[:, 0] - x, P[:, 1] - y)
@@ -50,8 +52,7 @@ def pure_pursuit(P):
         omega = SPEED * 2.0 * math.sin(alpha) / LOOKAHEAD
         w_l = (SPEED - omega * TRACK / 2) / R_WHEEL
         w_r = (SPEED + omega * TRACK / 2) / R_WHEEL
-        return {"wheel_l.angle_dot": KW * (w_l - s["wheel_l.angle_dot"]),
-                "wheel_r.angle_dot": KW * (w_r - s["wheel_r.angle_dot"])}
+        return {"motor_l.setpoint": w_l, "motor_r.setpoint": w_r}
     return f
 
 
@@ -66,7 +67,7 @@ def run(scene, t_end=30.0, period=0.01):
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--scene", default=str(Path(__file__).resolve().parents[1] / "scenes" /
-                                          "diff_drive_control.yaml"))
+                                          "diff_drive_servo.yaml"))
     p.add_argument("--t-end", type=float, default=30.0)
     p.add_argument("--period", type=float, default=0.01)
     a = p.parse_args()

@@ -79,7 +79,8 @@ typedef struct ap_lin_def {
   const char *const *independent; /* NULL-terminated names preferred as independent
                               coordinates / speeds when the partitions are chosen; default NULL */
   const char *const *inputs; /* NULL-terminated model speed names that receive an input
-                              generalized force (a joint torque or force): columns of B */
+                              generalized force (a joint torque or force), or MOTOR.setpoint
+                              names (a motor's set-point): columns of B */
   double tol;              /* Newton: residual relative to its scale; default 1e-12 */
   int max_iter;            /* Newton iterations; default 40 */
   double zero_tol;         /* an entry of A is a structural zero when |A_ij| is within

@@ -5,7 +5,9 @@
  * free body's "frame.wx": a torque about the world x axis): exactly the columns of the
  * linearizer's input matrix B (ap_lin_def.inputs, docs/linearize.md), so that a gain K
  * computed from the linearization applies to the same inputs here. The scene's `inputs:`
- * section declares them (ap_scene_add_inputs).
+ * section declares them (ap_scene_add_inputs). An input may also be a motor's set-point, named
+ * "MOTOR.setpoint" (a motor effect of a body model whose set-point is a constant, rad/s, rad or
+ * m): it replaces the motor's set-point, starting at it, and the motor's law makes the torque.
  *
  * Values are held constant between changes (zero-order hold). The right-hand side jumps
  * where a value changes, so the stepper is restarted there (at the current state, q and v put
@@ -29,7 +31,8 @@ extern "C" {
 #endif
 
 /* Declare the inputs: names is a NULL-terminated list of model speed names (as
- * ap_model_speed_name gives them; at most one input per speed). The values start at 0. A new
+ * ap_model_speed_name gives them; at most one input per speed) or MOTOR.setpoint names. The
+ * values start at 0 (a set-point: at the motor's own). A new
  * declaration replaces the old one (and removes a controller). AP_ERR_ARG for a name that is
  * not a speed (the message has the closest one) or a repeated name; s NULL: AP_ERR_ARG. */
 AP_API int ap_sim_declare_inputs(ap_sim *s, const char *const *names);

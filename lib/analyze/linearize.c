@@ -25,6 +25,7 @@
 #include "appell/body.h"
 #include "core/defcheck.h"
 #include "linalg/linalg.h"
+#include "model/setpoint.h"
 
 ap_lin_def ap_lin_def_default(void) {
   ap_lin_def d;
@@ -114,12 +115,14 @@ static int alloc_all(ap_lin *L) {
 
 static int bind_inputs(ap_lin *L) {
   for (const char *const *s = L->def.inputs; s && *s; s++) {
-    int i = ap_model_find_speed(L->m, *s);
-    if (i < 0) {
+    int i = ap_model_find_speed(L->m, *s), e = i < 0 ? ap_act_find_setpoint(L->m, *s) : -1;
+    if (i < 0 && e >= 0) i = -1 - e;   /* a motor's set-point (model/setpoint.h) */
+    else if (i < 0) {
       const char **names = calloc((size_t)L->k + 1, sizeof *names);
       for (int j = 0; names && j < L->k; j++) names[j] = ap_model_speed_name(L->m, j);
       const char *sug = names ? ap_suggest(*s, names, L->k) : NULL;
-      ap_an_msg(L, "inputs: '%s' is not a speed of model '%s'%s%s%s", *s, ap_model_name(L->m),
+      ap_an_msg(L, "inputs: '%s' is not a speed of model '%s' nor MOTOR.setpoint of a motor "
+                "with a constant set-point%s%s%s", *s, ap_model_name(L->m),
                 sug ? " (did you mean '" : "", sug ? sug : "", sug ? "'?)" : "");
       free(names);
       L->bad_list = "inputs", L->bad_index = (int)(s - L->def.inputs);   /* located by scene */
@@ -344,20 +347,29 @@ static int check_autonomous(ap_lin *L) {
   return AP_ERR_UNSUPPORTED;
 }
 
-/* B: exact response of the independent speed rates to unit generalized forces. */
-static void input_matrix(ap_lin *L) {
+/* B: exact response of the independent speed rates to unit generalized forces; for a motor's
+ * set-point, to the force g on its speed that a unit change of the set-point makes (g = kd or
+ * kp, 0 while saturated: d tau / d s of the motor's law). */
+static int input_matrix(ap_lin *L) {
   ap_data *d = L->d;
   int k = L->k, l = d->l, nx = L->nx;
   memset(L->Bm, 0, sizeof *L->Bm * (size_t)nx * (L->nu ? L->nu : 1));
   for (int c = 0; c < L->nu; c++) {
     double *e = L->u, *t = L->udot, *dv = L->f1;   /* e: k, t: l, dv: k */
     memset(e, 0, sizeof *e * (size_t)k);
-    e[L->inputs[c]] = 1.0;
+    if (L->inputs[c] >= 0) e[L->inputs[c]] = 1.0;
+    else {
+      int col = 0, rc = ap_act_setpoint_gain(L->m, d, -1 - L->inputs[c], &col, &e[0]);
+      if (rc != AP_OK) return ap_an_msg(L, "inputs: '%s': %s", L->def.inputs[c], d->msg), rc;
+      double g = e[0];
+      e[0] = 0.0, e[col] = g;
+    }
     ap_la_gemv_t(k, l, d->B, e, t);
     ap_la_chol_solve(l, d->G, t);
     ap_la_gemv(k, l, d->B, t, dv);
     for (int j = 0; j < L->l; j++) L->Bm[L->nci + j + (size_t)c * nx] = dv[L->uperm[L->ru + j]];
   }
+  return AP_OK;
 }
 
 static int is_zero(const ap_lin *L, int r, int c, double amax) {
@@ -404,7 +416,8 @@ int ap_lin_linearize(ap_lin *L) {
   if (rc == AP_OK) rc = ap_an_jacobian(L);
   if (rc == AP_OK) rc = ap_an_rates(L, L->x0, L->F0);   /* leaves the data at x0 */
   if (rc != AP_OK) return rc;
-  input_matrix(L);
+  rc = input_matrix(L);
+  if (rc != AP_OK) return rc;
   find_cyclic(L);
   rc = check_steady(L);
   L->linearized = rc == AP_OK;
@@ -421,7 +434,8 @@ const char *ap_lin_state_name(const ap_lin *L, int i) {
 }
 
 const char *ap_lin_input_name(const ap_lin *L, int j) {
-  return L && j >= 0 && j < L->nu ? ap_model_speed_name(L->m, L->inputs[j]) : NULL;
+  if (!L || j < 0 || j >= L->nu) return NULL;
+  return L->inputs[j] >= 0 ? ap_model_speed_name(L->m, L->inputs[j]) : L->def.inputs[j];
 }
 
 int ap_lin_is_cyclic(const ap_lin *L, int i) {

@@ -114,6 +114,8 @@ typedef struct ap_scratch {
   ap_st *st;                /* the tree path's structured state (m->ops), else NULL */
   const double *input_Q;    /* (k) generalized forces added to Q by the velocity stage: a
                                simulation's inputs (lib/integrate/sim_input.c), or NULL */
+  const double *setpoint_in; /* (effects) motor set-points that are inputs, used in place of
+                               the motor's value; NaN where the motor keeps its own; or NULL */
 } ap_scratch;
 
 /* Q += the data's input forces, when it has them (the velocity stage, double build only: the

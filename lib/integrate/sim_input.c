@@ -5,6 +5,10 @@
  * (ap_scratch.input_Q): the inputs enter the Appell solve where the linearizer's B says they
  * do, and every mode (minimal, projected, DAE, the tree path) sees them.
  *
+ * An input may also be a motor's set-point ("MOTOR.setpoint", model/setpoint.h): speed[j] is
+ * then -1 - e (e the motor's effect index) and the value goes to sp[e], which the motor reads
+ * in place of its own set-point (ap_scratch.setpoint_in); it starts at that set-point.
+ *
  * Zero-order hold. A change of a value makes the right-hand side jump, so the stepper (or IDA)
  * is restarted at the current state (ap_drv_restart_state), either before the next advance
  * (ap_sim_set_input: pending) or at a controller instant. A controller is a stage of the
@@ -20,10 +24,13 @@
 
 #include "appell/control.h"
 #include "integrate/sim_int.h"
+#include "model/setpoint.h"
 
 struct ap_sim_ctrl {
   int nu;
-  int *speed;              /* (nu) model speed of each input */
+  int *speed;              /* (nu) model speed of each input, or -1 - e: motor e's set-point */
+  char **names;            /* (nu) the input names */
+  double *sp;              /* (effects) motor set-points in force; NaN: not an input */
   double *u;               /* (nu) the values in force */
   double *unew;            /* (nu) the controller's output before it is checked */
   double *tau;             /* (k) generalized forces: u scattered onto the speeds */
@@ -37,6 +44,8 @@ struct ap_sim_ctrl {
 
 static void ctrl_free(ap_sim_ctrl *c) {
   if (!c) return;
+  for (int j = 0; c->names && j < c->nu; j++) free(c->names[j]);
+  free(c->names), free(c->sp);
   free(c->speed), free(c->u), free(c->unew), free(c->tau), free(c->ybuf);
   free(c);
 }
@@ -51,15 +60,24 @@ static int speed_index(const ap_model *m, const char *name) {
   return -1;
 }
 
-/* The list checked: every name a speed, none twice. */
+/* Input name -> *idx: its speed index, or -1 - e for motor e's set-point; 0 when it is
+ * neither. */
+static int input_index(const ap_model *m, const char *name, int *idx) {
+  int i = speed_index(m, name), e = i < 0 ? ap_act_find_setpoint(m, name) : -1;
+  *idx = i >= 0 ? i : -1 - e;
+  return i >= 0 || e >= 0;
+}
+
+/* The list checked: every name a speed or a motor's set-point, none twice. */
 static int check_names(ap_sim *s, const char *const *names, int *nu) {
   const ap_model *m = s->m;
   int count = 0;
   for (; names[count]; count++) {
-    int i = speed_index(m, names[count]);
-    if (i < 0) {
+    int i;
+    if (!input_index(m, names[count], &i)) {
       const char *near = ap_suggest(names[count], (const char *const *)m->speed_names, m->k);
-      return ap_drv_fail(s, AP_ERR_ARG, "inputs: '%s' is not a speed of model '%s'%s%s%s",
+      return ap_drv_fail(s, AP_ERR_ARG, "inputs: '%s' is not a speed of model '%s' nor "
+                         "MOTOR.setpoint of a motor with a constant set-point%s%s%s",
                          names[count], m->name, near ? " (did you mean '" : "",
                          near ? near : "", near ? "'?)" : "");
     }
@@ -81,7 +99,9 @@ static ap_sim_ctrl *ctrl_alloc(const ap_sim *s, int nu) {
   c->unew = calloc((size_t)nu + 1, sizeof *c->unew);
   c->tau = calloc((size_t)s->k + 1, sizeof *c->tau);
   c->ybuf = calloc(ny + (size_t)(s->n + s->k) + 1, sizeof *c->ybuf);
-  if (c->speed && c->u && c->unew && c->tau && c->ybuf) return c;
+  c->names = calloc((size_t)nu + 1, sizeof *c->names);
+  c->sp = calloc((size_t)ap_act_effect_count(s->m) + 1, sizeof *c->sp);
+  if (c->speed && c->u && c->unew && c->tau && c->ybuf && c->names && c->sp) return c;
   ctrl_free(c);
   return NULL;
 }
@@ -93,11 +113,22 @@ int ap_sim_declare_inputs(ap_sim *s, const char *const *names) {
   if (rc != AP_OK) return rc;
   ap_sim_ctrl *c = ctrl_alloc(s, nu);
   if (!c) return ap_drv_fail(s, AP_ERR_NOMEM, "ap_sim_declare_inputs: out of memory");
-  for (int j = 0; j < nu; j++) c->speed[j] = speed_index(s->m, names[j]);
+  for (int e = 0; e < ap_act_effect_count(s->m); e++) c->sp[e] = NAN;
+  for (int j = 0; j < nu; j++) {
+    input_index(s->m, names[j], &c->speed[j]);
+    if (!(c->names[j] = malloc(strlen(names[j]) + 1)))
+      return ctrl_free(c), ap_drv_fail(s, AP_ERR_NOMEM, "ap_sim_declare_inputs: out of memory");
+    strcpy(c->names[j], names[j]);
+    if (c->speed[j] < 0) {   /* a set-point starts at the motor's own */
+      int e = -1 - c->speed[j];
+      c->u[j] = c->sp[e] = ap_act_setpoint_value(s->m, e);
+    }
+  }
   c->pending = s->ctrl != NULL;   /* the old inputs' forces go away */
   ap_drv_ctrl_free(s);
   s->ctrl = c;
   ((ap_scratch *)s->d->internal)->input_Q = c->tau;
+  ((ap_scratch *)s->d->internal)->setpoint_in = c->sp;
   ap_drv_pipeline_build(s);
   return AP_OK;
 }
@@ -106,7 +137,7 @@ int ap_sim_input_count(const ap_sim *s) { return s && s->ctrl ? s->ctrl->nu : 0;
 
 const char *ap_sim_input_name(const ap_sim *s, int j) {
   if (!s || !s->ctrl || j < 0 || j >= s->ctrl->nu) return NULL;
-  return s->m->speed_names[s->ctrl->speed[j]];
+  return s->ctrl->names[j];
 }
 
 int ap_sim_find_input(const ap_sim *s, const char *name) {
@@ -126,7 +157,9 @@ static int put(ap_sim *s, int j, double x, const char *who) {
     return ap_drv_fail(s, AP_ERR_NAN, "%s: input '%s' is %g at t = %.17g; an input must be "
                        "finite", who, ap_sim_input_name(s, j), x, s->t);
   if (x != c->u[j]) c->pending = 1;
-  c->u[j] = x, c->tau[c->speed[j]] = x;
+  c->u[j] = x;
+  if (c->speed[j] >= 0) c->tau[c->speed[j]] = x;
+  else c->sp[-1 - c->speed[j]] = x;
   return AP_OK;
 }
 
@@ -229,7 +262,8 @@ static int restart_if_pending(ap_sim *s, double t) {
   ap_sim_ctrl *c = s->ctrl;
   if (!c->pending) return AP_OK;
   c->pending = 0;
-  s->ev_stamp = -1;   /* the data's evaluation had the old inputs */
+  s->ev_inputs_old = 1;   /* the data's evaluation had the old inputs (its position stage holds) */
+  if (s->dae) s->ev_stamp = -1;
   if (!s->dae) {
     int rc = ap_step_jump(s->st, t, s->y);
     s->stats.restarts++;

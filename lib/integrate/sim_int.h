@@ -40,6 +40,9 @@ struct ap_sim {
   long ev_stamp;            /* pipeline stage count (d->cnt) right after that evaluation: the
                                data still holds it while the count is unchanged */
   double ev_t;              /* its time */
+  int ev_basis;             /* the data's basis (ap_basis) in that evaluation */
+  int ev_inputs_old;        /* 1: the inputs changed since (sim_input.c): its position stage
+                               still holds, its forces and derivatives do not */
   double growth_cap;        /* minimal mode: a stage whose basis growth exceeds this fails
                                (recoverably): the step went too far on a frozen partition */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */

@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "model/builder.h"
+#include "model/setpoint.h"
 #ifndef AP_SC_COMPLEX
 #include "model/tree_model.h"
 #endif
@@ -103,7 +104,7 @@ static int check_motor(ap_builder *b, const ap_mjoint *J, ap_meff *ef) {
 int ap_act_compile(ap_builder *b, const ap_bmodel *M, ap_meff *ef) {
   const ap_effect_def *d = &ef->def;
   const char *nm = ef->name;
-  ef->qcol = -1;
+  ef->qcol = -1, ef->index = (int)(ef - M->effs);
   if (d->joint < 0 || d->joint >= M->nj)
     FAIL("effect '%s': joint %d does not exist (%d joints)", nm, d->joint, M->nj);
   const ap_mjoint *J = &M->joints[M->joint_topo[d->joint]];
@@ -206,6 +207,10 @@ static int source(const ap_model *m, ap_data *d, const ap_meff *ef, double t, co
   const ap_effect_def *e = &ef->def;
   f[0] = e->value, f[1] = f[2] = 0.0;
   if (df) memset(df, 0, (size_t)(1 + e->ninputs) * sizeof *df);
+#ifndef AP_SC_COMPLEX
+  const double *in = ((const ap_scratch *)d->internal)->setpoint_in;
+  if (in && !isnan(in[ef->index])) return f[0] = in[ef->index], AP_OK;   /* an input, held */
+#endif
   if (e->state_fn) {
 #ifdef AP_SC_COMPLEX
     return state_cs(m, d, ef, t, q, v, f);
@@ -300,5 +305,46 @@ int ap_body_actuator_partials(const ap_model *m, ap_data *d, int effect, int *co
   }
   free(dq);
   return rc;
+}
+
+/* ---- set-points as inputs (setpoint.h) ------------------------------------------------------ */
+
+static const ap_meff *motor_of(const ap_model *m, int e) {
+  if (!m || !ap_model_is_body_model(m) || e < 0 || e >= ap_bm(m)->ne) return NULL;
+  const ap_meff *ef = &ap_bm(m)->effs[e];
+  return ef->def.kind == AP_EFFECT_MOTOR ? ef : NULL;
+}
+
+int ap_act_effect_count(const ap_model *m) {
+  return m && ap_model_is_body_model(m) ? ap_bm(m)->ne : 0;
+}
+
+double ap_act_setpoint_value(const ap_model *m, int e) {
+  const ap_meff *ef = motor_of(m, e);
+  return ef ? ef->def.value : 0.0;
+}
+
+int ap_act_find_setpoint(const ap_model *m, const char *name) {
+  static const char suffix[] = ".setpoint";
+  size_t len = name ? strlen(name) : 0, ls = sizeof suffix - 1;
+  if (len <= ls || strcmp(name + len - ls, suffix) != 0) return -1;
+  for (int e = 0; e < ap_act_effect_count(m); e++) {
+    const ap_meff *ef = motor_of(m, e);
+    if (ef && strlen(ef->name) == len - ls && strncmp(ef->name, name, len - ls) == 0)
+      return ef->def.value_fn || ef->def.state_fn ? -1 : e;
+  }
+  return -1;
+}
+
+int ap_act_setpoint_gain(const ap_model *m, ap_data *d, int e, int *col, double *g) {
+  const ap_meff *ef = motor_of(m, e);
+  if (!ef || !ap_core_data_ok(m, d)) return AP_ERR_ARG;
+  double f[3];
+  int sat, rc = source(m, d, ef, d->t, d->q, d->v, f, NULL);
+  if (rc != AP_OK) return rc;
+  (void)law(ef, d->q, d->v, f, &sat);
+  *col = ef->col;
+  *g = sat ? 0.0 : ef->def.motor == AP_MOTOR_RATE ? ef->def.kd : ef->def.kp;
+  return AP_OK;
 }
 #endif

@@ -147,6 +147,7 @@ typedef struct ap_meff {
   /* joint forces and motors (actuator.c), resolved at compile */
   int col;                    /* global index of the speed acted on */
   int qcol;                   /* AP_MOTOR_ANGLE: global index of its coordinate; else -1 */
+  int index;                  /* its index among the model's effects (setpoint.h) */
   int in_idx[AP_STATE_MAX_INPUTS];  /* state_fn inputs: global index in q or v ... */
   int in_v[AP_STATE_MAX_INPUTS];    /* ... of v when 1; AP_STATE_BODY: in_idx is body *
                                        AP_BODY_QTY_COUNT + quantity (body_qty.c) */

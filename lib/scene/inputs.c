@@ -5,7 +5,9 @@
  *
  * The same list is the linearizer's default inputs (the columns of B, when the linearize:
  * section has no inputs: of its own), so that a gain computed from the linearization applies
- * to a simulation's inputs one for one. Checked at load (each name a speed of the model,
+ * to a simulation's inputs one for one. A motor's set-point is an input too, named
+ * MOTOR.setpoint (the motor's rate, angle or position, which must be a number: its value until
+ * a controller changes it). Checked at load (each name a speed of the model,
  * none twice, "did you mean"); ap_scene_add_inputs declares them on a simulation, with the
  * values 0 until a controller or ap_sim_set_input changes them. */
 #include <stdio.h>
@@ -13,6 +15,7 @@
 #include <string.h>
 
 #include "appell/control.h"
+#include "model/setpoint.h"
 #include "scene/scene_int.h"
 
 int sc_inputs_check(sc_ctx *c, const sc_scene *s, const ap_model *m) {
@@ -28,11 +31,13 @@ int sc_inputs_check(sc_ctx *c, const sc_scene *s, const ap_model *m) {
     const sc_node *e = n->kids[i];
     int found = 0;
     for (int j = 0; e->kind == SC_SCALAR && j < ap_model_k(m); j++) found |= !strcmp(speeds[j], e->text);
+    found |= e->kind == SC_SCALAR && ap_act_find_setpoint(m, e->text) >= 0;
     if (e->kind != SC_SCALAR) rc = sc_err(c, e, "expected a speed name");
     else if (!found) {
       const char *near = ap_suggest(e->text, speeds, ap_model_k(m));
       rc = sc_err(c, e, "'%s' is not a speed of the model%s%s%s: an input is a generalized "
-                  "force on a speed", e->text, near ? " (did you mean '" : "", near ? near : "",
+                  "force on a speed, or MOTOR.setpoint of a motor whose set-point is a number",
+                  e->text, near ? " (did you mean '" : "", near ? near : "",
                   near ? "'?)" : "");
     }
     for (int j = 0; rc == AP_OK && j < i; j++)

@@ -124,7 +124,42 @@ def test_diff_drive_pure_pursuit():
     """From 0.3 m off the wavy road, the cross-track error stays below 5 mm after 10 s
     (measured 1.2 mm) and the robot moves on along it at about 0.5 m/s."""
     ex = example("diff_drive_pursuit")
-    res, err = ex.run(str(SCENES / "diff_drive_control.yaml"), 30.0, 0.01)
+    res, err = ex.run(str(SCENES / "diff_drive_servo.yaml"), 30.0, 0.01)
     assert err[0] > 0.25
     assert err[res.t >= 10].max() < 0.005
     assert res["chassis.x"][-1] > 12.0
+
+
+FLY = """
+name: fly
+bodies: {fly: {mass: 1, inertia: [0.1, 0.1, 0.2]}}
+joints: {fly: {kind: revolute, axis: z}}
+effects: {spin: {kind: motor, joint: fly, rate: 1, kd: 0.5}}
+initial: {fly: {rate: 1}}
+inputs: [spin.setpoint]
+simulation: {t_end: 2, rtol: 1e-10, atol: 1e-12}
+output: {interval: 0.05, channels: [coordinates, speeds]}
+"""
+
+
+def test_motor_setpoint_input():
+    """A rate motor's set-point as the input: it starts at the motor's rate; held by a
+    controller s_j = 3 - w_j / 2, the rate follows w_{j+1} = s_j + (w_j - s_j) exp(-kd T / I);
+    the linearizer's B for it is d(w')/ds = kd / I (an angle motor's: kp / I)."""
+    sim = appell.Simulation(appell.loads(FLY))
+    assert sim.inputs == {"spin.setpoint": 1.0}
+    res = sim.run(2.0, T, controller=lambda t, s: {"spin.setpoint": 3 - s["fly.angle_dot"] / 2},
+                  period=T)
+    w, E = 1.0, math.exp(-0.5 / 0.2 * T)
+    for j in range(1, 41):
+        sp = 3 - w / 2
+        w = sp + (w - sp) * E
+        assert res["fly.angle_dot"][j] == pytest.approx(w, abs=1e-8)
+    lin = appell.linearize(appell.loads(FLY), free=["fly.angle_dot"])
+    assert lin.input_names == ("spin.setpoint",)
+    assert lin.block(["fly.angle_dot"], matrix="B")[0, 0] == pytest.approx(0.5 / 0.2, rel=1e-14)
+    servo = FLY.replace("rate: 1, kd: 0.5", "angle: 0, kp: 4, kd: 0.5").replace("rate: 1}", "rate: 0}")
+    lin = appell.linearize(appell.loads(servo), about="equilibrium")
+    assert lin.block(["fly.angle_dot"], matrix="B")[0, 0] == pytest.approx(4 / 0.2, rel=1e-14)
+    with pytest.raises(appell.SceneError, match="MOTOR.setpoint"):
+        appell.loads(FLY.replace("[spin.setpoint]", "[spin.setpont]"))
