@@ -22,7 +22,8 @@
  * name the copy defines that the scene (or another instance) defines already is an error,
  * unless the scene wrote it without a value (`rear_wheel:`): the copy then takes that entry's
  * place, so the scene decides where in the order of elements (and of the state) it comes.
- * Runs after the --set overrides, so `--set instances.rl.parameters.y=0.5` works. The copies
+ * Runs after the --set overrides of parts and instances (`--set instances.rl.parameters.y=0.5`)
+ * and before the others, which may change what the copies define (scene.c). The copies
  * of all instances together are at most SC_MAX_NODES nodes (the reader's limit: a few lines
  * of instances of a large part must not grow without bound). */
 #include <ctype.h>
