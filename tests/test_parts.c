@@ -5,6 +5,8 @@
  *    (the part's file and line, and the instance), include cycles (the chain) and depth, a
  *    missing file, unknown parts, parameters and placeholders, a missing required value, a
  *    name defined twice. The files are written to a fresh temporary folder.
+ *  - Places: entries written without a value keep the order of the elements for the copies;
+ *    --set reaches the elements the copies define.
  *  - Kron: two copies of Hoffmann's two-rod pendulum (one part, instantiated twice) hung from
  *    O = (-d/2, 0) and D = (d/2, 0) in the y-z plane, their lower ends joined at B by a loop
  *    closure: a five-bar linkage with 2 degrees of freedom. The independent model here uses
@@ -151,6 +153,47 @@ static void test_good(void) {
   AP_CHECK(s->joints[0].def.parent_frame.pos[1] == 0.4);
   AP_CHECK(s->joints[1].def.parent_frame.pos[1] == -0.4);
   ap_scene_free(sc);
+}
+
+/* An entry written without a value keeps its place for the instance that defines it: the
+ * elements are built in the file's order (hub, l_disk, arm, r_disk), not with the copies last;
+ * an unfilled place is refused. A --set of an element an instance defines applies after the
+ * copy (it is the copy's value that changes); one of instances: before it. */
+static void test_places(void) {
+  write_file("places.yaml", "include: wheel.yaml\nbodies:\n  hub: {mass: 2, inertia: [1, 1, 1]}\n"
+             "  l_disk:\n  arm: {mass: 3, inertia: [1, 1, 1]}\n  r_disk: ~\n"
+             "joints:\n  hub: {kind: revolute}\n  l_disk:\n  arm: {kind: revolute}\n"
+             "instances:\n  l: {part: wheel, parameters: {need: 1, parent: hub}}\n"
+             "  r: {part: wheel, parameters: {need: 1, parent: arm}}\n");
+  char path[512], msg[1024];
+  snprintf(path, sizeof path, "%s/places.yaml", tmp);
+  const char *sets[] = {"bodies.r_disk.mass=5", "joints.l_disk.parent_frame.pos.1=0.5",
+                        "instances.r.parameters.r=0.25"};
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load(path, sets, 3, &sc, msg, sizeof msg);
+  if (rc) fprintf(stderr, "%s\n", msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  if (!sc) return;
+  static const char *const order[] = {"hub", "l_disk", "arm", "r_disk"};
+  AP_CHECK_EQ_INT(ap_scene_count(sc, AP_SCENE_BODIES), 4);
+  AP_CHECK_EQ_INT(ap_scene_count(sc, AP_SCENE_JOINTS), 4);
+  for (int i = 0; i < 4; i++) {
+    AP_CHECK(!strcmp(ap_scene_element_name(sc, AP_SCENE_BODIES, i), order[i]));
+    AP_CHECK(!strcmp(ap_scene_element_name(sc, AP_SCENE_JOINTS, i), i == 3 ? "r_disk" : order[i]));
+  }
+  const sc_scene *s = sc_scene_parsed(sc);
+  AP_CHECK(s->bodies[1].def.mass == 1 && s->bodies[3].def.mass == 5);
+  AP_CHECK(s->bodies[3].def.shape.radius == 0.25);
+  AP_CHECK(s->joints[1].def.parent_frame.pos[1] == 0.5);
+  AP_CHECK(s->joints[3].def.parent_frame.pos[1] == 0);
+  ap_scene_free(sc);
+  write_file("unfilled.yaml", "include: wheel.yaml\n"
+             "bodies:\n  hub: {mass: 2, inertia: [1, 1, 1]}\n  x_disk:\n"
+             "joints: {hub: {kind: revolute}}\n"
+             "instances:\n  l: {part: wheel, parameters: {need: 1, parent: hub}}\n");
+  expect("unfilled.yaml", NULL, "unfilled.yaml:4:10: bodies.x_disk", "expected a mapping");
+  expect("places.yaml", "bodies.m_disk.mass=5", "--set bodies.m_disk.mass=5",
+         "bodies has no body 'm_disk'");
 }
 
 /* ---- Kron: the closed chain against its two-coordinate model ---------------------------- */
@@ -377,6 +420,7 @@ int main(void) {
   AP_CHECK(mkdtemp(tmp) != NULL);
   test_errors();
   test_good();
+  test_places();
   test_kron_energy();
   test_kron_modes();
   char cmd[400];

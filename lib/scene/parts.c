@@ -19,8 +19,11 @@
  *
  * Every copied node keeps the line and column (and file) of the part's text and carries the
  * note "part 'P' as 'I' (FILE:LINE:COL of the instance)", so messages about it name both. A
- * name the copy defines that the scene (or another instance) defines already is an error.
- * Runs after the --set overrides, so `--set instances.rl.parameters.y=0.5` works. The copies
+ * name the copy defines that the scene (or another instance) defines already is an error,
+ * unless the scene wrote it without a value (`rear_wheel:`): the copy then takes that entry's
+ * place, so the scene decides where in the order of elements (and of the state) it comes.
+ * Runs after the --set overrides of parts and instances (`--set instances.rl.parameters.y=0.5`)
+ * and before the others, which may change what the copies define (scene.c). The copies
  * of all instances together are at most SC_MAX_NODES nodes (the reader's limit: a few lines
  * of instances of a large part must not grow without bound). */
 #include <ctype.h>
@@ -159,6 +162,12 @@ static sc_node *section(sc_ctx *c, sc_node *root, const char *name) {
   return s;
 }
 
+/* An entry written without a value (`rear_wheel:`) keeps its place in the order of its section
+ * for the instance that defines it: elements are built in the order of the file. */
+static int kept_place(const sc_node *v) {
+  return v->kind == SC_SCALAR && !v->quoted && (!v->text[0] || strcmp(v->text, "~") == 0);
+}
+
 static int add_entries(inst_ctx *x, sc_node *root, const char *name, const sc_node *src) {
   if (sc_expect(x->c, src, SC_MAP)) return AP_ERR_ARG;
   sc_node *dst = section(x->c, root, name);
@@ -172,7 +181,16 @@ static int add_entries(inst_ctx *x, sc_node *root, const char *name, const sc_no
     const sc_node *had = v ? sc_map_get(dst, k->text) : NULL;
     int rc = !v ? (x->c->status ? x->c->status : sc_nomem(x->c)) : AP_OK;
     for (int j = 0; had && j < dst->n; j++)
-      if (dst->kids[j] == had) had = dst->keys[j];
+      if (dst->kids[j] == had) {
+        if (kept_place(had)) {   /* the copy takes the place the scene kept for it */
+          sc_tree_free(dst->keys[j]), sc_tree_free(dst->kids[j]);
+          dst->keys[j] = k, dst->kids[j] = v;
+          k = v = NULL, had = NULL;
+          break;
+        }
+        had = dst->keys[j];
+      }
+    if (!k) continue;
     if (rc == AP_OK && had)
       rc = sc_err(x->c, k, "'%s' is defined twice: here and at %s:%d:%d%s%s", k->text,
                   had->file ? had->file : x->c->file, had->line, had->col,

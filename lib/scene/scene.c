@@ -74,6 +74,12 @@ static void stem(const char *file, char *out, size_t len) {
   ap_core_copy_name(out, len, whole[0] ? whole : "scene");   /* "..." when cut */
 }
 
+/* A --set of the parts: or instances: sections ("instances.rl.parameters.y=0.5"). */
+static int sets_parts(const char *set) {
+  size_t n = strcspn(set, ".[=");
+  return (n == 5 && strncmp(set, "parts", 5) == 0) || (n == 9 && strncmp(set, "instances", 9) == 0);
+}
+
 static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (sc_parse_scene(c, &sc->s) != AP_OK) return c->status;
   if (!sc->s.name) sc->s.name = sc->name;
@@ -118,8 +124,13 @@ int ap_scene_load_string(const char *text, size_t len, const char *name,
   if (sc->s.root && sc->s.root->kind != SC_MAP)
     sc_err(&c, sc->s.root, "a scene is a mapping of sections (bodies:, joints:, ...)");
   if (c.status == AP_OK) sc_include_expand(&c, sc->s.root, c.file, &sc->s.strings);
-  for (int i = 0; c.status == AP_OK && i < nsets; i++) sc_tree_set(&c, sc->s.root, sets[i]);
+  /* --set of parts and instances before they are copied, every other one after: it may
+   * change an element an instance defines (joints.front_wheel.parent_frame.pos.0=...) */
+  for (int i = 0; c.status == AP_OK && i < nsets; i++)
+    if (sets_parts(sets[i])) sc_tree_set(&c, sc->s.root, sets[i]);
   if (c.status == AP_OK) sc_parts_expand(&c, sc->s.root, &sc->s.strings);
+  for (int i = 0; c.status == AP_OK && i < nsets; i++)
+    if (!sets_parts(sets[i])) sc_tree_set(&c, sc->s.root, sets[i]);
   if (c.status == AP_OK) sc_params_read(&c, sc->s.root, &sc->s.params);
   if (c.status == AP_OK) load_parsed(&c, sc);
   if (c.status != AP_OK) {
