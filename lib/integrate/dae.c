@@ -38,15 +38,9 @@
  * 0.
  *
  * Scaling (measured: without it IDA's Newton iteration failed at rtol 1e-12 on every model with
- * a plane contact or a loop). The impulses are differential variables (IDASetId 1: their
- * derivatives appear in F) and are in the error test like q and v. The system in (q, v, Lambda,
- * M) has index 1, not 2: one differentiation of F_c and F_phi gives lambda = Lambda' and
- * mu = M' (index 2 belongs to the multipliers themselves, which are not variables here), so the
- * impulses' local error is of the order of q's and v's and BDF's error test and order selection
- * apply to it. Out of the error test (IDASetId 0 with IDASetSuppressAlg, as index-2 variables
- * are treated), IDA trapped itself at order 1 to 2 on 19 of 10 000 random models
- * (docs/testing.md; tests/scenes/difftest/dae_output_interval.yaml: 6 853 steps where 706 do
- * now). Each impulse is weighed by what it does to v or q: v moves by M dLambda with
+ * a plane contact or a loop). The impulses are algebraic (IDASetId 0) and out of the error test
+ * (IDASetSuppressAlg), as index-2 variables must be, but they still weigh in the Newton
+ * convergence test. Each is weighed by what it does to v or q: v moves by M dLambda with
  * M = g^-1 A_s^T, so the change of Lambda that moves v by dv along the constraint forces is
  * Pl dv with Pl = (A_s M)^-1 A_s (Pl M = I), and Lambda_c's tolerance is sum_i |Pl_ci| tol(v_i);
  * likewise M_r's is sum_i |Pm_ri| tol(q_i) with Pm = (Phi_s Phi_s^T)^-1 Phi_s. These do not
@@ -220,6 +214,7 @@ static int setup_ida(ap_dae *s, double t0, const ap_step_opts *o) {
        IDASetUserData(s->mem, s) == IDA_SUCCESS &&
        IDAWFtolerances(s->mem, ap_dae_weights) == IDA_SUCCESS &&
        IDASetId(s->mem, s->id) == IDA_SUCCESS &&
+       IDASetSuppressAlg(s->mem, SUNTRUE) == IDA_SUCCESS &&
        IDASetMaxNumSteps(s->mem, o->max_steps > 0 ? o->max_steps : 100000) == IDA_SUCCESS &&
        IDASetInitStep(s->mem, o->h_init) == IDA_SUCCESS;
   if (ok && o->h_max > 0) ok = IDASetMaxStep(s->mem, o->h_max) == IDA_SUCCESS;
@@ -277,7 +272,7 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
     memset(y1, 0, sizeof(double) * (size_t)s->ny);
     memcpy(y, y0, sizeof(double) * (size_t)nd);
     memcpy(y1, yp0, sizeof(double) * (size_t)nd);
-    for (int i = 0; i < s->ny; i++) id[i] = 1.0;   /* every variable is differential */
+    for (int i = 0; i < s->ny; i++) id[i] = i < nd ? 1.0 : 0.0;
     rc = initial_multipliers(s, t0);
     ok = rc == AP_OK && setup_ida(s, t0, o) && !ap_nvp_nomem(s->pool);
   }
