@@ -16,7 +16,10 @@
  * Then Q += sum_j f_j F_n,j and the Appell solve gives the same v'. For one contact 1 + u is
  * the Painleve indicator: with it <= 0 the sliding motion has no solution or two (Painleve's
  * paradox) and the evaluation stops, saying so; with several, I + U must have positive leading
- * minors (elimination without pivoting). A sphere has u = 0 (its friction has no moment about
+ * minors (elimination without pivoting). Active rows that repeat others (the two sideways rows
+ * of one axle) are left out of S (their share of the reactions is carried by the rows they
+ * repeat; v' is unchanged); a sliding contact's normal row that depends on the others is
+ * refused (its F_n is not unique). A sphere has u = 0 (its friction has no moment about
  * its centre along the normal). Cost: only while a contact slides; a model without modes has
  * an empty block and never calls this. Double build only. */
 #include <math.h>
