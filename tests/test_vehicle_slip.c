@@ -30,39 +30,9 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "scene_runner.h"
 
 #define G 9.81
-
-typedef struct runner {
-  ap_scene *sc;
-  ap_sim *sim;
-  double *x0;
-} runner;
-
-static int start(runner *r, const char *file, const char *const *sets, int nsets) {
-  char path[1200], msg[1024] = "";
-  memset(r, 0, sizeof *r);
-  snprintf(path, sizeof path, "%s/examples/scenes/%s", AP_SRCDIR, file);
-  int rc = ap_scene_load(path, sets, nsets, &r->sc, msg, sizeof msg);
-  if (rc != AP_OK) return printf("  %s: %s\n", file, msg), rc;
-  const ap_model *m = ap_scene_model(r->sc);
-  int n = ap_model_n(m);
-  ap_scene_run run;
-  ap_scene_get_run(r->sc, &run);
-  run.sim.rtol = 1e-12, run.sim.atol = 1e-14, run.sim.method = "dop853";
-  r->x0 = calloc((size_t)(n + ap_model_k(m)), sizeof *r->x0);
-  rc = ap_scene_initial_state(r->sc, r->x0, r->x0 + n, NULL, 0, msg, sizeof msg);
-  if (rc == AP_OK)
-    rc = ap_sim_create(m, &run.sim, run.t0, r->x0, r->x0 + n, &r->sim, msg, sizeof msg);
-  if (rc != AP_OK) printf("  %s: %s\n", file, msg);
-  return rc;
-}
-
-static void stop(runner *r) {
-  ap_sim_free(r->sim);
-  ap_scene_free(r->sc);
-  free(r->x0);
-}
 
 static const char *MODES[] = {"simulation.mode=minimal", "simulation.mode=projected"};
 
@@ -70,8 +40,8 @@ static const char *MODES[] = {"simulation.mode=minimal", "simulation.mode=projec
 static void test_skid(int im) {
   const double v0 = 1.0, muk = 0.6, ts = v0 / (muk * G);
   runner r;
-  AP_CHECK_EQ_INT(start(&r, "diff_drive_skid.yaml", &MODES[im], 1), AP_OK);
-  if (!r.sim) return stop(&r);
+  AP_CHECK_EQ_INT(runner_start(&r, "diff_drive_skid.yaml", &MODES[im], 1, 1e-12), AP_OK);
+  if (!r.sim) return runner_stop(&r);
   int slide = 1;
   for (int c = 0; c < 3; c++) slide &= ap_sim_contact_mode(r.sim, c) == 1;
   AP_CHECK(slide);
@@ -103,7 +73,7 @@ static void test_skid(int im) {
          q[0] - v0 * v0 / (2 * muk * G), roll);
   AP_CHECK(ne >= 1 && et < 1e-9);
   AP_CHECK(fabs(v[0]) < 1e-9 && fabs(q[0] - v0 * v0 / (2 * muk * G)) < 1e-9 && roll);
-  stop(&r);
+  runner_stop(&r);
 }
 
 /* A braking torque T per drive wheel: gentle (no slip, closed-form deceleration) or hard
@@ -112,8 +82,8 @@ static void test_brake(int im) {
   const double v0 = 1.0, T = 1.0, r_w = 0.1, Meff = 11.3 + 2 * 0.25 + 0.05;
   const double a = -2 * T / (r_w * Meff), t1 = 0.4;
   runner r;
-  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", &MODES[im], 1), AP_OK);
-  if (!r.sim) return stop(&r);
+  AP_CHECK_EQ_INT(runner_start(&r, "diff_drive_brake.yaml", &MODES[im], 1, 1e-12), AP_OK);
+  if (!r.sim) return runner_stop(&r);
   AP_CHECK_EQ_INT(ap_sim_advance(r.sim, t1), AP_OK);
   const double *q = ap_sim_q(r.sim), *v = ap_sim_v(r.sim);
   double ev = fabs(v[0] - (v0 + a * t1)), ex = fabs(q[0] - (v0 * t1 + 0.5 * a * t1 * t1));
@@ -124,16 +94,16 @@ static void test_brake(int im) {
          ap_sim_event_count(r.sim), roll);
   AP_CHECK(ev < 1e-9 && ex < 1e-9 && roll);
   AP_CHECK_EQ_INT(ap_sim_event_count(r.sim), 0);
-  stop(&r);
+  runner_stop(&r);
   const char *sets[] = {MODES[im], "effects.brake_l.torque=-20", "effects.brake_r.torque=-20"};
-  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 3), AP_OK);
-  if (!r.sim) return stop(&r);
+  AP_CHECK_EQ_INT(runner_start(&r, "diff_drive_brake.yaml", sets, 3, 1e-12), AP_OK);
+  if (!r.sim) return runner_stop(&r);
   int ml = ap_sim_contact_mode(r.sim, 0), mr = ap_sim_contact_mode(r.sim, 1);
   int mc = ap_sim_contact_mode(r.sim, 2);
   printf("  %s: T = 20 N m: modes at t0 %d %d %d (1 sliding, 2 airborne)\n", MODES[im] + 16,
          ml, mr, mc);
   AP_CHECK(ml == 1 && mr == 1 && mc == 2);
-  stop(&r);
+  runner_stop(&r);
 }
 
 /* Friction on a wheel under a planar chassis is refused (the contact row's multiplier there

@@ -96,23 +96,6 @@ void ap_cfr_slip(const ap_bmodel *M, double *S, const ap_mcon *c, const double *
 
 /* ---- small dense solves (column-major, n of a few dozen at most) --------------------------- */
 
-/* Cholesky A = L L^T in the lower triangle; -1 when not positive definite. */
-static int chol(int n, double *A) {
-  for (int j = 0; j < n; j++) {
-    double dj = A[j + (size_t)j * n];
-    for (int p = 0; p < j; p++) dj -= A[j + (size_t)p * n] * A[j + (size_t)p * n];
-    if (!(dj > 0)) return -1;
-    dj = sqrt(dj);
-    A[j + (size_t)j * n] = dj;
-    for (int i = j + 1; i < n; i++) {
-      double x = A[i + (size_t)j * n];
-      for (int p = 0; p < j; p++) x -= A[i + (size_t)p * n] * A[j + (size_t)p * n];
-      A[i + (size_t)j * n] = x / dj;
-    }
-  }
-  return 0;
-}
-
 static void chol_solve(int n, const double *L, double *x) {
   for (int i = 0; i < n; i++) {
     for (int p = 0; p < i; p++) x[i] -= L[i + (size_t)p * n] * x[p];
@@ -185,19 +168,22 @@ static int active_rows(const ap_bmodel *M, const double *S, fr_work *w) {
   return p;
 }
 
-/* Cholesky of S = A g^-1 A^T skipping the rows that repeat earlier ones (pivot <= 1e-12 of
- * their diagonal: a wheel's sideways row that repeats the other wheel's on one axle): such a
- * row gets a unit diagonal and no coupling, drop[j] = 1, and its entries of every right-hand
- * side are zeroed (zero_dropped) so that its multiplier is 0. The rows it repeats carry its
- * share: the accelerations do not change. Returns the first dropped row at or after `from`,
- * or -1. */
-static int chol_skip(int n, double *A, double *drop, int from) {
+/* Cholesky A = L L^T in the lower triangle, skipping the rows that repeat earlier ones (pivot
+ * <= rel = 1e-12 of their diagonal: a wheel's sideways row that repeats the other wheel's on one
+ * axle): such a row gets a unit diagonal and no coupling, drop[j] = 1, and its entries of every
+ * right-hand side are zeroed (zero_dropped) so that its multiplier is 0. The rows it repeats
+ * carry its share: the accelerations do not change. Returns the first dropped row at or after
+ * `from`, or -1. With drop NULL (the metric g, rel 0) the first such row is returned at
+ * once (not positive definite). */
+static int chol_skip(int n, double *A, double *drop, int from, double rel) {
   int first = -1;
   for (int j = 0; j < n; j++) {
     double dj = A[j + (size_t)j * n], d0 = dj;
     for (int p = 0; p < j; p++) dj -= A[j + (size_t)p * n] * A[j + (size_t)p * n];
-    drop[j] = !(dj > 1e-12 * d0);
-    if (drop[j]) {
+    int dep = !(dj > rel * d0);
+    if (dep && !drop) return j;
+    if (drop) drop[j] = dep;
+    if (dep) {
       if (j >= from && first < 0) first = j;
       for (int p = 0; p < j; p++) A[j + (size_t)p * n] = 0.0;
       for (int i = j; i < n; i++) A[i + (size_t)j * n] = 0.0;
@@ -234,7 +220,7 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
   const ap_bmodel *M = ap_bm(m);
   int k = M->k, na = w->na;
   memcpy(w->Lg, d->g, sizeof(double) * (size_t)k * k);
-  if (chol(k, w->Lg) != 0) {
+  if (chol_skip(k, w->Lg, NULL, 0, 0.0) >= 0) {
     AP_BM_MSG(d, "model '%s': sliding contacts: the metric g is not positive definite at "
               "t = %.17g", m->name, d->t);
     return AP_ERR_SINGULAR;
@@ -252,7 +238,7 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
     const ap_mcon *c = &M->cons[ci];
     np += c->fric >= 0 && ap_cfr_mode(M, ap_bm_scratch(d), c) == AP_CM_SLIDING;
   }
-  if (chol_skip(na, w->Sm, w->drop, na - np) >= 0) {
+  if (chol_skip(na, w->Sm, w->drop, na - np, 1e-12) >= 0) {
     AP_BM_MSG(d, "model '%s': sliding contacts: a sliding contact's normal row depends on the "
               "other %d active constraint rows at t = %.17g (the normal forces are not unique: "
               "statically indeterminate contacts)", m->name, na - 1, d->t);
