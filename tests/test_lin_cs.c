@@ -161,6 +161,8 @@ static const char *const refused[] = {
     "bowling_ball.yaml",        /* contact modes: sliding, then rolling: no steady state */
     "ball_drop_spin.yaml",      /* falling onto the floor */
     "ball_dome_liftoff.yaml",   /* rolling off the top of a dome */
+    "diff_drive_skid.yaml",     /* skidding with locked wheels: its contacts slide */
+    "diff_drive_brake.yaml",    /* braking: decelerating, no steady state */
     NULL};
 
 static int in(const char *const *list, const char *name) {

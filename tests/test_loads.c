@@ -19,6 +19,7 @@
 #include <appell/appell.h>
 
 #include "check.h"
+#include "scene_runner.h"
 
 #ifndef AP_SRCDIR
 #define AP_SRCDIR "."
@@ -33,36 +34,6 @@ typedef struct loads {
   ap_load_kind kind;
   int rc;
 } loads;
-
-typedef struct runner {
-  ap_scene *sc;
-  ap_sim *sim;
-  double *x0;
-} runner;
-
-static int start(runner *r, const char *file, const char *const *sets, int nsets) {
-  char path[1200], msg[1024] = "";
-  memset(r, 0, sizeof *r);
-  snprintf(path, sizeof path, "%s/examples/scenes/%s", AP_SRCDIR, file);
-  int rc = ap_scene_load(path, sets, nsets, &r->sc, msg, sizeof msg);
-  if (rc != AP_OK) return printf("  %s: %s\n", file, msg), rc;
-  const ap_model *m = ap_scene_model(r->sc);
-  int n = ap_model_n(m);
-  ap_scene_run run;
-  ap_scene_get_run(r->sc, &run);
-  r->x0 = calloc((size_t)(n + ap_model_k(m)), sizeof *r->x0);
-  rc = ap_scene_initial_state(r->sc, r->x0, r->x0 + n, NULL, 0, msg, sizeof msg);
-  if (rc == AP_OK)
-    rc = ap_sim_create(m, &run.sim, run.t0, r->x0, r->x0 + n, &r->sim, msg, sizeof msg);
-  if (rc != AP_OK) printf("  %s: %s\n", file, msg);
-  return rc;
-}
-
-static void stop(runner *r) {
-  ap_sim_free(r->sim);
-  ap_scene_free(r->sc);
-  free(r->x0);
-}
 
 /* The normal loads of the rolling contacts at the simulation's state. */
 static loads get_loads(runner *r) {
@@ -106,7 +77,7 @@ static const char *const motors_rest[] = {"effects.motor_l.rate=0", "effects.mot
  * pitch moment (AP_LOAD_JOINT). */
 static void test_two_wheels(const char *file, const char *const *sets) {
   runner r;
-  AP_CHECK_EQ_INT(start(&r, file, sets, 2), AP_OK);
+  AP_CHECK_EQ_INT(runner_start(&r, file, sets, 2, 0), AP_OK);
   loads L = get_loads(&r);
   double W = 11.0 * G;
   AP_CHECK_EQ_INT(L.rc, AP_OK);
@@ -117,18 +88,18 @@ static void test_two_wheels(const char *file, const char *const *sets) {
   printf("  %-34s %.12g %.12g N (m g / 2 = %.12g), roll moment %.1e N m\n", file, L.N[0],
          L.N[1], W / 2, Mx);
   AP_CHECK_NEAR(F, W, 1e-12 * W);
-  stop(&r);
+  runner_stop(&r);
 }
 
 /* The loads at rest of a scene in one chassis form (1: free), with n contacts of kind. */
 static loads rest_loads(const char *file, int form, int n, ap_load_kind kind) {
   runner r;
-  AP_CHECK_EQ_INT(start(&r, file, form ? rest_free : rest_sets, 2 + form), AP_OK);
+  AP_CHECK_EQ_INT(runner_start(&r, file, form ? rest_free : rest_sets, 2 + form, 0), AP_OK);
   loads L = get_loads(&r);
   AP_CHECK_EQ_INT(L.rc, AP_OK);
   AP_CHECK_EQ_INT(L.n, n);
   AP_CHECK_EQ_INT((int)L.kind, kind);
-  stop(&r);
+  runner_stop(&r);
   return L;
 }
 
@@ -168,7 +139,7 @@ static void test_suspension(void) {
   runner r;
   double front = (4.466666666666667 + 1.5) * G, rear = (5.833333333333333 + 1.5) * G;
   double W = 26.6 * G;
-  AP_CHECK_EQ_INT(start(&r, "car_suspension.yaml", NULL, 0), AP_OK);
+  AP_CHECK_EQ_INT(runner_start(&r, "car_suspension.yaml", NULL, 0, 0), AP_OK);
   for (int pass = 0; pass < 2; pass++) {
     if (pass) AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 1.0), AP_OK);
     loads L = get_loads(&r);
@@ -182,15 +153,15 @@ static void test_suspension(void) {
     check_statics("car_suspension", &L, W, (20.0 * 0.5 + 0.6 * 1.2 + 3.0 * 1.2) / 26.6, 0.0,
                   pass ? 1e-11 : 1e-13);
   }
-  stop(&r);
+  runner_stop(&r);
 }
 
 /* The same motion on a planar and on a free chassis: the same loads at every output. */
 static void test_forms_agree(const char *file, double W) {
   static const char *const free_set[] = {"joints.chassis.kind=free"};
   runner a, b;
-  AP_CHECK_EQ_INT(start(&a, file, NULL, 0), AP_OK);
-  AP_CHECK_EQ_INT(start(&b, file, free_set, 1), AP_OK);
+  AP_CHECK_EQ_INT(runner_start(&a, file, NULL, 0, 0), AP_OK);
+  AP_CHECK_EQ_INT(runner_start(&b, file, free_set, 1, 0), AP_OK);
   double worst = 0.0;
   for (int i = 0; i <= 40 && a.sim && b.sim; i++) {
     double t = 0.05 * i;
@@ -203,7 +174,7 @@ static void test_forms_agree(const char *file, double W) {
   printf("  %-34s planar vs free chassis over 2 s: loads differ by %.2e N (m g %.4g N)\n", file,
          worst, W);
   AP_CHECK_LE(worst, 1e-9 * W);
-  stop(&a), stop(&b);
+  runner_stop(&a), runner_stop(&b);
 }
 
 int main(void) {

@@ -16,7 +16,10 @@
  * Then Q += sum_j f_j F_n,j and the Appell solve gives the same v'. For one contact 1 + u is
  * the Painleve indicator: with it <= 0 the sliding motion has no solution or two (Painleve's
  * paradox) and the evaluation stops, saying so; with several, I + U must have positive leading
- * minors (elimination without pivoting). A sphere has u = 0 (its friction has no moment about
+ * minors (elimination without pivoting). Active rows that repeat others (the two sideways rows
+ * of one axle) are left out of S (their share of the reactions is carried by the rows they
+ * repeat; v' is unchanged); a sliding contact's normal row that depends on the others is
+ * refused (its F_n is not unique). A sphere has u = 0 (its friction has no moment about
  * its centre along the normal). Cost: only while a contact slides; a model without modes has
  * an empty block and never calls this. Double build only. */
 #include <math.h>
@@ -34,7 +37,7 @@ static double *block(const ap_bmodel *M, const double *S, const ap_mcon *c) {
 size_t ap_cfr_scratch_size(const ap_bmodel *M) {
   if (!M->nfric) return 0;
   size_t k = (size_t)M->k, b = (size_t)M->b, nf = (size_t)M->nfric;
-  return nf * fr_stride(M) + k * k + k * b + b * b + 2 * k + 3 * b + b * nf + k * nf +
+  return nf * fr_stride(M) + k * k + k * b + b * b + 2 * k + 4 * b + b * nf + k * nf +
          nf * nf + 2 * nf;
 }
 
@@ -93,23 +96,6 @@ void ap_cfr_slip(const ap_bmodel *M, double *S, const ap_mcon *c, const double *
 
 /* ---- small dense solves (column-major, n of a few dozen at most) --------------------------- */
 
-/* Cholesky A = L L^T in the lower triangle; -1 when not positive definite. */
-static int chol(int n, double *A) {
-  for (int j = 0; j < n; j++) {
-    double dj = A[j + (size_t)j * n];
-    for (int p = 0; p < j; p++) dj -= A[j + (size_t)p * n] * A[j + (size_t)p * n];
-    if (!(dj > 0)) return -1;
-    dj = sqrt(dj);
-    A[j + (size_t)j * n] = dj;
-    for (int i = j + 1; i < n; i++) {
-      double x = A[i + (size_t)j * n];
-      for (int p = 0; p < j; p++) x -= A[i + (size_t)p * n] * A[j + (size_t)p * n];
-      A[i + (size_t)j * n] = x / dj;
-    }
-  }
-  return 0;
-}
-
 static void chol_solve(int n, const double *L, double *x) {
   for (int i = 0; i < n; i++) {
     for (int p = 0; p < i; p++) x[i] -= L[i + (size_t)p * n] * x[p];
@@ -145,7 +131,7 @@ static double solve_nopivot(int n, double *Mx, double *y) {
 /* ---- the sliding contacts' forces ------------------------------------------------------------ */
 
 typedef struct fr_work {
-  double *Lg, *X, *Sm, *y, *z, *rhs, *lam0, *U, *F, *Mp, *lamN, *act, *nidx;
+  double *Lg, *X, *Sm, *y, *z, *rhs, *lam0, *U, *F, *Mp, *lamN, *act, *nidx, *drop;
   int na;
 } fr_work;
 
@@ -156,24 +142,68 @@ static fr_work carve(const ap_bmodel *M, double *S) {
   w.X = w.Lg + k * k, w.Sm = w.X + k * b, w.y = w.Sm + b * b, w.z = w.y + k;
   w.rhs = w.z + k, w.lam0 = w.rhs + b, w.act = w.lam0 + b, w.U = w.act + b;
   w.F = w.U + b * nf, w.Mp = w.F + k * nf, w.lamN = w.Mp + nf * nf, w.nidx = w.lamN + nf;
+  w.drop = w.nidx + nf;
   w.na = 0;
   return w;
 }
 
-/* The active rows (not dropped by a mode) into w->act; the normal row of sliding contact j
- * (in the order of M->cons) at w->nidx[j]; returns the number of sliding contacts. */
+/* The active rows (not dropped by a mode) into w->act, the sliding contacts' normal rows last
+ * (so that a row that repeats others is dropped before them, see frictionless); the normal row
+ * of sliding contact j (in the order of M->cons) at w->nidx[j]; returns the number of sliding
+ * contacts. */
 static int active_rows(const ap_bmodel *M, const double *S, fr_work *w) {
   int p = 0;
-  for (int ci = 0; ci < M->nc; ci++) {
-    const ap_mcon *c = &M->cons[ci];
-    int sliding = c->fric >= 0 && ap_cfr_mode(M, S, c) == AP_CM_SLIDING;
-    for (int r = 0; r < c->nrows; r++) {
-      if (c->fric >= 0 && dropped(M, S, c, r)) continue;
-      if (sliding && r == c->hrow) w->nidx[p++] = w->na;
-      w->act[w->na++] = c->row + r;
+  for (int pass = 0; pass < 2; pass++)
+    for (int ci = 0; ci < M->nc; ci++) {
+      const ap_mcon *c = &M->cons[ci];
+      int sliding = c->fric >= 0 && ap_cfr_mode(M, S, c) == AP_CM_SLIDING;
+      for (int r = 0; r < c->nrows; r++) {
+        if (c->fric >= 0 && dropped(M, S, c, r)) continue;
+        int normal = sliding && r == c->hrow;
+        if (normal != pass) continue;
+        if (normal) w->nidx[p++] = w->na;
+        w->act[w->na++] = c->row + r;
+      }
+    }
+  return p;
+}
+
+/* Cholesky A = L L^T in the lower triangle, skipping the rows that repeat earlier ones (pivot
+ * <= rel = 1e-12 of their diagonal: a wheel's sideways row that repeats the other wheel's on one
+ * axle): such a row gets a unit diagonal and no coupling, drop[j] = 1, and its entries of every
+ * right-hand side are zeroed (zero_dropped) so that its multiplier is 0. The rows it repeats
+ * carry its share: the accelerations do not change. Returns the first dropped row at or after
+ * `from`, or -1. With drop NULL (the metric g, rel 0) the first such row is returned at
+ * once (not positive definite). */
+static int chol_skip(int n, double *A, double *drop, int from, double rel) {
+  int first = -1;
+  for (int j = 0; j < n; j++) {
+    double dj = A[j + (size_t)j * n], d0 = dj;
+    for (int p = 0; p < j; p++) dj -= A[j + (size_t)p * n] * A[j + (size_t)p * n];
+    int dep = !(dj > rel * d0);
+    if (dep && !drop) return j;
+    if (drop) drop[j] = dep;
+    if (dep) {
+      if (j >= from && first < 0) first = j;
+      for (int p = 0; p < j; p++) A[j + (size_t)p * n] = 0.0;
+      for (int i = j; i < n; i++) A[i + (size_t)j * n] = 0.0;
+      A[j + (size_t)j * n] = 1.0;
+      continue;
+    }
+    dj = sqrt(dj);
+    A[j + (size_t)j * n] = dj;
+    for (int i = j + 1; i < n; i++) {
+      double x = A[i + (size_t)j * n];
+      for (int p = 0; p < j; p++) x -= A[i + (size_t)p * n] * A[j + (size_t)p * n];
+      A[i + (size_t)j * n] = x / dj;
     }
   }
-  return p;
+  return first;
+}
+
+static void zero_dropped(const fr_work *w, double *x) {
+  for (int a = 0; a < w->na; a++)
+    if (w->drop[a] != 0.0) x[a] = 0.0;
 }
 
 /* Row a of the active rows of A dotted with x (k). */
@@ -190,7 +220,7 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
   const ap_bmodel *M = ap_bm(m);
   int k = M->k, na = w->na;
   memcpy(w->Lg, d->g, sizeof(double) * (size_t)k * k);
-  if (chol(k, w->Lg) != 0) {
+  if (chol_skip(k, w->Lg, NULL, 0, 0.0) >= 0) {
     AP_BM_MSG(d, "model '%s': sliding contacts: the metric g is not positive definite at "
               "t = %.17g", m->name, d->t);
     return AP_ERR_SINGULAR;
@@ -203,15 +233,22 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
   for (int a = 0; a < na; a++)
     for (int c = 0; c < na; c++)
       w->Sm[a + (size_t)c * na] = arow_dot(M, d, w, a, w->X + (size_t)c * k);
-  if (chol(na, w->Sm) != 0) {
-    AP_BM_MSG(d, "model '%s': sliding contacts: the %d active constraint rows are dependent at "
-              "t = %.17g (the normal forces are not unique)", m->name, na, d->t);
+  int np = 0;
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    np += c->fric >= 0 && ap_cfr_mode(M, ap_bm_scratch(d), c) == AP_CM_SLIDING;
+  }
+  if (chol_skip(na, w->Sm, w->drop, na - np, 1e-12) >= 0) {
+    AP_BM_MSG(d, "model '%s': sliding contacts: a sliding contact's normal row depends on the "
+              "other %d active constraint rows at t = %.17g (the normal forces are not unique: "
+              "statically indeterminate contacts)", m->name, na - 1, d->t);
     return AP_ERR_SINGULAR;
   }
   for (int j = 0; j < k; j++) w->y[j] = d->Q[j] - d->h[j];
   chol_solve(k, w->Lg, w->y);
   for (int a = 0; a < na; a++)
     w->lam0[a] = d->gamma[(int)w->act[a]] - arow_dot(M, d, w, a, w->y);
+  zero_dropped(w, w->lam0);
   chol_solve(na, w->Sm, w->lam0);
   return AP_OK;
 }
@@ -232,6 +269,7 @@ static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c,
   memcpy(w->z, F, sizeof(double) * (size_t)k);
   chol_solve(k, w->Lg, w->z);
   for (int a = 0; a < w->na; a++) U[a] = arow_dot(M, d, w, a, w->z);
+  zero_dropped(w, U);
   chol_solve(w->na, w->Sm, U);
 }
 
