@@ -24,10 +24,15 @@
 #include "appell/accuracy.h"
 #include "integrate/sim_int.h"
 
+/* Made at creation and made again with the stepper when a contact-mode switch changes the
+ * number of free speeds: the coordinates' weights (the first n, set by
+ * ap_sim_set_uncontrolled) are kept, the speeds' are 1. */
 int ap_drv_weights_create(ap_sim *s, size_t ny) {
-  s->wt = malloc(sizeof(double) * (ny ? ny : 1));
-  if (!s->wt) return AP_ERR_NOMEM;
-  for (size_t i = 0; i < ny; i++) s->wt[i] = 1.0;
+  double *w = malloc(sizeof(double) * (ny ? ny : 1));
+  if (!w) return AP_ERR_NOMEM;
+  for (size_t i = 0; i < ny; i++) w[i] = s->wt && i < (size_t)s->n ? s->wt[i] : 1.0;
+  free(s->wt);
+  s->wt = w;
   return AP_OK;
 }
 
