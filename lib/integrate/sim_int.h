@@ -131,8 +131,15 @@ void ap_drv_events_free(ap_sim *s);
 /* The error weights s->wt, all 1 (free_coords.c). */
 int ap_drv_weights_create(ap_sim *s, size_t ny);
 /* Restart the stepper (or IDA) at (t, q, v) given as coordinates and speeds: q onto its
- * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim.c). */
+ * manifold, v onto the constraints nearest in g, the mode's state rebuilt (sim_restart.c). */
 int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v);
+/* sim_restart.c: the state put on the constraints at creation and restart, the stepper or IDA
+ * made for it. */
+int ap_drv_consistent_coordinates(ap_sim *s, double t0, const double *q0, double *q);
+int ap_drv_consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0,
+                              int refuse);
+int ap_drv_setup_dae(ap_sim *s);
+int ap_drv_make_stepper(ap_sim *s, double t0);
 /* Contact modes (contact_modes.c): the initial modes from (t0, q0, v0) before the state is put
  * on the constraints, their switch events once the stepper exists, the stage that keeps the
  * slip directions after each step, and freeing. Nothing when the model has no contact
