@@ -39,6 +39,11 @@ extern "C" {
  * derivative at t. Returns 0 = ok, > 0 = recoverable (retry with a smaller step), < 0 = stop. */
 typedef int (*ap_time_fn)(double t, double f[3], void *user);
 
+/* A fixed ground height field z = h(x, y) (m, world): fill h[0] = h, h[1] = dh/dx,
+ * h[2] = dh/dy, h[3] = d2h/dx2, h[4] = d2h/dxdy, h[5] = d2h/dy2 at the world point (x, y) (m).
+ * Returns 0 = ok, non-zero when h is not defined there (the evaluation stops with a message). */
+typedef int (*ap_height_fn)(double x, double y, double h[6], void *user);
+
 /* A force (N, world axes) and torque (N m, world axes) at time t, for an applied effect.
  * Both arrays are zeroed before the call. Return codes as above. */
 typedef int (*ap_wrench_fn)(double t, double force[3], double torque[3], void *user);
@@ -259,6 +264,11 @@ typedef struct ap_ground_motion {
                               on a plane-contact joint, rolling; default 0 (a plane) */
   double sphere_center[3]; /* (m, world); default 0 */
   int inside;              /* 1: roll inside the sphere; default 0 */
+  ap_height_fn height_fn;  /* non-NULL: the ground is instead the fixed height field
+                              z = h(x, y), rolled on by a body that is not on a plane-contact
+                              joint (rolling or the wheel knife edge; no friction modes); the
+                              contact point is the closest point, found by Newton; default NULL */
+  void *height_user;       /* passed to height_fn; default NULL */
 } ap_ground_motion;
 
 typedef struct ap_constraint_def {

@@ -50,10 +50,14 @@ static ap_sc tangents(const ap_sc *n, ap_sc *t1, ap_sc *t2) {
 /* The ground's normal n and tangents t1, t2 (t1 x t2 = n) in this build's scalar at the body
  * origin o: the constants e_z, e_x, e_y for the plane z = 0, copies of the constraint's for a
  * tilted plane, n = gside (o - gc) / |o - gc| on a sphere (*D = |o - gc|); into gf (9). */
-static void ground_frame(const ap_mcon *c, const ap_sc *o, ap_sc *gf, const ap_sc **n,
-                         const ap_sc **t1, const ap_sc **t2, ap_sc *D) {
+static void ground_frame(const ap_mcon *c, const ap_sc *o, const kwheel *W, ap_sc *gf,
+                         const ap_sc **n, const ap_sc **t1, const ap_sc **t2, ap_sc *D) {
   *n = EZ, *t1 = EX, *t2 = EY;
   if (!c->plane) return;
+  if (c->plane == 3) {   /* a height field: the frame at the ground point (heightfield.c) */
+    *n = W->hf + HF_N, *t1 = W->hf + HF_T1, *t2 = W->hf + HF_T2;
+    return;
+  }
   *n = gf, *t1 = gf + 3, *t2 = gf + 6;
   if (c->plane == 1) {
     v3_copy_d(c->gn, gf), v3_copy_d(c->gt1, gf + 3), v3_copy_d(c->gt2, gf + 6);
@@ -76,7 +80,7 @@ kwheel ap_contact_geom(const ap_bmodel *M, ap_sc *S, const ap_mcon *c) {
     return W;
   }
   kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);
-  kwheel W = {J.u, J.cb, J.H, J.rc, J.track};
+  kwheel W = {J.u, J.cb, J.H, J.rc, J.track, NULL};
   return W;
 }
 
@@ -92,10 +96,19 @@ int ap_contact_position(const ap_model *m, ap_data *d, double t, ap_sc *S) {
     kwheel W = ap_contact_geom(M, S, c);
     ap_sc sigma;
     double flat;
+    if (c->plane == 3) {   /* a height field: Newton on the closest point (heightfield.c) */
+#ifdef AP_SC_COMPLEX
+      return AP_ERR_UNSUPPORTED;   /* refused earlier by ap_bm_cs_blocker */
+#else
+      int rc = ap_hf_position(m, d, t, S, c);
+      if (rc != AP_OK) return rc;
+      continue;
+#endif
+    }
     if (c->plane) {   /* u = -R^T n */
       ap_sc gf[9];
       const ap_sc *gn, *t1, *t2;
-      ground_frame(c, C.o, gf, &gn, &t1, &t2, NULL);
+      ground_frame(c, C.o, &W, gf, &gn, &t1, &t2, NULL);
       for (int i = 0; i < 3; i++) W.u[i] = -v3_dot(C.R + 3 * i, gn);
     } else
       W.u[0] = -C.R[2], W.u[1] = -C.R[5], W.u[2] = -C.R[8];
@@ -122,9 +135,12 @@ static ap_sc contact_hol_row(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_
   if (c->plane) {   /* the gap n . x - offset; on a sphere n . (x - gc) - gside grad */
     ap_sc gf[9];
     const ap_sc *gn, *t1, *t2;
-    ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &t1, &t2, NULL);
+    ground_frame(c, ap_kin_body(M, S, c->def.body).o, &W, gf, &gn, &t1, &t2, NULL);
     for (int col = 0; col < M->K1; col++) row[col] = v3_dot(JP + 3 * col, gn);
     if (c->plane == 1) return v3_dot_d(x, c->gn) - c->goff;
+#ifndef AP_SC_COMPLEX
+    if (c->plane == 3) return ap_hf_gap(W.hf, x);
+#endif
     ap_sc g = -c->gside * c->grad;
     for (int i = 0; i < 3; i++) g += gn[i] * (x[i] - c->gc[i]);
     return g;
@@ -168,7 +184,7 @@ static void plane_rows(const ap_bmodel *M, ap_sc *S, const ap_mcon *c, ap_sc *A,
   kwheel W = ap_contact_geom(M, S, c);
   ap_sc *JP = S + M->off_tmp, x[3], n[3], gf[9];
   const ap_sc *gn, *t1, *t2;
-  ground_frame(c, C.o, gf, &gn, &t1, &t2, NULL);
+  ground_frame(c, C.o, &W, gf, &gn, &t1, &t2, NULL);
   ap_kin_point(M, S, c->def.body, W.cb, x, NULL, JP);
   if (c->def.kind == AP_CON_ROLLING) {
     put_row3(M, A, a0, c->row, t1, JP, 0.0);
@@ -253,7 +269,11 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   kbody C = ap_kin_body(M, S, c->def.body);
   ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9], D = 1.0;
   const ap_sc *gn = EZ, *t1 = EX, *t2 = EY;
-  if (c->plane) ground_frame(c, C.o, gf, &gn, &t1, &t2, &D);
+#ifndef AP_SC_COMPLEX
+  if (c->plane == 3) return ap_hf_gamma(M, S, c, gamma);
+#endif
+  kwheel W = ap_contact_geom(M, S, c);
+  if (c->plane) ground_frame(c, C.o, &W, gf, &gn, &t1, &t2, &D);
   if (c->plane == 2) return sphere_gamma(M, S, c, &C, gn, t1, t2, D, gamma);
   contact_motion(M, S, c, surface, gn, vP, aP, x, xd);
   if (c->plane) return plane_gamma(c, &C, gn, t1, t2, vP, aP, gamma);
@@ -347,10 +367,23 @@ static int ground_sphere(ap_builder *b, const char *nm, ap_mcon *c) {
   return AP_OK;
 }
 
+/* A height field z = h(x, y) (c->plane = 3; heightfield.c): fixed, alone. */
+static int ground_height(ap_builder *b, const char *nm, ap_mcon *c) {
+  const ap_ground_motion *g = &c->def.ground;
+  if (g->kind != AP_GROUND_FIXED || g->sphere_radius != 0.0 || v3_norm(g->normal) != 0.0 ||
+      g->offset != 0.0)
+    FAIL("constraint '%s': a height-field ground is fixed and alone: no ground motion (kind %d), "
+         "sphere (radius %g), normal or offset (%g)", nm, (int)g->kind, g->sphere_radius,
+         g->offset);
+  c->plane = 3;
+  return AP_OK;
+}
+
 /* The ground plane n . p = offset: c->plane, gn, gt1 = e_y x n / |.| (e_x for n = e_z; from
  * e_x when n is along e_y), gt2 = n x gt1. A tilted plane cannot move. */
 static int ground_plane(ap_builder *b, const char *nm, ap_mcon *c) {
   const ap_ground_motion *g = &c->def.ground;
+  if (g->height_fn) return ground_height(b, nm, c);
   if (g->sphere_radius != 0.0) return ground_sphere(b, nm, c);
   double nn = v3_norm(g->normal), ey[3] = {0, 1, 0}, ex[3] = {1, 0, 0};
   if (nn == 0.0 && g->offset == 0.0) return AP_OK;
@@ -412,8 +445,12 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
   if (c->plane && J->kind == AP_JOINT_PLANE_CONTACT)
     FAIL("constraint '%s': body '%s' is on a plane-contact joint, which rolls on z = 0 only; "
          "for this ground (%s) put the body on a free joint (or a wheel on its axle)", nm,
-         B->name, c->plane == 2 ? "a sphere" : "a tilted or raised plane");
+         B->name, c->plane == 3 ? "a height field" : c->plane == 2 ? "a sphere" :
+         "a tilted or raised plane");
   int modes = d->mu >= 0 || d->unilateral == 1 || isnan(d->mu);   /* NaN: refused below */
+  if (modes && c->plane == 3)
+    FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) are not available on a "
+         "height-field ground (it is bilateral and perfectly rough)", nm, d->mu, d->unilateral);
   if (modes && (knife || J->kind == AP_JOINT_PLANE_CONTACT))
     FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) need a rolling contact "
          "of a body that is not on a plane-contact joint (a free body, a wheel on its axle): "
@@ -456,7 +493,8 @@ static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
                           double *F) {
   double gf[9];
   const double *gn, *t1, *t2;
-  ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &t1, &t2, NULL);
+  kwheel W = ap_contact_geom(M, S, c);
+  ground_frame(c, ap_kin_body(M, S, c->def.body).o, &W, gf, &gn, &t1, &t2, NULL);
   if (c->def.kind == AP_CON_ROLLING) {
     v3_axpy(lam[0], t1, F), v3_axpy(lam[1], t2, F);
   } else {
@@ -517,7 +555,8 @@ void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n
                       double *t2) {
   double gf[9];
   const double *gn, *a, *b;
-  ground_frame(c, ap_kin_body(M, S, c->def.body).o, gf, &gn, &a, &b, NULL);
+  kwheel W = ap_contact_geom(M, S, c);
+  ground_frame(c, ap_kin_body(M, S, c->def.body).o, &W, gf, &gn, &a, &b, NULL);
   v3_copy(gn, n), v3_copy(a, t1), v3_copy(b, t2);
 }
 #endif

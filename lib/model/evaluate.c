@@ -24,7 +24,11 @@
 int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len) {
   const ap_bmodel *M = ap_bm(m);
   for (int ci = 0; ci < M->nc; ci++)
-    if (M->cons[ci].kind->no_cs) {
+    if (M->cons[ci].plane == 3) {
+      snprintf(msg, len, "constraint '%s' rolls on a height field (z = h(x, y), a C function of "
+               "doubles)", M->cons[ci].name);
+      return -1;
+    } else if (M->cons[ci].kind->no_cs) {
       snprintf(msg, len, "constraint '%s' is %s", M->cons[ci].name, M->cons[ci].kind->no_cs);
       return -1;
     }

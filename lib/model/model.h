@@ -130,7 +130,8 @@ typedef struct ap_mcon {
   int plane;                  /* contacts: 1 when the ground plane is not z = 0 (an incline:
                                  gn . x = goff, tangents gt1, gt2 with gt1 x gt2 = gn); 2 on a
                                  fixed sphere (centre gc, radius grad, gside +1 outside, -1
-                                 inside: the normal gside (o - gc) / |o - gc|) */
+                                 inside: the normal gside (o - gc) / |o - gc|); 3 on a height
+                                 field (def.ground.height_fn; heightfield.c) */
   double gn[3], gt1[3], gt2[3], goff, gc[3], grad;
   int gside;
   int fric;                   /* rolling with contact modes (def.mu or def.unilateral): index of
@@ -192,7 +193,11 @@ typedef struct ap_bmodel {
 /* A body: R (3 x 3), o, Iw (3 x 3), R com, w, vo, al, ao; then Jw, Jo, Jc (3 x K1 each). */
 #define KBODY_FIELDS(X) X(R, 9) X(o, 3) X(Iw, 9) X(rcom, 3) X(w, 3) X(vo, 3) X(al, 3) X(ao, 3)
 /* A wheel contact's geometry: u, cb, H (3 x 3), rc, track (3 + 1 + 1). */
-#define KWHEEL_FIELDS(X) X(u, 3) X(cb, 3) X(H, 9) X(rc, 3) X(track, 5)
+#define KWHEEL_FIELDS(X) X(u, 3) X(cb, 3) X(H, 9) X(rc, 3) X(track, 5) X(hf, HF_STRIDE)
+/* A height-field contact's ground point and frame (heightfield.c): p (x, y), whether set, h,
+ * h_x, h_y, h_xx, h_xy, h_yy, n, t1, t2, dF/dp (2 x 2, column-major), |N|. */
+enum { HF_P = 0, HF_SET = 2, HF_H = 3, HF_GRAD = 4, HF_HESS = 6, HF_N = 9, HF_T1 = 12,
+       HF_T2 = 15, HF_J = 18, HF_NN = 22, HF_STRIDE = 23 };
 
 #define KJ_ENUM(f, c) KJ_##f, KJ_END_##f = KJ_##f + (c) - 1,
 #define KB_ENUM(f, c) KB_##f, KB_END_##f = KB_##f + (c) - 1,
@@ -230,6 +235,7 @@ typedef struct kwheel {
   ap_sc *u, *cb, *H, *rc;     /* u = -R^T e_z (body), contact point c_b = grad sigma(u) (body),
                                  Hessian of sigma (body), contact vector R c_b (world) */
   ap_sc *track;               /* disk, torus: as kjoint.track (wheel blocks only) */
+  ap_sc *hf;                  /* height field: ground point and frame (HF_*; wheel blocks) */
 } kwheel;
 
 /* Each view has exactly its table's fields (kbody: and the three Jacobians). */
@@ -471,6 +477,12 @@ double ap_eff_potential(const ap_bmodel *M, double *S);
 /* The ground's unit normal n and tangents t1, t2 at the contact of c (contact.c). */
 void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n, double *t1,
                       double *t2);
+/* Height-field contacts (heightfield.c, double build only): the ground point p by Newton on
+ * the closest-point conditions and the contact geometry at it (position stage), the gap
+ * n . (x - p), and the constraint's rows of gamma. */
+int ap_hf_position(const ap_model *m, ap_data *d, double t, double *S, const ap_mcon *c);
+double ap_hf_gap(const double *hf, const double *x);
+void ap_hf_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, double *gamma);
 /* F += f and (T != NULL) T += (x - o) x f: a force f at the world point x (constraint.c). */
 void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the

@@ -13,9 +13,10 @@
 #include "scene/scene_int.h"
 
 static const char *const ground_keys[] = {"kind", "center", "omega", "velocity", "normal",
-                                          "offset", "sphere", NULL};
+                                          "offset", "sphere", "z", NULL};
 static const char *const sphere_keys[] = {"center", "radius", "inside", NULL};
-static const char *const ground_kinds[] = {"fixed", "turntable", "translating", NULL};
+static const char *const ground_kinds[] = {"fixed", "turntable", "translating", "height_field",
+                                           NULL};
 /* In the order of ap_constraint_kind (user constraints are C-only: "user" is refused). */
 static const char *const con_kinds[] = {"rolling", "knife_edge", "prescribed_speed", "user",
                                         "coincident", "point_on_line", "point_on_plane", NULL};
@@ -47,6 +48,7 @@ int sc_parse_ground(sc_ctx *c, const sc_node *n, sc_ground *g) {
       sc_get_vec(c, n, "center", 2, g->def.center) ||
       sc_get_vec(c, n, "normal", 3, g->def.normal) || sc_get_number(c, n, "offset", &g->def.offset))
     return AP_ERR_ARG;
+  if (kind == 3 || sc_map_get(n, "z")) return sc_parse_height(c, n, g);   /* height_field */
   const sc_node *nn = sc_map_get(n, "normal"), *sp = sc_map_get(n, "sphere");
   if (nn && !(fabs(g->def.normal[0]) + fabs(g->def.normal[1]) + fabs(g->def.normal[2]) > 0))
     return sc_err(c, nn, "the ground plane's normal must not be zero");
@@ -99,6 +101,7 @@ void sc_ground_bind(sc_ground *g) {
   g->def.omega_fn = g->omega.timed ? omega_fn : NULL;
   g->def.velocity_fn[0] = g->vel[0].timed || g->vel[1].timed ? vel_fn_x : NULL;
   g->def.velocity_fn[1] = g->vel[0].timed || g->vel[1].timed ? vel_fn_y : NULL;
+  if (g->def.height_fn) g->def.height_user = &g->height;
 }
 
 /* ---- constraints ------------------------------------------------------------------------ */
@@ -170,7 +173,9 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   k->ground = s->ground;
   memset(&k->ground.omega, 0, sizeof k->ground.omega);
   memset(k->ground.vel, 0, sizeof k->ground.vel);
+  memset(&k->ground.height, 0, sizeof k->ground.height);
   if (g) return sc_parse_ground(c, g, &k->ground);
+  if (sc_height_copy(c, &s->ground, &k->ground)) return AP_ERR_ARG;
   /* Inherit the top-level ground: copy its expressions by recompiling their text (messages
    * then point at the top-level node). */
   if (s->ground.omega.timed &&

@@ -32,6 +32,7 @@ void sc_scene_clear(sc_scene *s) {
     sc_expr_free(&s->cons[c].value);
     sc_expr_free(&s->cons[c].ground.omega);
     for (int i = 0; i < 2; i++) sc_expr_free(&s->cons[c].ground.vel[i]);
+    sc_expr_free(&s->cons[c].ground.height);
   }
   for (int e = 0; e < s->ne; e++) {
     for (int i = 0; i < 3; i++) {
@@ -42,6 +43,7 @@ void sc_scene_clear(sc_scene *s) {
   }
   sc_expr_free(&s->ground.omega);
   for (int i = 0; i < 2; i++) sc_expr_free(&s->ground.vel[i]);
+  sc_expr_free(&s->ground.height);
   sc_events_free(s);
   sc_params_free(s->params);
   sc_strings_free(&s->strings);

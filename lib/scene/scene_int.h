@@ -219,6 +219,7 @@ typedef struct sc_joint {
 typedef struct sc_ground {
   ap_ground_motion def;
   sc_expr omega, vel[2];
+  sc_expr height;          /* kind: height_field: h(x, y) (heightfield.c) */
 } sc_ground;
 
 typedef struct sc_con {
@@ -338,6 +339,11 @@ int sc_scene_has_modes(const sc_scene *s);
 /* The kind of constraint k for listings (kinds by ap_constraint_kind), with its modes. */
 const char *sc_con_kind_text(const sc_con *k, const char *const *kinds);
 void sc_ground_bind(sc_ground *g);
+/* A height-field ground (heightfield.c): its `z` expression of x and y read at n into g (and
+ * g->def.height_fn set); the copy of one (inherited by a constraint); the height function. */
+int sc_parse_height(sc_ctx *c, const sc_node *n, sc_ground *g);
+int sc_height_copy(sc_ctx *c, const sc_ground *from, sc_ground *to);
+int sc_height_fn(double x, double y, double h[6], void *user);
 int sc_parse_run(sc_ctx *c, sc_scene *s);
 /* The keys of initial: for a joint of this kind (NULL-terminated). */
 const char *const *sc_init_keys(ap_joint_kind kind);
