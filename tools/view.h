@@ -25,7 +25,8 @@ typedef struct view_body {
   int force_col[3];        /* CSV columns of BODY.contact.Fx, .Fy, .Fz, or -1 */
 } view_body;
 
-/* A ground surface to draw (tools/view_ground.c): the plane normal . p = offset, or a sphere. */
+/* A ground surface to draw (tools/view_ground.c): the plane normal . p = offset, a sphere, or
+ * a height field z = h(x, y) (field: sampled on a grid about the motion, view_field.c). */
 #define VIEW_MAX_GROUNDS 8
 typedef struct view_ground {
   int sphere;              /* 0 plane, 1 sphere */
@@ -34,6 +35,9 @@ typedef struct view_ground {
   double center[3];        /* sphere: centre (m) */
   double radius;           /* sphere: radius (m) */
   int inside;              /* sphere: rolled on from inside (a bowl) */
+  int field;               /* 1: a height field (the model's function and its user pointer) */
+  ap_height_fn height_fn;
+  void *height_user;
 } view_ground;
 
 /* Everything a page or an export shows, one frame per CSV row. */
@@ -99,6 +103,21 @@ void view_mesh_free(view_mesh *m);
  * (projected onto it, with a margin), or a UV sphere (normals outward, inward for a bowl);
  * 0 or -1 out of memory (view_ground.c). */
 int view_mesh_ground(const view_frames *f, const view_ground *g, view_mesh *m);
+
+/* A height field's grid about the motion (view_field.c): nx x ny points from (x0, y0) every
+ * d (m), at most VIEW_FIELD_N a side; its JSON {"kind":"heightfield","x0":..,"y0":..,"d":..,
+ * "nx":..,"ny":..,"z":[x fastest; null where h is not defined]} and its mesh (0, or -1 out of
+ * memory). */
+#define VIEW_FIELD_N 121
+typedef struct view_grid {
+  double x0, y0, d;
+  int nx, ny;
+} view_grid;
+view_grid view_field_grid(const view_frames *f);
+/* A ground mesh of nv vertices (ground colour) and ni indices (view_ground.c). */
+int view_alloc_mesh(view_mesh *m, int nv, int ni);
+void view_field_json(FILE *out, const view_frames *f, const view_ground *g);
+int view_field_mesh(const view_frames *f, const view_ground *g, view_mesh *m);
 
 /* The glTF binary of f (tools/export_gltf.c); 0, or -1 out of memory or on a failed write. */
 int view_write_gltf(FILE *out, const view_frames *f);

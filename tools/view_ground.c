@@ -14,6 +14,9 @@
 #include "view.h"
 
 static int same(const view_ground *a, const view_ground *b) {
+  if (a->field || b->field)
+    return a->field == b->field && a->height_fn == b->height_fn &&
+           a->height_user == b->height_user;
   if (a->sphere != b->sphere) return 0;
   if (a->sphere)
     return a->radius == b->radius && a->inside == b->inside &&
@@ -28,7 +31,8 @@ void view_grounds(const ap_scene *sc, view_frames *f) {
   for (int c = 0; c < nc && f->ng < VIEW_MAX_GROUNDS; c++) {
     ap_ground_motion gm;
     if (ap_model_constraint_ground(m, c, &gm) != AP_OK) continue;
-    view_ground g = {gm.sphere_radius > 0, {0, 0, 0}, 0, {0, 0, 0}, 0, gm.inside};
+    view_ground g = {gm.sphere_radius > 0, {0, 0, 0}, 0, {0, 0, 0}, 0, gm.inside,
+                     gm.height_fn != NULL, gm.height_fn, gm.height_user};
     if (g.sphere) {
       memcpy(g.center, gm.sphere_center, sizeof g.center);
       g.radius = gm.sphere_radius;
@@ -41,7 +45,7 @@ void view_grounds(const ap_scene *sc, view_frames *f) {
     if (!seen) f->ground[f->ng++] = g;
   }
   if (f->ng == 0) {
-    view_ground z = {0, {0, 0, 1}, 0, {0, 0, 0}, 0, 0};
+    view_ground z = {0, {0, 0, 1}, 0, {0, 0, 0}, 0, 0, 0, NULL, NULL};
     f->ground[f->ng++] = z;
   }
 }
@@ -50,7 +54,10 @@ void view_grounds_json(FILE *out, const view_frames *f) {
   fputc('[', out);
   for (int k = 0; k < f->ng; k++) {
     const view_ground *g = &f->ground[k];
-    if (g->sphere)
+    if (g->field) {
+      if (k) fputc(',', out);
+      view_field_json(out, f, g);
+    } else if (g->sphere)
       fprintf(out, "%s{\"kind\":\"sphere\",\"center\":[%.17g,%.17g,%.17g],\"radius\":%.17g,"
               "\"inside\":%d}", k ? "," : "", g->center[0], g->center[1], g->center[2],
               g->radius, g->inside);
@@ -61,7 +68,7 @@ void view_grounds_json(FILE *out, const view_frames *f) {
   fputc(']', out);
 }
 
-static int alloc_mesh(view_mesh *m, int nv, int ni) {
+int view_alloc_mesh(view_mesh *m, int nv, int ni) {
   memset(m, 0, sizeof *m);
   m->pos = malloc(sizeof *m->pos * 3 * (size_t)nv);
   m->normal = malloc(sizeof *m->normal * 3 * (size_t)nv);
@@ -99,7 +106,7 @@ static int plane_mesh(const view_frames *f, const view_ground *g, view_mesh *m) 
     lo[0] = fmin(lo[0], u), hi[0] = fmax(hi[0], u), lo[1] = fmin(lo[1], w), hi[1] = fmax(hi[1], w);
   }
   double margin = fmax(1.0, 0.5 * fmax(hi[0] - lo[0], hi[1] - lo[1]));
-  if (alloc_mesh(m, 4, 6) != 0) return -1;
+  if (view_alloc_mesh(m, 4, 6) != 0) return -1;
   for (int c = 0; c < 4; c++) {
     double u = c & 1 ? hi[0] + margin : lo[0] - margin, w = c & 2 ? hi[1] + margin : lo[1] - margin;
     double p[3];
@@ -114,7 +121,7 @@ static int plane_mesh(const view_frames *f, const view_ground *g, view_mesh *m) 
 static int sphere_mesh(const view_ground *g, view_mesh *m) {
   enum { NU = 48, NV = 24 };
   const double pi = 3.14159265358979323846;
-  if (alloc_mesh(m, (NU + 1) * (NV + 1), 6 * NU * NV) != 0) return -1;
+  if (view_alloc_mesh(m, (NU + 1) * (NV + 1), 6 * NU * NV) != 0) return -1;
   for (int j = 0; j <= NV; j++)
     for (int i = 0; i <= NU; i++) {
       double th = pi * j / NV, ph = 2 * pi * i / NU;
@@ -136,5 +143,6 @@ static int sphere_mesh(const view_ground *g, view_mesh *m) {
 }
 
 int view_mesh_ground(const view_frames *f, const view_ground *g, view_mesh *m) {
+  if (g->field) return view_field_mesh(f, g, m);
   return g->sphere ? sphere_mesh(g, m) : plane_mesh(f, g, m);
 }

@@ -26,7 +26,9 @@ CHECK is one of:
            scene's centre and radius, from inside, and the ball's centre is R - r from the drawn
            centre), to 1e-9 in every frame; a pixel of the drawn ground differs from the
            background; the glTF export has a ground mesh on the same surface (float32) and
-           passes the validator
+           passes the validator; the height field (ball_bumps) is drawn as a mesh whose
+           vertices lie on h(x, y) (float32), none inside the ball, one within the grid
+           spacing of its centre's distance r
 
 Exit 0 pass, 1 fail, 77 skip (only when chromium or node is not installed at all).
 """
@@ -337,12 +339,27 @@ def test_gltf(appell, scenes, work):
           f"({worst:.3g})")
 
 
-TERRAIN = {"ball_incline": ("plane", 0.1), "ball_bowl": ("sphere", 0.1)}
+TERRAIN = {"ball_incline": ("plane", 0.1), "ball_bowl": ("sphere", 0.1),
+           "ball_bumps": ("heightfield", 0.1)}
+
+
+def bumps_h(x, y):
+    """The height field of examples/scenes/ball_bumps.yaml (its z expression)."""
+    e = math.exp
+    return (0.05 * e(-((x - 1) ** 2 + y ** 2) / 0.1) -
+            0.03 * e(-((x - 1.8) ** 2 + (y - 0.4) ** 2) / 0.15) +
+            0.04 * e(-((x - 2.5) ** 2 + (y + 0.3) ** 2) / 0.08))
 
 
 def ground_distance(g, pos):
-    """Signed distance of pos from the drawn ground g (its world matrix, column-major)."""
+    """Signed distance of pos from the drawn ground g (its world matrix, column-major); for
+    the height field, the distance to the nearest drawn vertex (within the grid spacing of the
+    surface's)."""
     m = g["m"]
+    if g["kind"] == "heightfield":
+        v = g["vertices"]
+        return math.sqrt(min((v[i] - pos[0]) ** 2 + (v[i + 1] - pos[1]) ** 2 +
+                             (v[i + 2] - pos[2]) ** 2 for i in range(0, len(v), 3)))
     if g["kind"] == "plane":
         n, o = m[8:11], m[12:15]
         return sum(n[i] * (pos[i] - o[i]) for i in range(3))
@@ -381,7 +398,10 @@ def test_terrain(appell, scenes, work):
             grounds = page.eval("appellView.grounds.map(function (g) { return {kind: g.kind,"
                                 " m: g.object.matrixWorld.elements, radius: g.kind == 'sphere' ?"
                                 " g.object.geometry.parameters.radius : 0,"
-                                " side: g.surface.material.side}; })")
+                                " side: g.surface.material.side, vertices: g.kind =="
+                                " 'heightfield' ? Array.from(g.surface.geometry.attributes"
+                                ".position.array) : [], d: g.kind == 'heightfield' ?"
+                                " appellView.data.grounds[0].d : 0}; })")
             check(len(grounds) == 1 and grounds[0]["kind"] == kind,
                   f"{name}: the page draws one {kind}: {[g['kind'] for g in grounds]}")
             g = grounds[0]
@@ -389,8 +409,21 @@ def test_terrain(appell, scenes, work):
             ball = names[1].split(".")[0]
             worst = max(abs(ground_distance(g, [row[col[f"{ball}.pos.{c}"]] for c in "xyz"])
                             - r_ball) for row in rows)
-            check(worst <= 1e-9, f"{name}: the ball is {worst:.3g} off the drawn ground")
-            if kind == "plane":
+            if kind == "heightfield":   # no vertex inside the ball, one within the spacing
+                dist = [ground_distance(g, [row[col[f"{ball}.pos.{c}"]] for c in "xyz"])
+                        for row in rows[::5]]
+                v = g["vertices"]
+                zerr = max(abs(v[i + 2] - bumps_h(v[i], v[i + 1])) for i in range(0, len(v), 3))
+                worst = max(abs(x - r_ball) for x in dist)
+                check(min(dist) >= r_ball - 1e-6 and max(dist) <= r_ball + g["d"],
+                      f"{name}: the ball centre is {min(dist):.4g}..{max(dist):.4g} from the "
+                      f"drawn vertices (radius {r_ball}, spacing {g['d']:.3g})")
+                check(zerr <= 1e-6, f"{name}: drawn heights {zerr:.3g} off h(x, y)")
+            else:
+                check(worst <= 1e-9, f"{name}: the ball is {worst:.3g} off the drawn ground")
+            if kind == "heightfield":
+                pass
+            elif kind == "plane":
                 want = [0, -math.sin(math.radians(25)), math.cos(math.radians(25))]
                 err = max(abs(g["m"][8 + i] - want[i]) for i in range(3))
                 check(err <= 1e-12, f"{name}: drawn normal {g['m'][8:11]} (scene {want})")
@@ -417,6 +450,10 @@ def test_terrain(appell, scenes, work):
                 cands = [[c0[i] - r_ball * n[i] + 0.25 * (math.cos(a) * t1[i] +
                           math.sin(a) * t2[i]) for i in range(3)]
                          for a in [k * math.pi / 6 for k in range(12)]]
+            elif kind == "heightfield":   # the surface 0.25 m around the ball
+                cands = [[c0[0] + 0.25 * math.cos(a), c0[1] + 0.25 * math.sin(a),
+                          bumps_h(c0[0] + 0.25 * math.cos(a), c0[1] + 0.25 * math.sin(a))]
+                         for a in [k * math.pi / 6 for k in range(12)]]
             else:   # the bowl's wall 25 degrees up from its bottom
                 s25, c25 = math.sin(math.radians(25)), math.cos(math.radians(25))
                 cands = [[s25 * math.cos(a), s25 * math.sin(a), 1 - c25]
@@ -440,7 +477,8 @@ def test_terrain(appell, scenes, work):
                                         os.path.join(work, name + ".glb"), csv, node)
                 gm = dict(g, m=g["m"][:12] + ([0, 0, 0] if kind == "plane" else [0, 0, 1]) +
                           [1], radius=1)
-                off = max(abs(ground_distance(gm, p)) for p in pos)
+                off = max(abs(ground_distance(gm, p) if kind != "heightfield" else
+                              p[2] - bumps_h(p[0], p[1])) for p in pos)
                 check(off <= 1e-6, f"{name}: the glTF ground is {off:.3g} off the surface")
                 print(f"{name}: glTF ground mesh of {len(pos)} vertices, {off:.2e} off")
 

@@ -137,9 +137,42 @@
     scene.add(mesh);
     return { kind: 'sphere', object: mesh, surface: mesh };
   }
+  /* A height field z = h(x, y): the grid of samples (null where h is undefined) as a lit mesh,
+   * both sides drawn, with grid lines every 10 samples following the surface. */
+  function drawField(g) {
+    var pos = [], idx = [], lines = [], nx = g.nx, ny = g.ny;
+    for (var j = 0; j < ny; j++)
+      for (var i = 0; i < nx; i++) {
+        var z = g.z[j * nx + i];
+        pos.push(g.x0 + i * g.d, g.y0 + j * g.d, z === null ? 0 : z);
+      }
+    function ok(i, j) { return g.z[j * nx + i] !== null; }
+    for (j = 0; j + 1 < ny; j++)
+      for (i = 0; i + 1 < nx; i++) {
+        var a = j * nx + i;
+        if (ok(i, j) && ok(i + 1, j) && ok(i, j + 1) && ok(i + 1, j + 1))
+          idx.push(a, a + 1, a + nx + 1, a, a + nx + 1, a + nx);
+        if (j % 10 === 0 && ok(i, j) && ok(i + 1, j)) lines.push(a, a + 1);
+        if (i % 10 === 0 && ok(i, j) && ok(i, j + 1)) lines.push(a, a + nx);
+      }
+    var geo = new THREE.BufferGeometry();
+    geo.setAttribute('position', new THREE.BufferAttribute(new Float32Array(pos), 3));
+    geo.setIndex(idx);
+    geo.computeVertexNormals();
+    var mat = groundMat.clone();
+    mat.side = THREE.DoubleSide;
+    var mesh = new THREE.Mesh(geo, mat);
+    var lgeo = new THREE.BufferGeometry();
+    lgeo.setAttribute('position', geo.getAttribute('position'));
+    lgeo.setIndex(lines);
+    mesh.add(new THREE.LineSegments(lgeo, gridMat));
+    scene.add(mesh);
+    return { kind: 'heightfield', object: mesh, surface: mesh };
+  }
   var grounds = (D.grounds && D.grounds.length ? D.grounds :
     [{ kind: 'plane', normal: [0, 0, 1], offset: 0 }]).map(function (g) {
-    return g.kind === 'sphere' ? drawSphere(g) : drawPlane(g);
+    return g.kind === 'sphere' ? drawSphere(g) : g.kind === 'heightfield' ? drawField(g) :
+      drawPlane(g);
   });
   var axes = new THREE.AxesHelper(Math.max(0.3 * span, bodySize));
   scene.add(axes);
