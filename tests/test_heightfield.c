@@ -386,6 +386,59 @@ static void test_disk_bump(void) {
   ap_model_free(m);
 }
 
+/* ---- linearization at the bottom of a dip ------------------------------------------------- */
+
+/* A ball at rest at the bottom of the dip h = (x^2 + y^2) / (2 rho) (radius of curvature rho =
+ * 1 m): its centre moves on a surface of radius rho - r, so it rocks at
+ * w^2 = 5 g / (7 (rho - r)) (the bowl's pendulum of length 7 (rho - r) / 5). appell linearize's
+ * path: no complex step (named), Ridders' differences; eigenvalues within their error bound. */
+static const char DIP_SCENE[] =
+    "name: dip\n"
+    "bodies:\n"
+    "  ball: {mass: 2.0, shape: {kind: sphere, radius: 0.1}, inertia: uniform}\n"
+    "joints:\n"
+    "  ball: {kind: free}\n"
+    "ground: {kind: height_field, z: \"0.5*(x^2 + y^2)\"}\n"
+    "constraints:\n"
+    "  roll: {kind: rolling, body: ball}\n"
+    "effects:\n"
+    "  gravity: {kind: gravity}\n"
+    "initial:\n"
+    "  ball: {z: 0.1}\n";
+
+static void test_linearize_dip(void) {
+  ap_scene_lin_guess g;
+  char msg[1024] = "";
+  int rc = ap_scene_lin_guess_load("dip.yaml", DIP_SCENE, strlen(DIP_SCENE), NULL, 0, &g, msg,
+                                   sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  ap_lin *L = NULL;
+  if (rc == AP_OK) rc = ap_scene_lin_create(&g, NULL, &L);
+  if (rc == AP_OK) rc = ap_lin_operating_point(L, NAN);
+  if (rc == AP_OK) rc = ap_lin_linearize(L);
+  if (rc == AP_OK) rc = ap_lin_eigen(L, NULL, 0, 1);
+  ap_lin_eig e;
+  if (rc == AP_OK) rc = ap_lin_get_eigen(L, &e);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  if (rc != AP_OK) printf("  %s %s\n", msg, L ? ap_lin_message(L) : "");
+  double w = sqrt(5 * G / (7 * (1.0 - RADIUS))), worst = 0, bound = 0;
+  int pairs = 0;
+  for (int i = 0; rc == AP_OK && i < e.n; i++)
+    if (e.im[i] > 0) {
+      worst = fmax(worst, fabs(e.im[i] - w) + fabs(e.re[i]));
+      bound = fmax(bound, e.err[i]);
+      pairs++;
+    }
+  printf("  ball at the bottom of the dip h = (x^2 + y^2) / 2: %d rocking pairs at %.15g rad/s, "
+         "closed form %.15g (off %.1e, error bound %.1e; %s)\n", pairs, w + worst, w, worst, bound,
+         L ? ap_lin_fallback(L) : "");
+  AP_CHECK_EQ_INT(pairs, 2);
+  AP_CHECK_LE(worst, fmax(bound, 1e-12 * w));
+  AP_CHECK(L && strstr(ap_lin_fallback(L), "height field") != NULL);
+  ap_lin_free(L);
+  ap_scene_lin_guess_free(&g);
+}
+
 /* ---- (e) errors ------------------------------------------------------------------------------ */
 
 static void expect_load_error(const char *z, const char *want) {
@@ -468,6 +521,7 @@ int main(void) {
   test_fd();
   test_scene_bumps();
   test_disk_bump();
+  test_linearize_dip();
   test_errors();
   AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_heightfield");

@@ -432,8 +432,9 @@ AP_API int ap_joint_speed_index(const ap_model *m, int joint);
 AP_API int ap_constraint_row_index(const ap_model *m, int constraint);
 /* The ground surface of constraint c (a rolling or knife-edge constraint) as compiled, for
  * drawing it: normal is the plane's unit normal ((0, 0, 1) for z = 0) and offset its
- * normal . p, or sphere_radius > 0 with sphere_center and inside for a ground sphere; kind and
- * the motion fields as defined. AP_ERR_ARG for a math-level model, a bad c or a NULL out;
+ * normal . p, or sphere_radius > 0 with sphere_center and inside for a ground sphere, or
+ * height_fn (non-NULL, with height_user) for a height field; kind and the motion fields as
+ * defined. AP_ERR_ARG for a math-level model, a bad c or a NULL out;
  * AP_ERR_UNSUPPORTED for a constraint of another kind (it has no ground). */
 AP_API int ap_model_constraint_ground(const ap_model *m, int c, ap_ground_motion *out);
 

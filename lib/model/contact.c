@@ -269,11 +269,13 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   kbody C = ap_kin_body(M, S, c->def.body);
   ap_sc vP[3], aP[3], x[3], xd[3], Ag[3], gf[9], D = 1.0;
   const ap_sc *gn = EZ, *t1 = EX, *t2 = EY;
+  if (c->plane == 3) {   /* a height field; the complex-step build refuses it (cs_blocker) */
 #ifndef AP_SC_COMPLEX
-  if (c->plane == 3) return ap_hf_gamma(M, S, c, gamma);
+    ap_hf_gamma(M, S, c, gamma);
 #endif
-  kwheel W = ap_contact_geom(M, S, c);
-  if (c->plane) ground_frame(c, C.o, &W, gf, &gn, &t1, &t2, &D);
+    return;
+  }
+  if (c->plane) ground_frame(c, C.o, NULL, gf, &gn, &t1, &t2, &D);   /* planes, spheres */
   if (c->plane == 2) return sphere_gamma(M, S, c, &C, gn, t1, t2, D, gamma);
   contact_motion(M, S, c, surface, gn, vP, aP, x, xd);
   if (c->plane) return plane_gamma(c, &C, gn, t1, t2, vP, aP, gamma);
