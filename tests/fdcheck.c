@@ -253,3 +253,26 @@ fd_result fd_many(const char *label, const ap_model *m, int samples, int check_p
   return worst;
 }
 
+
+ap_model *fd_free_shape(const char *name, int kind, const ap_constraint_def *c) {
+  ap_builder *b = NULL;
+  ap_model *m = NULL;
+  AP_CHECK_EQ_INT(ap_builder_create(name, &b), AP_OK);
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "wheel", bd.mass = 1.3;
+  bd.shape.kind = (ap_shape_kind)kind, bd.shape.radius = 0.4, bd.shape.tube = 0.07;
+  bd.shape.semi_axes[0] = 0.5, bd.shape.semi_axes[1] = 0.3, bd.shape.semi_axes[2] = 0.2;
+  rand_vec(bd.com, 3, 0.1), rand_inertia(bd.inertia, 0.05);
+  AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
+  ap_joint_def j = ap_joint_def_default();
+  j.kind = AP_JOINT_FREE, j.child = 0;
+  AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
+  ap_constraint_def cc = *c;
+  cc.body = 0;
+  AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &cc, NULL), AP_OK);
+  ap_effect_def e = ap_effect_def_default();
+  AP_CHECK_EQ_INT(ap_builder_add_effect(b, &e, NULL), AP_OK);
+  AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_OK);
+  ap_builder_free(b);
+  return m;
+}

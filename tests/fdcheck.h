@@ -66,6 +66,10 @@ int fd_along(const ap_model *m, ap_data *d, double t, const double *q, const dou
 int fd_check(const ap_model *m, ap_data *d, double t, const double *q, const double *v,
              double h, fd_result *res, meas *a, meas *der);
 double err_rel(const double *an, const double *fd, int n);
+/* Model `name`: body "wheel" of the shape kind (radius 0.4 m, tube 0.07 m, semi-axes 0.5, 0.3,
+ * 0.2 m; 1.3 kg, a random centre of mass and inertia) on a free joint with the contact c (its
+ * body set to the wheel) under gravity; NULL (checks failed) when it does not compile. */
+ap_model *fd_free_shape(const char *name, int kind, const ap_constraint_def *c);
 /* Random state: coordinates (quaternions unit), speeds, time. */
 void rand_state(const ap_model *m, double *q, double *v, double *t);
 /* fd_check at several random states (disks and tori at least min_flat in |sin| from lying

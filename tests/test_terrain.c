@@ -166,32 +166,15 @@ static void test_incline_closed_form(void) {
  * torus on a free joint) against d/ds (A v + a0) along the motion; without the term of the
  * contact point moving over the body surface the check fails. */
 static void test_fd_incline(void) {
-  double n[3] = {0.3, -0.4, 0.8}, g[3] = {0, 0, -G};
+  double n[3] = {0.3, -0.4, 0.8};
   printf("  tilted-plane contacts, finite differences along the motion:\n");
   for (int knife = 0; knife < 2; knife++)
     for (int kind = knife ? AP_SHAPE_DISK : AP_SHAPE_SPHERE; kind <= AP_SHAPE_TORUS; kind++) {
-      ap_builder *b = NULL;
-      ap_model *m = NULL;
-      AP_CHECK_EQ_INT(ap_builder_create("shape on an incline", &b), AP_OK);
-      ap_body_def bd = ap_body_def_default();
-      bd.name = "wheel", bd.mass = 1.3;
-      bd.shape.kind = (ap_shape_kind)kind, bd.shape.radius = 0.4, bd.shape.tube = 0.07;
-      bd.shape.semi_axes[0] = 0.5, bd.shape.semi_axes[1] = 0.3, bd.shape.semi_axes[2] = 0.2;
-      rand_vec(bd.com, 3, 0.1), rand_inertia(bd.inertia, 0.05);
-      AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
-      ap_joint_def j = ap_joint_def_default();
-      j.kind = AP_JOINT_FREE, j.child = 0;
-      AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
       ap_constraint_def c = ap_constraint_def_default();
-      c.name = "contact", c.body = 0, c.no_spin = !knife;
+      c.name = "contact", c.no_spin = !knife;
       if (knife) c.kind = AP_CON_KNIFE_EDGE, c.wheel = 1;
       memcpy(c.ground.normal, n, sizeof n), c.ground.offset = -0.2;
-      AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &c, NULL), AP_OK);
-      ap_effect_def e = ap_effect_def_default();
-      memcpy(e.gravity, g, sizeof g);
-      AP_CHECK_EQ_INT(ap_builder_add_effect(b, &e, NULL), AP_OK);
-      AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_OK);
-      ap_builder_free(b);
+      ap_model *m = fd_free_shape("shape on an incline", kind, &c);
       if (!m) continue;
       ap_data *d = NULL;
       AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);

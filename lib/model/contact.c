@@ -271,7 +271,7 @@ void ap_con_contact_gamma(const ap_bmodel *M, ap_sc *S, int ci, const ap_sc *G, 
   const ap_sc *gn = EZ, *t1 = EX, *t2 = EY;
   if (c->plane == 3) {   /* a height field; the complex-step build refuses it (cs_blocker) */
 #ifndef AP_SC_COMPLEX
-    ap_hf_gamma(M, S, c, gamma);
+    ap_hf_gamma(M, S, c, surface, gamma);
 #endif
     return;
   }

@@ -26,7 +26,7 @@
  * rate is aP = ao + al x rc + w x (w x rc) + w x R c_b'. Each row c . vP (c = t1, t2, n, or
  * the wheel axis R e_z of a knife edge) has gamma = -(c' . vP + c . aP); no-spin n . w has
  * -(n' . w + n . al). This is exact off the contact manifold too (the finite-difference check
- * runs at random states). Double build only: h comes from a C function of doubles, so the
+ * runs at random states; without n' it fails). Double build only: h comes from a C function of doubles, so the
  * complex-step build refuses the model (evaluate.c ap_bm_cs_blocker). */
 #include <math.h>
 #include <stdio.h>
@@ -191,13 +191,14 @@ static void tangent_rates(const double *hf, const double *nd, double *t1d, doubl
   v3_cross_add(n, t1d, t2d);
 }
 
-void ap_hf_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, double *gamma) {
+void ap_hf_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, int curvature,
+                 double *gamma) {
   kbody C = ap_kin_body(M, S, c->def.body);
   kwheel W = ap_contact_geom(M, S, c);
   const double *hf = W.hf, *n = hf + HF_N;
-  double vP[3], aP[3], nd[3], t1d[3], t2d[3], e[3], Rcd[3];
+  double vP[3], aP[3], nd[3] = {0, 0, 0}, t1d[3], t2d[3], e[3], Rcd[3];
   ap_kin_point_motion(M, S, c->def.body, W.rc, vP, aP);   /* ao + al x rc + w x (w x rc) */
-  point_rate(&C, &W, vP, nd);
+  if (curvature) point_rate(&C, &W, vP, nd);
   v3_cross(C.w, n, e);
   for (int i = 0; i < 3; i++) e[i] -= nd[i];               /* R u' = w x n - n' */
   rhrt(C.R, W.H, e, Rcd);                                  /* R c_b' */

@@ -402,7 +402,8 @@ int ap_con_gamma(const ap_model *m, ap_data *d, double t, const ap_sc *q, const 
                  ap_sc *S, ap_sc *gamma);
 /* Rolling (or wheel knife-edge) gamma with or without the term of the contact point moving
  * over the body surface (surface = 0 is the classic mistake; tests use it to show the
- * finite-difference check catches it). Writes the constraint's rows of gamma. */
+ * finite-difference check catches it; on a height field: without the ground's curvature).
+ * Writes the constraint's rows of gamma. */
 void ap_con_rolling_gamma(const ap_bmodel *M, ap_sc *S, int con, int surface, ap_sc *gamma);
 /* Implicit holonomic rows (loop closures, wheel contact rows): residuals phi (nloop) and their
  * Jacobian transposed, JlT (k x nloop, ld k): JlT[c + k s] = d phi_s / d v_c. */
@@ -479,10 +480,12 @@ void ap_contact_frame(const ap_bmodel *M, double *S, const ap_mcon *c, double *n
                       double *t2);
 /* Height-field contacts (heightfield.c, double build only): the ground point p by Newton on
  * the closest-point conditions and the contact geometry at it (position stage), the gap
- * n . (x - p), and the constraint's rows of gamma. */
+ * n . (x - p), and the constraint's rows of gamma (curvature = 0 leaves out the ground's
+ * curvature, n' = 0: the classic mistake, for the tests). */
 int ap_hf_position(const ap_model *m, ap_data *d, double t, double *S, const ap_mcon *c);
 double ap_hf_gap(const double *hf, const double *x);
-void ap_hf_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, double *gamma);
+void ap_hf_gamma(const ap_bmodel *M, double *S, const ap_mcon *c, int curvature,
+                 double *gamma);
 /* F += f and (T != NULL) T += (x - o) x f: a force f at the world point x (constraint.c). */
 void ap_bm_add_force(const double *f, const double *x, const double *o, double *F, double *T);
 /* Forces on the subtree of a plane-contact body (world axes), after the velocity stage: of the
