@@ -7,7 +7,8 @@
  *
  *     F_i(p) = x_i - p_i + (x_z - h) h_i = 0,   i = x, y      (then x - p = (x_z - h) N)
  *
- * solved by Newton from the last solution (the body origin's (x, y) the first time), with
+ * solved by Newton's method (each step halved until h is defined and |F| decreases) from the
+ * last solution (the body origin's (x, y) the first time), with
  *     dF_i/dp_j = dx_i/dp_j - delta_ij + (dx_z/dp_j - h_j) h_i + (x_z - h) h_ij,
  *     dx/dp_j = -R H R^T dn/dp_j,  dn/dp_j = (I - n n^T) dN/dp_j / |N|,  dN/dp_j = -(h_xj, h_yj, 0)
  * (H the Hessian of sigma). The closest point is unique (a minimum of the distance, the shape
@@ -124,6 +125,25 @@ static int check_unique(const ap_model *m, ap_data *d, double t, const ap_mcon *
   return fail(m, d, t, c, why, hf);
 }
 
+/* One damped Newton step from hf's p with residual F (updated): the full step dp, halved
+ * until h is defined there and |F| decreases (taken whole once |dp| is below the tolerance,
+ * where |F| is round-off). Returns the full step's length, or -1 when no step is acceptable
+ * (*rc: the last evaluation's status). */
+static double newton_step(const ap_mbody *B, const kbody *C, kwheel *W, const ap_mcon *c,
+                          double *F, double *flat, int *rc) {
+  double *hf = W->hf, *J = hf + HF_J, det = J[0] * J[3] - J[1] * J[2];
+  double dp[2] = {-(J[3] * F[0] - J[2] * F[1]) / det, -(J[0] * F[1] - J[1] * F[0]) / det};
+  double p0[2] = {hf[HF_P], hf[HF_P + 1]}, F0 = hypot(F[0], F[1]), full = hypot(dp[0], dp[1]);
+  if (!isfinite(full)) return -1.0;
+  int tiny = full <= HF_TOL * (1.0 + hypot(p0[0], p0[1]));
+  for (double lam = 1.0; lam > 1e-9; lam *= 0.5) {
+    hf[HF_P] = p0[0] + lam * dp[0], hf[HF_P + 1] = p0[1] + lam * dp[1];
+    *rc = support_at(B, C, W, c, F, flat);
+    if (*rc == 0 && (tiny || hypot(F[0], F[1]) < F0)) return full;
+  }
+  return -1.0;
+}
+
 int ap_hf_position(const ap_model *m, ap_data *d, double t, double *S, const ap_mcon *c) {
   const ap_bmodel *M = ap_bm(m);
   const ap_mbody *B = &M->bodies[c->def.body];
@@ -132,32 +152,26 @@ int ap_hf_position(const ap_model *m, ap_data *d, double t, double *S, const ap_
   double *hf = W.hf, F[2], flat, last = 0.0;
   if (hf[HF_SET] != 1.0 || !isfinite(hf[HF_P]) || !isfinite(hf[HF_P + 1]))
     hf[HF_P] = C.o[0], hf[HF_P + 1] = C.o[1];
-  int small = 0;
-  for (int it = 0; it < HF_ITER; it++) {
-    int rc = support_at(B, &C, &W, c, F, &flat);
-    hf[HF_SET] = 0.0;
-    if (rc < 0) return fail(m, d, t, c, "the height h(x, y) or one of its derivatives is not finite "
-                                "(or its function failed)", hf);
-    if (rc > 0)
-      return fail(m, d, t, c, "the disk or torus lies flat against the ground (its contact point "
-                  "is undefined)", hf);
-    if (small >= 2) {
+  hf[HF_SET] = 0.0;
+  int rc = support_at(B, &C, &W, c, F, &flat), small = 0;
+  for (int it = 0; it < HF_ITER && rc == 0 && last >= 0; it++) {
+    last = newton_step(B, &C, &W, c, F, &flat, &rc);
+    small = last >= 0 && last <= HF_TOL * (1.0 + hypot(hf[HF_P], hf[HF_P + 1])) ? small + 1 : 0;
+    if (small >= 2) {   /* one more step after the first below the tolerance: round-off */
       hf[HF_SET] = 1.0;
       frame_tangents(hf);
       return check_unique(m, d, t, c, hf);
     }
-    const double *J = hf + HF_J;
-    double det = J[0] * J[3] - J[1] * J[2];
-    double dp0 = -(J[3] * F[0] - J[2] * F[1]) / det, dp1 = -(J[0] * F[1] - J[1] * F[0]) / det;
-    if (!isfinite(dp0) || !isfinite(dp1)) break;
-    hf[HF_P] += dp0, hf[HF_P + 1] += dp1;
-    last = hypot(dp0, dp1);
-    small = last <= HF_TOL * (1.0 + hypot(hf[HF_P], hf[HF_P + 1])) ? small + 1 : 0;
   }
-  char why[200];
+  if (rc < 0) return fail(m, d, t, c, "the height h(x, y) or one of its derivatives is not finite "
+                          "(or its function failed)", hf);
+  if (rc > 0)
+    return fail(m, d, t, c, "the disk or torus lies flat against the ground (its contact point "
+                "is undefined)", hf);
+  char why[240];
   snprintf(why, sizeof why, "Newton's method on the closest-point conditions did not converge "
-           "in %d iterations (last step %.3g m, residual %.3g m; no closest point near the last "
-           "one)", HF_ITER, last, hypot(F[0], F[1]));
+           "(%s; residual %.3g m): no closest point near the last one", last < 0 ?
+           "no step reduced the residual" : "iterations exhausted", hypot(F[0], F[1]));
   return fail(m, d, t, c, why, hf);
 }
 
