@@ -13,7 +13,8 @@
  *    random states (tests/fdcheck.h, FD_TOL), and off by far more without the ground's
  *    curvature term;
  *  the scene's expression layer: h's derivatives from the jets against hand-derived ones
- *    (1e-13), and a ball rolling over Gaussian bumps keeps its energy (within 10 rtol E);
+ *    (1e-13), and a ball rolling over Gaussian bumps keeps its energy (within 10 rtol E); the
+ *    projected and DAE modes (IDA: the cross-check) follow the minimal mode within 10 rtol m;
  *  a disk (wheel) rolling over a speed bump: energy within 10 rtol E, the velocity constraints
  *    to round-off, the contact gap within the projection tolerance;
  *  errors: a malformed expression (FILE:LINE:COLUMN), a ground curving more sharply than the
@@ -256,6 +257,28 @@ static void test_fd(void) {
 
 /* ---- (c) the scene: derivatives from the jets, energy over bumps -------------------------- */
 
+/* The same run in projected and DAE mode (IDA) against the minimal mode's centres xc (30
+ * times over T): the largest difference of each. */
+static void other_modes(const ap_model *m, const ap_sim_def *def0, const double *q,
+                        const double *v, double T, const double *xc, double *diff) {
+  for (int mode = 0; mode < 2; mode++) {
+    ap_sim_def def = *def0;
+    def.mode = mode ? AP_MODE_DAE : AP_MODE_PROJECTED;
+    if (mode) def.method = "ida";
+    char msg[1024];
+    ap_sim *s = start(m, &def, q, v, msg, sizeof msg);
+    AP_CHECK(s != NULL);
+    if (!s) printf("  %s\n", msg);
+    diff[mode] = 0.0;
+    for (int k = 1; k <= 30 && s; k++) {
+      AP_CHECK_EQ_INT(ap_sim_advance(s, T * k / 30), AP_OK);
+      for (int i = 0; i < 3; i++)
+        diff[mode] = fmax(diff[mode], fabs(ap_sim_q(s)[i] - xc[3 * (k - 1) + i]));
+    }
+    ap_sim_free(s);
+  }
+}
+
 static const char BUMPS_SCENE[] =
     "name: bumps\n"
     "bodies:\n"
@@ -290,7 +313,7 @@ static void test_scene_bumps(void) {
     bumps_h(x, y, ref, &B);
     for (int i = 0; i < 6; i++) derr = fmax(derr, fabs(h[i] - ref[i]) / (1 + fabs(ref[i])));
   }
-  double q[7], v[6], E0 = 0, dE = 0, zmin = 1, zmax = 0, T = 3.0;
+  double q[7], v[6], E0 = 0, dE = 0, zmin = 1, zmax = 0, T = 3.0, xc[90], diff[2] = {0, 0};
   AP_CHECK_EQ_INT(ap_scene_initial_state(sc, q, v, NULL, 0, msg, sizeof msg), AP_OK);
   ap_sim_def def = ap_sim_def_default();
   def.rtol = 1e-10, def.atol = 1e-12;
@@ -303,7 +326,9 @@ static void test_scene_bumps(void) {
     AP_CHECK_EQ_INT(ap_scene_energy(sc, ap_sim_time(s), ap_sim_q(s), ap_sim_v(s), &E), AP_OK);
     dE = fmax(dE, fabs(E - E0));
     zmin = fmin(zmin, ap_sim_q(s)[2]), zmax = fmax(zmax, ap_sim_q(s)[2]);
+    if (k % 10 == 0) memcpy(xc + 3 * (k / 10 - 1), ap_sim_q(s), 3 * sizeof *xc);
   }
+  if (s) other_modes(m, &def, q, v, T, xc, diff);
   ap_sim_stats st;
   if (s) ap_sim_get_stats(s, &st);
   printf("  scene ball over three Gaussian bumps: h's derivatives from the jets vs by hand %.1e; "
@@ -313,6 +338,10 @@ static void test_scene_bumps(void) {
   AP_CHECK_LE(derr, 1e-13);
   AP_CHECK(zmax - zmin > 0.03);   /* it went over the bumps */
   AP_CHECK_LE(dE, 10 * def.rtol * E0);
+  printf("  the same in projected mode and in DAE mode (IDA, the cross-check): centres %.1e and "
+         "%.1e m from the minimal mode's\n", diff[0], diff[1]);
+  AP_CHECK_LE(diff[0], 10 * def.rtol * 1.0);   /* 10 rtol x the ball's 1 m scale of motion */
+  AP_CHECK_LE(diff[1], 10 * def.rtol * 1.0);
   ap_sim_free(s);
   ap_scene_free(sc);
 }
