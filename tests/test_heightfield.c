@@ -346,6 +346,21 @@ static void test_scene_bumps(void) {
   ap_scene_free(sc);
 }
 
+/* A constraint's own ground replaces the top-level height field (a plane here). */
+static void test_scene_own_ground(void) {
+  const char *sets[] = {"constraints.roll.ground={normal: [0, 0, 1]}"};
+  ap_scene *sc = NULL;
+  char msg[1024] = "";
+  int rc = ap_scene_load_string(BUMPS_SCENE, strlen(BUMPS_SCENE), "bumps.yaml", sets, 1, &sc,
+                                msg, sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  ap_ground_motion gm;
+  if (rc == AP_OK) rc = ap_model_constraint_ground(ap_scene_model(sc), 0, &gm);
+  AP_CHECK(rc == AP_OK && gm.height_fn == NULL);
+  if (rc != AP_OK) printf("  %s\n", msg);
+  ap_scene_free(sc);
+}
+
 /* ---- (d) a disk (wheel) over a speed bump ------------------------------------------------- */
 
 static void test_disk_bump(void) {
@@ -526,6 +541,7 @@ int main(void) {
   test_bowl();
   test_fd();
   test_scene_bumps();
+  test_scene_own_ground();
   test_disk_bump();
   test_linearize_dip();
   test_errors();

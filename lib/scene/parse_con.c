@@ -174,6 +174,7 @@ static int parse_con_body(sc_ctx *c, sc_scene *s, const sc_node *n, sc_con *k) {
   memset(&k->ground.omega, 0, sizeof k->ground.omega);
   memset(k->ground.vel, 0, sizeof k->ground.vel);
   memset(&k->ground.height, 0, sizeof k->ground.height);
+  if (g) k->ground.def.height_fn = NULL;   /* its own ground replaces a top-level height field */
   if (g) return sc_parse_ground(c, g, &k->ground);
   if (sc_height_copy(c, &s->ground, &k->ground)) return AP_ERR_ARG;
   /* Inherit the top-level ground: copy its expressions by recompiling their text (messages
