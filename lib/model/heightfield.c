@@ -27,8 +27,8 @@
  * rate is aP = ao + al x rc + w x (w x rc) + w x R c_b'. Each row c . vP (c = t1, t2, n, or
  * the wheel axis R e_z of a knife edge) has gamma = -(c' . vP + c . aP); no-spin n . w has
  * -(n' . w + n . al). This is exact off the contact manifold too (the finite-difference check
- * runs at random states; without n' it fails). Double build only: h comes from a C function of doubles, so the
- * complex-step build refuses the model (evaluate.c ap_bm_cs_blocker). */
+ * runs at random states; without n' it fails). Double build only: h comes from a C function
+ * of doubles, so the complex-step build refuses the model (evaluate.c ap_bm_cs_blocker). */
 #include <math.h>
 #include <stdio.h>
 
