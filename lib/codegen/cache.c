@@ -26,7 +26,7 @@
 
 extern char **environ;
 
-#define CG_FLAGS "-O2 -fPIC -shared -ffp-contract=off -fno-fast-math"
+#define CG_FLAGS "-O1 -fPIC -shared -ffp-contract=off -fno-fast-math"
 
 static uint64_t fnv1a(const char *s, uint64_t h) {
   for (; *s; s++) h = (h ^ (unsigned char)*s) * 1099511628211ULL;
@@ -90,7 +90,7 @@ static int write_file(const char *path, const char *text) {
 static int run_cc(const char *src, const char *so, char *why, size_t len) {
   const char *cc = getenv("APPELL_CC");
   if (!cc || !cc[0]) cc = "cc";
-  char *argv[] = {(char *)cc, "-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math",
+  char *argv[] = {(char *)cc, "-O1", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math",
                   "-o", (char *)so, (char *)src, "-lm", NULL};
   posix_spawn_file_actions_t fa;
   if (posix_spawn_file_actions_init(&fa) != 0) return snprintf(why, len, "out of memory"), -1;
