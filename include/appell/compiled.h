@@ -29,7 +29,7 @@ typedef enum ap_compile_mode {
 /* Switch body model m to compiled kinematics. Call it before the first evaluation with any data
  * of m, and not while another thread evaluates m. Returns 1 when m now runs compiled, 0 when it
  * stays interpreted (mode NEVER, or a reason written as one line into notice: no compiler, the
- * compiler failed, the tree path, driven coordinates), AP_ERR_ARG for a NULL model or a mode out
+ * compiler failed, the tree path, a math-level model), AP_ERR_ARG for a NULL model or a mode out
  * of range. notice (len bytes) may be NULL; it is set to "" when there is nothing to say. */
 AP_API int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notice,
                                    size_t len);

@@ -6,7 +6,8 @@
  * model-<hash>.so per model (FNV-1a 64 of the source and the compiler flags). A cached file
  * is used only when it is a regular file owned by the user, dlopen takes it, and its
  * apc_hash matches; otherwise it is rebuilt. Writes are atomic: the compiler writes a file
- * named after the process and the hash, renamed over the final name when complete.
+ * named after the process, a per-process sequence number and the hash, renamed over the final
+ * name when complete.
  * The compiler (`cc`, or $APPELL_CC) runs by posix_spawnp with an argument vector, never a
  * shell; its output goes to /dev/null (the notice says that it failed and how). */
 #include <dlfcn.h>
@@ -121,8 +122,10 @@ int cg_load(const char *src, cg_lib *out, char *why, size_t len) {
   if (cache_dir(dir, sizeof dir, why, len) != 0) return -1;
   snprintf(path, sizeof path, "%s/model-%s.so", dir, hash);
   if (try_open(path, hash, out) == 0) return out->from_cache = 1, 0;
-  snprintf(tmp_c, sizeof tmp_c, "%s/tmp-%ld-%s.c", dir, (long)getpid(), hash);
-  snprintf(tmp_so, sizeof tmp_so, "%s/tmp-%ld-%s.so", dir, (long)getpid(), hash);
+  static _Atomic unsigned seq;   /* threads of one process compile under their own names */
+  unsigned me = seq++;
+  snprintf(tmp_c, sizeof tmp_c, "%s/tmp-%ld-%u-%s.c", dir, (long)getpid(), me, hash);
+  snprintf(tmp_so, sizeof tmp_so, "%s/tmp-%ld-%u-%s.so", dir, (long)getpid(), me, hash);
   size_t n = strlen(src) + 128;
   char *text = malloc(n);
   if (!text) return snprintf(why, len, "out of memory"), -1;

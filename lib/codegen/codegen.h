@@ -88,7 +88,9 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len);
 /* ---- compile, cache, load (cache.c) ------------------------------------------------------ */
 
 typedef int (*cg_plane_fn)(void *ctx, int joint, const double *Rj, double *z);
-typedef int (*cg_pos_fn)(const double *q, double *S, double *g, cg_plane_fn plane, void *ctx);
+typedef int (*cg_drive_fn)(void *ctx, int joint);
+typedef int (*cg_pos_fn)(const double *q, double *S, double *g, cg_plane_fn plane,
+                         cg_drive_fn drive, void *ctx);
 typedef void (*cg_vel_fn)(const double *v, double *S, double *h);
 
 typedef struct cg_lib {

@@ -27,9 +27,14 @@ static int plane_cb(void *ctx, int joint, const double *Rj, double *z) {
   return ap_kin_plane(c->m, c->d, joint, c->d->t, Rj, c->S, z);
 }
 
+static int drive_cb(void *ctx, int joint) {
+  plane_ctx *c = ctx;
+  return ap_kin_drives(c->m, c->d, joint, c->d->t, c->S);
+}
+
 static int fast_position(const ap_bm_fast *f, const ap_model *m, ap_data *d, double *S) {
   plane_ctx c = {m, d, S};
-  return ((const cg_fast *)f)->lib.position(d->q, S, d->g, plane_cb, &c);
+  return ((const cg_fast *)f)->lib.position(d->q, S, d->g, plane_cb, drive_cb, &c);
 }
 
 static void fast_velocity(const ap_bm_fast *f, const double *v, double *S, double *h) {
@@ -55,10 +60,8 @@ int ap_model_is_compiled(const ap_model *m) {
 
 static int why_not(const ap_model *m, char *why, size_t len) {
   if (!ap_model_is_body_model(m))
-    return snprintf(why, len, "model '%s' is not a body model", m->name), -1;
-  if (m->ops)
-    return snprintf(why, len, "model '%s' runs on the tree path, which is not compiled",
-                    m->name), -1;
+    return snprintf(why, len, "it is not a body model (a math-level system)"), -1;
+  if (m->ops) return snprintf(why, len, "it runs on the tree path, which is not compiled"), -1;
   return cg_kin_supported(ap_bm(m), why, len);
 }
 

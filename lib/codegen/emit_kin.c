@@ -16,10 +16,6 @@ void cg_mark(cg_kin *K, const double *p, int n) {
 }
 
 int cg_kin_supported(const ap_bmodel *M, char *why, size_t len) {
-  if (M->has_drive) {
-    snprintf(why, len, "driven joint coordinates are not compiled yet");
-    return -1;
-  }
   for (int j = 0; j < M->nj; j++)
     if ((int)M->joints[j].kind < 0 || (int)M->joints[j].kind > AP_JOINT_PLANE_CONTACT) {
       snprintf(why, len, "joint '%s' has an unknown kind", M->joints[j].name);
@@ -105,18 +101,37 @@ static void plane(cg_kin *K, int jx, const cg_v *Rj, kjoint *J, cg_v *z) {
   *z = cg_ref('z', (size_t)jx);
 }
 
+/* The joint's own columns into Jw and Jo, driven ones into column k (f' W) and adw, adv. */
 static void joint_columns(cg_kin *K, const ap_mjoint *j, kjoint *J, cg_v *Jw, cg_v *Jo) {
   cg_gen *G = K->G;
-  for (int i = 0; i < 3; i++) *cg_at(K, J->adw + i) = *cg_at(K, J->adv + i) = cg_const(0.0);
+  int k = K->M->k;
+  cg_v *adw = cg_at(K, J->adw), *adv = cg_at(K, J->adv), *drv = cg_at(K, J->drv);
+  for (int i = 0; i < 3; i++) adw[i] = adv[i] = cg_const(0.0);
   cg_mark(K, J->adw, 3), cg_mark(K, J->adv, 3);
   for (int i = 0; i < j->nv; i++) {
     cg_v sw[3], sv[3], W[3], V[3];
     column(G, j, i, cg_at(K, J->rc), sw, sv);
     t_m3v(G, cg_at(K, J->RFP), sw, W);
     t_m3v(G, cg_at(K, J->RFP), sv, V);
-    t_axpy(G, cg_const(1.0), W, Jw + 3 * j->vidx[i]);
-    t_axpy(G, cg_const(1.0), V, Jo + 3 * j->vidx[i]);
+    if (j->vidx[i] >= 0) {
+      t_axpy(G, cg_const(1.0), W, Jw + 3 * j->vidx[i]);
+      t_axpy(G, cg_const(1.0), V, Jo + 3 * j->vidx[i]);
+    } else {
+      cg_v f1 = drv[3 * i + 1], f2 = drv[3 * i + 2];
+      t_axpy(G, f1, W, Jw + 3 * k), t_axpy(G, f1, V, Jo + 3 * k);
+      t_axpy(G, f2, W, adw), t_axpy(G, f2, V, adv);
+    }
   }
+}
+
+/* The joint's drives, by the library (ap_kin_drives): their values are read from S. */
+static void drives(cg_kin *K, int jx, const ap_mjoint *j, kjoint *J) {
+  int any = 0;
+  for (int i = 0; i < j->ndrivable; i++) any |= j->drive[i] != NULL;
+  if (!any) return;
+  cg_printf(K->G, "  {\n    int rc_ = drive(ctx, %d);\n    if (rc_ != 0) return rc_;\n  }\n", jx);
+  for (int i = 0; i < 3 * j->ndrivable; i++)
+    if (j->drive[i / 3]) *cg_at(K, J->drv + i) = cg_ref('S', (size_t)(J->drv + i - K->base));
 }
 
 static void joint_position(cg_kin *K, int jx) {
@@ -127,7 +142,9 @@ static void joint_position(cg_kin *K, int jx) {
   kjoint J = ap_kin_joint(M, K->base, jx);
   kbody C = ap_kin_body(M, K->base, j->child);
   cg_v *ql = cg_at(K, J.qloc);
-  for (int i = 0; i < j->nq; i++) ql[i] = cg_ref('q', (size_t)j->qidx[i]);
+  drives(K, jx, j, &J);
+  for (int i = 0; i < j->nq; i++)
+    ql[i] = j->qidx[i] >= 0 ? cg_ref('q', (size_t)j->qidx[i]) : cg_at(K, J.drv)[3 * i];
   cg_mark(K, J.qloc, j->nq);
   static const double I3[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   cg_v I3v[9], Z3[3] = {cg_const(0), cg_const(0), cg_const(0)}, *Rp = I3v, *op = Z3;

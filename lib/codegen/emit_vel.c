@@ -47,7 +47,9 @@ static void joint_velocity(cg_kin *K, int jx) {
   cg_v *r1 = cg_at(K, J.r1), *r2 = cg_at(K, J.r2), *r3 = cg_at(K, J.r3);
   apply(K, cg_at(K, C.Jw), w);
   apply(K, cg_at(K, C.Jo), vo);
-  for (int i = 0; i < j->nv; i++) cg_at(K, J.vloc)[i] = cg_ref('v', (size_t)j->vidx[i]);
+  cg_v *drv = cg_at(K, J.drv);
+  for (int i = 0; i < j->nv; i++)
+    cg_at(K, J.vloc)[i] = j->vidx[i] >= 0 ? cg_ref('v', (size_t)j->vidx[i]) : drv[3 * i + 1];
   cg_v wrel[3], vrel[3], r12[3], a[3], wr[3], w3[3];
   for (int i = 0; i < 3; i++) wrel[i] = cg_sub(G, w[i], wp[i]), r12[i] = cg_add(G, r1[i], r2[i]);
   for (int i = 0; i < 3; i++) vrel[i] = cg_sub(G, vo[i], vp[i]);
@@ -123,9 +125,11 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
             "g of the position stage, the velocities, biases and h of the velocity stage. */\n"
             "#include <math.h>\n\n"
             "typedef int (*apc_plane_fn)(void *ctx, int joint, const double *Rj, double *z);\n"
+            "typedef int (*apc_drive_fn)(void *ctx, int joint);\n"
             "extern const char apc_hash[];\n\n"
             "int apc_position(const double *q, double *S, double *g, apc_plane_fn plane, "
-            "void *ctx) {\n  double z[%d];\n  (void)plane, (void)ctx, (void)z;\n",
+            "apc_drive_fn drive, void *ctx) {\n  double z[%d];\n"
+            "  (void)plane, (void)drive, (void)ctx, (void)z;\n",
             M->nj + 1);
   if (!G.fail) {
     stage_begin(&K, M->k * M->k);

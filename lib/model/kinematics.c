@@ -130,6 +130,11 @@ static int plane_contact(const ap_model *m, ap_data *d, const ap_mbody *B, doubl
 }
 
 #ifndef AP_SC_COMPLEX
+int ap_kin_drives(const ap_model *m, ap_data *d, int j, double t, double *S) {
+  const ap_bmodel *M = ap_bm(m);
+  return call_drives(m, d, &M->joints[j], t, ap_kin_joint(M, S, j).drv);
+}
+
 int ap_kin_plane(const ap_model *m, ap_data *d, int j, double t, const double *Rj, double *S,
                  double *z) {
   const ap_bmodel *M = ap_bm(m);

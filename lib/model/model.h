@@ -156,7 +156,7 @@ typedef struct ap_meff {
 /* Code generated for one model (lib/codegen, docs/compiled.md): the kinematics of the position
  * stage with g, and of the velocity stage with h, writing the same scratch entries as
  * ap_kin_position (before the wheel contacts) + ap_kin_metric and ap_kin_velocity +
- * ap_kin_bias. position returns AP_OK or the status of a plane contact (ap_kin_plane). NULL
+ * ap_kin_bias. position returns AP_OK or the status of a drive or a plane contact. NULL
  * on the interpreted path; double build only. */
 typedef struct ap_bm_fast {
   int (*position)(const struct ap_bm_fast *f, const ap_model *m, ap_data *d, double *S);
@@ -398,6 +398,8 @@ void ap_kin_layout(ap_bmodel *M);
  * the joint's block of S and the height *z (for the compiled kinematics, lib/codegen). */
 int ap_kin_plane(const ap_model *m, ap_data *d, int j, double t, const double *Rj, double *S,
                  double *z);
+/* The drives of joint j at t into its block's drv (value, rate, acceleration; lib/codegen). */
+int ap_kin_drives(const ap_model *m, ap_data *d, int j, double t, double *S);
 #endif
 /* Doubles of the contact-mode scratch block (con_friction.c); 0 without contact modes. */
 size_t ap_cfr_scratch_size(const ap_bmodel *M);
