@@ -3,8 +3,9 @@
  * Every example scene and a few test scenes (a chain of tops on ball joints, loops, friction)
  * are loaded twice, with simulation.compile: never and always. Checked, within 1e-13 relative:
  *   - one ap_forward at the initial state and at three perturbed states (q, v moved by up to
- *     5%): v', q', g, h, A, a0 (the generated code performs the interpreted code's operations in
- *     the same order, so the two agree to the last bit up to the sign of a zero);
+ *     5%): v', q', g, h, A, a0, G (its Cholesky factor), Phi, e'' (the generated code performs
+ *     the interpreted code's operations in the same order, so the two agree to the last bit up
+ *     to the sign of a zero);
  *   - a whole run of up to 0.5 s with the scene's settings: the final q and v and the number of
  *     steps.
  * A model the generator does not take stays interpreted with a notice naming why (counted; none
@@ -71,6 +72,11 @@ static double forward_diff(const ap_model *mi, const ap_model *mc, const double 
     worst = fmax(worst, rel_diff(di->h, dc->h, k));
     worst = fmax(worst, rel_diff(di->A, dc->A, b * k));
     worst = fmax(worst, rel_diff(di->a0, dc->a0, b));
+    int l = di->l;   /* the acceleration stage's objects (compiled too) */
+    if (dc->l != l) worst = INFINITY;
+    else if (l > 0)
+      worst = fmax(worst, fmax(rel_diff(di->G, dc->G, l * l),
+                               fmax(rel_diff(di->Phi, dc->Phi, l), rel_diff(di->edd, dc->edd, l))));
   } else if (rc[0] == AP_OK) {
     worst = fmax(rel_diff(di->vdot, dc->vdot, k), rel_diff(di->qdot, dc->qdot, n));
   }

@@ -67,7 +67,9 @@ static int try_open(const char *path, const char *hash, cg_lib *out) {
   const char *got = dlsym(h, "apc_hash");
   out->position = (cg_pos_fn)(uintptr_t)dlsym(h, "apc_position");
   out->velocity = (cg_vel_fn)(uintptr_t)dlsym(h, "apc_velocity");
-  if (!got || strcmp(got, hash) != 0 || !out->position || !out->velocity) {
+  out->acceleration = (cg_acc_fn)(uintptr_t)dlsym(h, "apc_acceleration");
+  if (!got || strcmp(got, hash) != 0 || !out->position || !out->velocity ||
+      !out->acceleration) {
     dlclose(h);
     return -1;
   }

@@ -42,6 +42,7 @@ cg_v cg_add(cg_gen *G, cg_v a, cg_v b);
 cg_v cg_sub(cg_gen *G, cg_v a, cg_v b);
 cg_v cg_mul(cg_gen *G, cg_v a, cg_v b);
 cg_v cg_neg(cg_gen *G, cg_v a);
+cg_v cg_div(cg_gen *G, cg_v a, cg_v b);
 cg_v cg_call(cg_gen *G, const char *fn, cg_v a);      /* sin, cos */
 cg_v cg_quat_scale(cg_gen *G, cg_v nn);                /* nn > 0 ? 2 / nn : 0 */
 
@@ -82,7 +83,14 @@ void cg_kin_position(cg_kin *K);
 void cg_kin_velocity(cg_kin *K);
 void cg_kin_store(cg_kin *K, const char *out_name, int nout);
 
-/* The whole translation unit for a model (emit_kin.c): NULL when out of memory. */
+/* The acceleration stage at the model's sizes (emit_acc.c), g's structure from the position
+ * stage's traced g (gpos, k x k). */
+int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
+/* The free speeds the generated acceleration stage is made for: k - b, or 0 when b >= k (every
+ * speed fixed by the rows, as on a robot with prescribed wheel speeds). */
+int cg_free_speeds(const ap_bmodel *M);
+
+/* The whole translation unit for a model (emit_vel.c): NULL when out of memory. */
 char *cg_source(const ap_bmodel *M, char *why, size_t len);
 
 /* ---- compile, cache, load (cache.c) ------------------------------------------------------ */
@@ -92,11 +100,16 @@ typedef int (*cg_drive_fn)(void *ctx, int joint);
 typedef int (*cg_pos_fn)(const double *q, double *S, double *g, cg_plane_fn plane,
                          cg_drive_fn drive, void *ctx);
 typedef void (*cg_vel_fn)(const double *v, double *S, double *h);
+typedef int (*cg_acc_fn)(const double *g, const double *B, const double *Q, const double *h,
+                         const double *w, const double *N, const double *v, double *tk1,
+                         double *tk2, double *G, double *gB, double *Phi, double *edd,
+                         double *vdot, double *qdot);
 
 typedef struct cg_lib {
   void *handle;
   cg_pos_fn position;
   cg_vel_fn velocity;
+  cg_acc_fn acceleration;
   double ms_compile;     /* wall time of the compiler run (0 from the cache) */
   int from_cache;
 } cg_lib;

@@ -10,6 +10,7 @@
 
 #include "appell/compiled.h"
 #include "codegen/codegen.h"
+#include "linalg/linalg.h"
 
 typedef struct cg_fast {
   ap_bm_fast base;   /* first: the model holds a pointer to it */
@@ -39,6 +40,19 @@ static int fast_position(const ap_bm_fast *f, const ap_model *m, ap_data *d, dou
 
 static void fast_velocity(const ap_bm_fast *f, const double *v, double *S, double *h) {
   ((const cg_fast *)f)->lib.velocity(v, S, h);
+}
+
+/* The compiled acceleration stage where the core would run its native kernels on the model's
+ * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration). */
+static int fast_acceleration(const ap_model *m, ap_data *d) {
+  const cg_fast *F = (const cg_fast *)ap_bm(m)->fast;
+  int k = m->k, lim = ap_la_small_limit();
+  if (!F || d->estimate_cond || d->l != cg_free_speeds(ap_bm(m)) || k > lim || m->n > lim)
+    return AP_ERR_UNSUPPORTED;
+  ap_scratch *s = (ap_scratch *)d->internal;
+  int rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
+                               s->gB, d->Phi, d->edd, d->vdot, d->qdot);
+  return rc == 0 ? AP_OK : AP_ERR_UNSUPPORTED;
 }
 
 static void fast_destroy(ap_bm_fast *f) {
@@ -86,5 +100,6 @@ int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notic
   F->base.position = fast_position, F->base.velocity = fast_velocity;
   F->base.destroy = fast_destroy;
   ((ap_bmodel *)ap_bm(m))->fast = &F->base;   /* the model's evaluation strategy */
+  ((ap_model *)m)->ev.acceleration = fast_acceleration;
   return 1;
 }

@@ -91,6 +91,12 @@ cg_v cg_mul(cg_gen *G, cg_v a, cg_v b) {
   return emit2(G, a, "*", b);
 }
 
+cg_v cg_div(cg_gen *G, cg_v a, cg_v b) {
+  if (a.kind == CG_CONST && b.kind == CG_CONST) return cg_const(a.c / b.c);
+  if (is_c(b, 1.0)) return a;
+  return emit2(G, a, "/", b);
+}
+
 cg_v cg_call(cg_gen *G, const char *fn, cg_v a) {
   char x[48];
   cg_text(&a, x, sizeof x);
