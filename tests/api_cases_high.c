@@ -554,7 +554,28 @@ static void cases_accuracy(void) {
                         sizeof msg) == AP_ERR_ARG);
 }
 
+/* Compiled models (compiled.h): no compiler is run by these cases. */
+static void cases_compiled(void) {
+  ap_compile_mode cm = AP_COMPILE_AUTO;
+  CASE(ap_model_compile_native, "NULL model",
+       ap_model_compile_native(NULL, AP_COMPILE_AUTO, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_model_compile_native, "mode out of range",
+       ap_model_compile_native(BM, (ap_compile_mode)7, msg, sizeof msg) == AP_ERR_ARG);
+  CASE(ap_model_compile_native, "math-level model: interpreted, notice",
+       ap_model_compile_native(SM, AP_COMPILE_ALWAYS, msg, sizeof msg) == 0 &&
+           strstr(msg, "not a body model") != NULL);
+  CASE(ap_model_compile_native, "never, NULL notice",
+       ap_model_compile_native(BM, AP_COMPILE_NEVER, NULL, 0) == 0);
+  CASE(ap_model_is_compiled, "NULL", ap_model_is_compiled(NULL) == 0);
+  CASE(ap_model_is_compiled, "math-level model", ap_model_is_compiled(SM) == 0);
+  CASE(ap_compile_mode_parse, "NULL name", ap_compile_mode_parse(NULL, &cm) == AP_ERR_ARG);
+  CASE(ap_compile_mode_parse, "NULL mode", ap_compile_mode_parse("auto", NULL) == AP_ERR_ARG);
+  CASE(ap_compile_mode_parse, "unknown", ap_compile_mode_parse("sometimes", &cm) == AP_ERR_ARG);
+  CASE(ap_scene_compile_notice, "NULL", strcmp(ap_scene_compile_notice(NULL), "") == 0);
+}
+
 void api_cases_high(void) {
+  cases_compiled();
   cases_body_queries();
   cases_scene();
   cases_scene_runs();

@@ -55,6 +55,8 @@ static const char help[] =
     "                     the outputs at the least cost, from a short pilot run\n"
     "  --error-control C  outputs (default): coordinates that nothing and no output\n"
     "                     depends on are left out of the step-size control; all: none\n"
+    "  --compile C        never, auto or always: run the model's kinematics as C compiled\n"
+    "                     for it (simulation.compile; docs/compiled.md)\n"
     "  --quiet            no summary and no progress bar\n"
     "  -h, --help         this help\n"
     "\n"
@@ -88,10 +90,11 @@ static const char *const mapped[][2] = {{"--mode", "simulation.mode"},
                                         {"--atol", "simulation.atol"},
                                         {"--t-end", "simulation.t_end"},
                                         {"--interval", "output.interval"},
-                                        {"--path", "simulation.path"}};
+                                        {"--path", "simulation.path"},
+                                        {"--compile", "simulation.compile"}};
 
 static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
-  for (int m = 0; m < 7; m++) {
+  for (int m = 0; m < (int)(sizeof mapped / sizeof mapped[0]); m++) {
     const char *v = NULL;
     int r = cli_opt(argc, argv, i, mapped[m][0], &v);
     if (r == 0) continue;
@@ -108,7 +111,8 @@ static int mapped_opt(int argc, char **argv, int *i, run_opts *o, int *extra) {
 static int parse_args(int argc, char **argv, run_opts *o) {
   static const char *const known[] = {"--out", "--set", "--mode", "--method", "--rtol", "--atol",
                                       "--t-end", "--interval", "--path", "--quiet", "--help",
-                                      "--error-estimate", "--accuracy", "--error-control", NULL};
+                                      "--error-estimate", "--accuracy", "--error-control",
+                                      "--compile", NULL};
   int extra = 0;
   for (int i = 1; i < argc; i++) {
     const char *v = NULL;
@@ -443,6 +447,7 @@ int cmd_run(int argc, char **argv) {
   rs.err_path = out.kind == CLI_OUT_FILE ? o.out : NULL;
   int st = ap_scene_load(o.scene, o.sets, o.nsets, &rs.sc, msg, sizeof msg);
   if (st != AP_OK) return fprintf(stderr, "%s\n", msg), cli_exit_code(st);
+  if (ap_scene_compile_notice(rs.sc)[0]) fprintf(stderr, "%s\n", ap_scene_compile_notice(rs.sc));
   code = start(&rs, &o);
   if (code == EXIT_OK && cli_interrupted())
     code = fprintf(stderr, "appell run: interrupted by %s\n", cli_signal_name(cli_interrupted())),

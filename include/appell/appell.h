@@ -16,6 +16,7 @@
 #include "appell/control.h"
 #include "appell/accuracy.h"
 #include "appell/urdf.h"
+#include "appell/compiled.h"
 
 #define AP_VERSION_STRING "0.1.0"
 

@@ -49,6 +49,9 @@ AP_API void ap_scene_text_free(char *text);
 
 /* The compiled model (owned by the scene). */
 AP_API const ap_model *ap_scene_model(const ap_scene *s);
+/* Why the scene's model runs interpreted although simulation.compile (or APPELL_COMPILE) asked
+ * for compiled code (one line, docs/compiled.md), or "" (also for NULL). */
+AP_API const char *ap_scene_compile_notice(const ap_scene *s);
 
 /* Simulation settings of the scene (simulation: and output: sections). */
 typedef struct ap_scene_run {

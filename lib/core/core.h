@@ -65,6 +65,10 @@ typedef struct ap_evaluator {
   /* The sections of the scratch (a body model's bodies, joints, ... ; core/arena.h), or NULL.
    * In the guard build the dense path's data fills and checks their guards with its own. */
   const ap_arena *layout;
+  /* Optional (compiled models, lib/codegen): the dense path's acceleration stage of the double
+   * build, the same operations as fwd_acceleration's at the model's sizes; AP_ERR_UNSUPPORTED
+   * when it does not take this evaluation (then the core's own runs and reports). */
+  int (*acceleration)(const ap_model *m, ap_data *d);
 } ap_evaluator;
 
 struct ap_model {

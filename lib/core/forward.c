@@ -324,6 +324,10 @@ static int fwd_acceleration(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
   int k = m->k, l = d->l;
   d->cnt.acceleration++;
+#ifndef AP_SC_COMPLEX
+  int rc_acc = m->ev.acceleration ? m->ev.acceleration(m, d) : AP_ERR_UNSUPPORTED;
+  if (rc_acc != AP_ERR_UNSUPPORTED) return rc_acc;   /* a compiled model's (lib/codegen) */
+#endif
   /* tk2 = Q - h - g w ; Phi = B^T Q ; edd = B^T tk2 (the right-hand side) */
   AP_SC(ap_la_gemv)(k, k, d->g, d->w, s->tk1);
   for (int i = 0; i < k; i++) s->tk2[i] = d->Q[i] - d->h[i] - s->tk1[i];

@@ -44,6 +44,7 @@ int ap_bm_cs_blocker(const ap_model *m, char *msg, size_t len) {
 void ap_bm_destroy(void *impl) {
   ap_bmodel *M = impl;
   if (!M) return;
+  if (M->fast && M->fast->destroy) M->fast->destroy(M->fast);
   for (int b = 0; b < M->nb && M->bodies; b++) free(M->bodies[b].cols);
   free(M->bodies);
   free(M->joints);

@@ -20,10 +20,20 @@ int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S) {
   d->cnt.kinematic += M->n != M->k;
   d->cnt.constraint += M->b > 0;
   d->cnt.rheonomic += M->rheonomic;
+#ifndef AP_SC_COMPLEX
+  const ap_bm_fast *F = M->fast;   /* compiled kinematics and g (lib/codegen) */
+  int rc = F ? F->position(F, m, d, S) : ap_kin_position(m, d, d->t, d->q, S);
+  if (F && rc == AP_OK && M->nwheel) rc = ap_contact_position(m, d, d->t, S);
+#else
   int rc = ap_kin_position(m, d, d->t, d->q, S);
+#endif
   if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
   if (rc != AP_OK) return rc;
+#ifndef AP_SC_COMPLEX
+  if (!F) ap_kin_metric(M, S, d->g);
+#else
   ap_kin_metric(M, S, d->g);
+#endif
   if (M->n != M->k)
     for (int j = 0; j < M->nj; j++) ap_joint_fill_N(&M->joints[j], d->q, d->N, M->n);
   return M->b ? ap_con_rows(m, d, d->t, d->q, S, d->A, d->a0) : AP_OK;
@@ -34,8 +44,17 @@ int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S) {
   d->cnt.bias++;
   d->cnt.force += M->ne > 0;
   d->cnt.gamma += M->b > 0;
+#ifndef AP_SC_COMPLEX
+  if (M->fast) {
+    M->fast->velocity(M->fast, d->v, S, d->h);
+  } else {
+    ap_kin_velocity(M, d->v, S);
+    ap_kin_bias(M, S, d->h);
+  }
+#else
   ap_kin_velocity(M, d->v, S);
   ap_kin_bias(M, S, d->h);
+#endif
   int rc = M->ne ? ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q) : AP_OK;
   if (rc == AP_OK && M->b) rc = ap_con_gamma(m, d, d->t, d->q, d->v, S, d->gamma);
 #ifndef AP_SC_COMPLEX

@@ -129,6 +129,20 @@ static int plane_contact(const ap_model *m, ap_data *d, const ap_mbody *B, doubl
   return AP_OK;
 }
 
+#ifndef AP_SC_COMPLEX
+int ap_kin_drives(const ap_model *m, ap_data *d, int j, double t, double *S) {
+  const ap_bmodel *M = ap_bm(m);
+  return call_drives(m, d, &M->joints[j], t, ap_kin_joint(M, S, j).drv);
+}
+
+int ap_kin_plane(const ap_model *m, ap_data *d, int j, double t, const double *Rj, double *S,
+                 double *z) {
+  const ap_bmodel *M = ap_bm(m);
+  kjoint J = ap_kin_joint(M, S, j);
+  return plane_contact(m, d, &M->bodies[M->joints[j].child], t, Rj, &J, z);
+}
+#endif
+
 /* The joint's own columns into Jw and Jo (world), driven ones into column k. */
 static void joint_columns(const ap_bmodel *M, const ap_mjoint *j, kjoint *J, ap_sc *Jw,
                           ap_sc *Jo) {

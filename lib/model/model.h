@@ -154,6 +154,17 @@ typedef struct ap_meff {
                                        AP_BODY_QTY_COUNT + quantity (body_qty.c) */
 } ap_meff;
 
+/* Code generated for one model (lib/codegen, docs/compiled.md): the kinematics of the position
+ * stage with g, and of the velocity stage with h, writing the same scratch entries as
+ * ap_kin_position (before the wheel contacts) + ap_kin_metric and ap_kin_velocity +
+ * ap_kin_bias. position returns AP_OK or the status of a drive or a plane contact. NULL
+ * on the interpreted path; double build only. */
+typedef struct ap_bm_fast {
+  int (*position)(const struct ap_bm_fast *f, const ap_model *m, ap_data *d, double *S);
+  void (*velocity)(const struct ap_bm_fast *f, const double *v, double *S, double *h);
+  void (*destroy)(struct ap_bm_fast *f);
+} ap_bm_fast;
+
 typedef struct ap_bmodel {
   int nb, nj, nc, ne;
   int n, k, b, K1;
@@ -177,6 +188,7 @@ typedef struct ap_bmodel {
   size_t body_stride, proj_work, proj_iwork;
   ap_arena layout;            /* the sections of the scratch (ap_kin_layout): off_* and scratch
                                  come from it */
+  ap_bm_fast *fast;           /* compiled kinematics (lib/codegen), or NULL: interpreted */
 } ap_bmodel;
 
 /* ---- the per-element blocks of the scratch, each from one table ----------------------------
@@ -387,6 +399,14 @@ void ap_kin_point_motion(const ap_bmodel *M, ap_sc *S, int body, const ap_sc *r,
 void ap_kin_apply(int K1, const ap_sc *J, const ap_sc *v, ap_sc *out);
 /* Scratch size of the model's layout (sets the offsets in M). */
 void ap_kin_layout(ap_bmodel *M);
+#ifndef AP_SC_COMPLEX
+/* The plane contact of joint j (index in M->joints) with joint rotation Rj: u, cb, H, rc into
+ * the joint's block of S and the height *z (for the compiled kinematics, lib/codegen). */
+int ap_kin_plane(const ap_model *m, ap_data *d, int j, double t, const double *Rj, double *S,
+                 double *z);
+/* The drives of joint j at t into its block's drv (value, rate, acceleration; lib/codegen). */
+int ap_kin_drives(const ap_model *m, ap_data *d, int j, double t, double *S);
+#endif
 /* Doubles of the contact-mode scratch block (con_friction.c); 0 without contact modes. */
 size_t ap_cfr_scratch_size(const ap_bmodel *M);
 

@@ -15,9 +15,10 @@
 
 static const char *const sim_keys[] = {"mode", "method", "rtol", "atol", "t0", "t_end",
                                        "h_fixed", "h_init", "h_max", "max_steps", "rank_rtol",
-                                       "switch_growth", "path", NULL};
+                                       "switch_growth", "path", "compile", NULL};
 static const char *const modes[] = {"minimal", "projected", "dae", "plain", NULL};  /* ap_mode */
 static const char *const paths[] = {"auto", "dense", "tree", NULL};   /* ap_path */
+static const char *const compiles[] = {"never", "auto", "always", NULL};  /* ap_compile_mode */
 static const char *const out_keys[] = {"interval", "channels", NULL};
 
 /* Keys of the initial state by joint kind. */
@@ -184,9 +185,11 @@ static int parse_sim(sc_ctx *c, sc_scene *s) {
   ap_scene_run *r = &s->run;
   const sc_node *n = sc_map_get(s->root, "simulation");
   int mode = (int)r->sim.mode;
+  s->compile = -1;
   if (!n) return AP_OK;
   if (sc_check_keys(c, n, sim_keys) || sc_get_enum(c, n, "mode", modes, &mode) ||
       sc_get_enum(c, n, "path", paths, &s->path) ||
+      sc_get_enum(c, n, "compile", compiles, &s->compile) ||
       parse_method(c, s, n) || sc_get_number(c, n, "rtol", &r->sim.rtol) ||
       sc_get_number(c, n, "atol", &r->sim.atol) || sc_get_number(c, n, "t0", &r->t0) ||
       sc_get_number(c, n, "t_end", &r->t_end) || sc_get_number(c, n, "h_fixed", &r->sim.h_fixed) ||

@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "core/text.h"
+#include "appell/compiled.h"
 #include "scene/scene_int.h"
 
 #define SC_MAX_FILE (16L << 20)
@@ -23,6 +24,7 @@ struct ap_scene {
   ap_data *d;              /* scratch for outputs, energy and residuals */
   sc_out out;
   char name[64];
+  char compile_notice[600];   /* why simulation.compile fell back to the interpreted path */
 };
 
 void sc_scene_clear(sc_scene *s) {
@@ -82,10 +84,27 @@ static int sets_parts(const char *set) {
   return (n == 5 && strncmp(set, "parts", 5) == 0) || (n == 9 && strncmp(set, "instances", 9) == 0);
 }
 
+/* simulation.compile, else $APPELL_COMPILE, else never (docs/compiled.md). */
+static void compile_model(ap_scene *sc) {
+  ap_compile_mode mode = AP_COMPILE_NEVER;
+  const char *env = getenv("APPELL_COMPILE");
+  if (sc->s.compile >= 0) mode = (ap_compile_mode)sc->s.compile;
+  else if (env && env[0] && ap_compile_mode_parse(env, &mode) != AP_OK)
+    snprintf(sc->compile_notice, sizeof sc->compile_notice, "appell: APPELL_COMPILE='%.40s' is "
+             "not never, auto or always: ignored", env);
+  if (mode != AP_COMPILE_NEVER)
+    ap_model_compile_native(sc->m, mode, sc->compile_notice, sizeof sc->compile_notice);
+}
+
+const char *ap_scene_compile_notice(const ap_scene *s) {
+  return s ? s->compile_notice : "";
+}
+
 static int load_parsed(sc_ctx *c, ap_scene *sc) {
   if (sc_parse_scene(c, &sc->s) != AP_OK) return c->status;
   if (!sc->s.name) sc->s.name = sc->name;
   if (sc_build(c, &sc->s, &sc->m) != AP_OK) return c->status;
+  compile_model(sc);
   if (sc_events_bind(c, &sc->s, sc->m) != AP_OK) return c->status;
   if (sc_inputs_check(c, &sc->s, sc->m) != AP_OK) return c->status;
   if (ap_data_create(sc->m, &sc->d) != AP_OK || sc_out_names(&sc->out, &sc->s, sc->m) != AP_OK)

@@ -274,6 +274,7 @@ typedef struct sc_scene {
   unsigned channels;
   double init_tol;         /* relative speed correction above which the state is refused */
   int path;                /* simulation.path (ap_path): auto, dense or tree */
+  int compile;             /* simulation.compile (ap_compile_mode), -1 when not given */
   int nev;
   struct sc_event *events; /* the events: section and the bodies' collide: keys (events.c) */
   int nkink, nsat;

@@ -1,0 +1,121 @@
+/* Appell codegen layer (internal): C generated for one body model, compiled at load time.
+ *
+ * The generator runs the kinematics of lib/model/kinematics.c once on traced values (cg_v):
+ * constants (model parameters, structural zeros) fold at generation time, everything that
+ * depends on (q, v) is written out as one C statement per operation, in the same order and
+ * with the same association as the interpreted code, so the generated code computes the same
+ * floating-point numbers (a multiplication by a constant 1 or 0 and an addition of a constant
+ * 0 are dropped: exact except for the sign of a zero). It is a partial evaluation of the
+ * interpreted method, not a symbolic re-derivation.
+ * docs/compiled.md has the user's side; docs/design.md the layer. */
+#ifndef AP_CODEGEN_CODEGEN_H
+#define AP_CODEGEN_CODEGEN_H
+
+#include <stddef.h>
+
+#include "model/model.h"
+
+/* ---- traced scalars and the text they emit (trace.c) ------------------------------------- */
+
+enum { CG_CONST, CG_TEMP, CG_REF };
+
+typedef struct cg_v {
+  int kind;
+  double c;       /* CG_CONST */
+  int id;         /* CG_TEMP: the temporary t<id> */
+  char base;      /* CG_REF: the array base[idx] (q, v, S, z) */
+  size_t idx;
+} cg_v;
+
+typedef struct cg_gen {
+  char *s;
+  size_t len, cap;
+  int fail;       /* out of memory */
+  int ntemp;
+} cg_gen;
+
+void cg_printf(cg_gen *G, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+cg_v cg_const(double c);
+cg_v cg_ref(char base, size_t idx);
+void cg_text(const cg_v *a, char *out, size_t len);
+cg_v cg_add(cg_gen *G, cg_v a, cg_v b);
+cg_v cg_sub(cg_gen *G, cg_v a, cg_v b);
+cg_v cg_mul(cg_gen *G, cg_v a, cg_v b);
+cg_v cg_neg(cg_gen *G, cg_v a);
+cg_v cg_div(cg_gen *G, cg_v a, cg_v b);
+cg_v cg_call(cg_gen *G, const char *fn, cg_v a);      /* sin, cos */
+cg_v cg_quat_scale(cg_gen *G, cg_v nn);                /* nn > 0 ? 2 / nn : 0 */
+
+/* The inline helpers of model/model.h and rot.c on traced values (same order of operations). */
+cg_v t_dot(cg_gen *G, const cg_v *a, const cg_v *b);
+void t_cross(cg_gen *G, const cg_v *a, const cg_v *b, cg_v *c);
+void t_axpy(cg_gen *G, cg_v s, const cg_v *a, cg_v *c);
+void t_cross_add(cg_gen *G, const cg_v *a, const cg_v *b, cg_v *c);
+void t_m3v(cg_gen *G, const cg_v *M, const cg_v *x, cg_v *y);
+void t_m3tv(cg_gen *G, const cg_v *M, const cg_v *x, cg_v *y);
+void t_m3m(cg_gen *G, const cg_v *A, const cg_v *B, cg_v *C);
+void t_m3mt(cg_gen *G, const cg_v *A, const cg_v *B, cg_v *C);
+void t_axis_angle(cg_gen *G, const double *axis, cg_v angle, cg_v *R);
+void t_quat_matrix(cg_gen *G, const cg_v *q, cg_v *R);
+void t_consts(const double *x, int n, cg_v *out);
+
+/* ---- the kinematics on traced values (emit_kin.c, emit_vel.c) ---------------------------- */
+
+/* The traced scratch: one value per scratch double, and whether the stage being traced wrote
+ * it (offsets from a real scratch-sized array, so the views of model.h give them). */
+typedef struct cg_kin {
+  const ap_bmodel *M;
+  cg_gen *G;
+  double *base;          /* M->scratch doubles, only for the offsets of the views */
+  cg_v *sh;              /* traced scratch */
+  unsigned char *wr;     /* written in this stage */
+  cg_v *out;             /* g (k x k) or h (k) */
+  unsigned char *owr;
+} cg_kin;
+
+static inline cg_v *cg_at(cg_kin *K, const double *p) { return K->sh + (p - K->base); }
+void cg_mark(cg_kin *K, const double *p, int n);
+/* Emit the position stage's body (joints, bodies, g) and the velocity stage's (velocities,
+ * biases, h); then their stores. 0, or -1 when the model has what the generator does not take
+ * (why: a reason of at most len bytes). */
+int cg_kin_supported(const ap_bmodel *M, char *why, size_t len);
+void cg_kin_position(cg_kin *K);
+void cg_kin_velocity(cg_kin *K);
+void cg_kin_store(cg_kin *K, const char *out_name, int nout);
+
+/* The acceleration stage at the model's sizes (emit_acc.c), g's structure from the position
+ * stage's traced g (gpos, k x k). */
+int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
+/* The free speeds the generated acceleration stage is made for: k - b, or 0 when b >= k (every
+ * speed fixed by the rows, as on a robot with prescribed wheel speeds). */
+int cg_free_speeds(const ap_bmodel *M);
+
+/* The whole translation unit for a model (emit_vel.c): NULL when out of memory. */
+char *cg_source(const ap_bmodel *M, char *why, size_t len);
+
+/* ---- compile, cache, load (cache.c) ------------------------------------------------------ */
+
+typedef int (*cg_plane_fn)(void *ctx, int joint, const double *Rj, double *z);
+typedef int (*cg_drive_fn)(void *ctx, int joint);
+typedef int (*cg_pos_fn)(const double *q, double *S, double *g, cg_plane_fn plane,
+                         cg_drive_fn drive, void *ctx);
+typedef void (*cg_vel_fn)(const double *v, double *S, double *h);
+typedef int (*cg_acc_fn)(const double *g, const double *B, const double *Q, const double *h,
+                         const double *w, const double *N, const double *v, double *tk1,
+                         double *tk2, double *G, double *gB, double *Phi, double *edd,
+                         double *vdot, double *qdot);
+
+typedef struct cg_lib {
+  void *handle;
+  cg_pos_fn position;
+  cg_vel_fn velocity;
+  cg_acc_fn acceleration;
+  double ms_compile;     /* wall time of the compiler run (0 from the cache) */
+  int from_cache;
+} cg_lib;
+
+/* The shared object for src: from the cache when a valid one is there, else compiled and
+ * cached. 0, or -1 with a one-line reason in why. */
+int cg_load(const char *src, cg_lib *out, char *why, size_t len);
+
+#endif

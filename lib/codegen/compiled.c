@@ -1,0 +1,105 @@
+/* Compiled models (appell/compiled.h): generate the model's code (emit_kin.c, emit_vel.c),
+ * get its shared object (cache.c) and install it as the body model's fast kinematics
+ * (model/model.h ap_bm_fast), which the position and velocity hooks call in place of
+ * ap_kin_position + ap_kin_metric and ap_kin_velocity + ap_kin_bias. The plane contact's
+ * support function is called back into the library (ap_kin_plane). */
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "appell/compiled.h"
+#include "codegen/codegen.h"
+#include "linalg/linalg.h"
+
+typedef struct cg_fast {
+  ap_bm_fast base;   /* first: the model holds a pointer to it */
+  cg_lib lib;
+} cg_fast;
+
+typedef struct plane_ctx {
+  const ap_model *m;
+  ap_data *d;
+  double *S;
+} plane_ctx;
+
+static int plane_cb(void *ctx, int joint, const double *Rj, double *z) {
+  plane_ctx *c = ctx;
+  return ap_kin_plane(c->m, c->d, joint, c->d->t, Rj, c->S, z);
+}
+
+static int drive_cb(void *ctx, int joint) {
+  plane_ctx *c = ctx;
+  return ap_kin_drives(c->m, c->d, joint, c->d->t, c->S);
+}
+
+static int fast_position(const ap_bm_fast *f, const ap_model *m, ap_data *d, double *S) {
+  plane_ctx c = {m, d, S};
+  return ((const cg_fast *)f)->lib.position(d->q, S, d->g, plane_cb, drive_cb, &c);
+}
+
+static void fast_velocity(const ap_bm_fast *f, const double *v, double *S, double *h) {
+  ((const cg_fast *)f)->lib.velocity(v, S, h);
+}
+
+/* The compiled acceleration stage where the core would run its native kernels on the model's
+ * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration). */
+static int fast_acceleration(const ap_model *m, ap_data *d) {
+  const cg_fast *F = (const cg_fast *)ap_bm(m)->fast;
+  int k = m->k, lim = ap_la_small_limit();
+  if (!F || d->estimate_cond || d->l != cg_free_speeds(ap_bm(m)) || k > lim || m->n > lim)
+    return AP_ERR_UNSUPPORTED;
+  ap_scratch *s = (ap_scratch *)d->internal;
+  int rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
+                               s->gB, d->Phi, d->edd, d->vdot, d->qdot);
+  return rc == 0 ? AP_OK : AP_ERR_UNSUPPORTED;
+}
+
+static void fast_destroy(ap_bm_fast *f) {
+  cg_fast *F = (cg_fast *)f;
+  if (F->lib.handle) dlclose(F->lib.handle);
+  free(F);
+}
+
+int ap_compile_mode_parse(const char *name, ap_compile_mode *mode) {
+  static const char *const names[] = {"never", "auto", "always"};
+  for (int i = 0; name && mode && i < 3; i++)
+    if (strcmp(name, names[i]) == 0) return *mode = (ap_compile_mode)i, AP_OK;
+  return AP_ERR_ARG;
+}
+
+int ap_model_is_compiled(const ap_model *m) {
+  return ap_model_is_body_model(m) && ap_bm(m)->fast != NULL;
+}
+
+static int why_not(const ap_model *m, char *why, size_t len) {
+  if (!ap_model_is_body_model(m))
+    return snprintf(why, len, "it is not a body model (a math-level system)"), -1;
+  if (m->ops) return snprintf(why, len, "it runs on the tree path, which is not compiled"), -1;
+  return cg_kin_supported(ap_bm(m), why, len);
+}
+
+int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notice,
+                            size_t len) {
+  char why[512] = "", dummy[1];
+  if (!notice) notice = dummy, len = sizeof dummy;
+  if (len) notice[0] = '\0';
+  if (!m || (int)mode < AP_COMPILE_NEVER || (int)mode > AP_COMPILE_ALWAYS) return AP_ERR_ARG;
+  if (mode == AP_COMPILE_NEVER) return 0;
+  if (ap_model_is_compiled(m)) return 1;
+  char *src = why_not(m, why, sizeof why) == 0 ? cg_source(ap_bm(m), why, sizeof why) : NULL;
+  cg_fast *F = src ? calloc(1, sizeof *F) : NULL;
+  if (src && !F) snprintf(why, sizeof why, "out of memory");
+  int rc = F ? cg_load(src, &F->lib, why, sizeof why) : -1;
+  free(src);
+  if (rc != 0) {
+    free(F);
+    snprintf(notice, len, "appell: model '%s' runs interpreted: %s", m->name, why);
+    return 0;
+  }
+  F->base.position = fast_position, F->base.velocity = fast_velocity;
+  F->base.destroy = fast_destroy;
+  ((ap_bmodel *)ap_bm(m))->fast = &F->base;   /* the model's evaluation strategy */
+  ((ap_model *)m)->ev.acceleration = fast_acceleration;
+  return 1;
+}
