@@ -106,22 +106,8 @@ static void test_brake(int im) {
   runner_stop(&r);
 }
 
-/* Friction on a wheel under a planar chassis is refused (the contact row's multiplier there
- * is 0, not the wheel's load). */
-static void test_planar_refused(void) {
-  char path[1200], msg[1024] = "";
-  snprintf(path, sizeof path, "%s/examples/scenes/diff_drive.yaml", AP_SRCDIR);
-  const char *sets[] = {"constraints.roll_l.friction={mu: 0.8}"};
-  ap_scene *sc = NULL;
-  int rc = ap_scene_load(path, sets, 1, &sc, msg, sizeof msg);
-  printf("  planar chassis with friction: %s\n", msg);
-  AP_CHECK(rc != AP_OK && strstr(msg, "planar chassis") != NULL);
-  ap_scene_free(sc);
-}
-
 int main(void) {
   printf("vehicle slip:\n");
   for (int im = 0; im < 2; im++) test_skid(im), test_brake(im);
-  test_planar_refused();
   return ap_check_finish("test_vehicle_slip");
 }
