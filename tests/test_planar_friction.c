@@ -12,7 +12,10 @@
  * diff_drive_brake.yaml on a planar chassis: T = 1 N m per drive wheel never slips, the
  * deceleration 2 T / (r M_eff) to 1e-9. With the scene's mu_kinetic = 0.6 the caster's load is
  * negative from the start (braking at 5.9 m/s^2 tips the robot nose down), and T = 20 N m
- * lifts the caster too: a planar chassis cannot tip, the run stops saying so. */
+ * lifts the caster too: a planar chassis cannot tip, the run stops saying so. Refused: friction
+ * under a planar chassis on a tilted plane, a sliding wheel of the four-wheeled car.
+ * A brake torque growing with time: the drive wheels slip where the never-slipping run's
+ * friction_ratio (its true load below) reaches mu (1e-9 relative). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -145,6 +148,73 @@ static void test_tip_message(void) {
   ap_scene_free(sc);
 }
 
+/* A brake torque growing as 4 t N m per drive wheel on the planar robot: the wheels slip where
+ * the run that never slips (mu = 100) needs mu = 0.3, i.e. where its friction_ratio of roll_l
+ * (the true load in the denominator) reaches 0.3: t* located by an event on ratio - mu. */
+static int ratio_l(double t, const double *q, const double *v, const ap_data *d, void *user,
+                   double *out) {
+  ap_contact_force f;
+  (void)t, (void)q, (void)v;
+  if (ap_body_contact_force(user, d, d->lambda, 0, &f) != AP_OK) return -1;
+  *out = f.friction_ratio - 0.3;
+  return 0;
+}
+
+static void test_growing_brake(void) {
+  const char *sets[] = {"joints.chassis.kind=planar", "initial.chassis={vx: 1}",
+                        "effects.brake_l.torque=-4*t", "effects.brake_r.torque=-4*t",
+                        "constraints.roll_l.friction={mu: 100}",
+                        "constraints.roll_r.friction={mu: 100}",
+                        "constraints.roll_c.friction={mu: 100}"};
+  runner a, b;
+  double ts = NAN;
+  AP_CHECK_EQ_INT(runner_start(&a, "diff_drive_brake.yaml", sets, 7, 1e-12), AP_OK);
+  if (a.sim) {
+    ap_event_def def = ap_event_def_default();
+    def.name = "ratio", def.fn = ratio_l, def.user = (void *)ap_scene_model(a.sc);
+    def.direction = AP_EVENT_RISING, def.action = AP_EVENT_STOP, def.stage = AP_EVENT_REACTIONS;
+    AP_CHECK_EQ_INT(ap_sim_add_event(a.sim, &def), AP_OK);
+    if (ap_sim_advance(a.sim, 1.0) == AP_STOPPED) ts = ap_sim_time(a.sim);
+  }
+  sets[4] = "constraints.roll_l.friction={mu: 0.3}";
+  sets[5] = "constraints.roll_r.friction={mu: 0.3}";
+  sets[6] = "constraints.roll_c.friction={mu: 0.3}";
+  AP_CHECK_EQ_INT(runner_start(&b, "diff_drive_brake.yaml", sets, 7, 1e-12), AP_OK);
+  if (b.sim && isfinite(ts)) {
+    AP_CHECK_EQ_INT(ap_sim_advance(b.sim, ts + 1e-9), AP_OK);
+    ap_event_record rec;
+    memset(&rec, 0, sizeof rec);
+    int n = ap_sim_event_count(b.sim);
+    if (n > 0) AP_CHECK_EQ_INT(ap_sim_event_get(b.sim, 0, &rec), AP_OK);
+    printf("  planar, brake 4 t N m, mu 0.3: the never-slipping run needs mu at t* = %.15g; "
+           "first event %s at %.15g (|t - t*| / t* = %.2g)\n", ts, n ? rec.name : "none", rec.t,
+           fabs(rec.t - ts) / ts);
+    AP_CHECK(n >= 1 && strstr(rec.name, ".slip") != NULL);
+    AP_CHECK_LE(fabs(rec.t - ts), 1e-9 * ts);
+  }
+  AP_CHECK(isfinite(ts));
+  runner_stop(&a), runner_stop(&b);
+}
+
+/* Refused under a planar chassis: friction on a tilted plane (the loads assume z = 0), and a
+ * sliding wheel of the four-wheeled car (statically indeterminate loads), as on a free one. */
+static void test_refusals(void) {
+  char path[1200], msg[1024] = "";
+  snprintf(path, sizeof path, "%s/examples/scenes/diff_drive_skid.yaml", AP_SRCDIR);
+  const char *tilt[] = {"joints.chassis.kind=planar", "initial.chassis={vx: 1}",
+                        "constraints.roll_l.ground={normal: [0, 0.1, 1]}"};
+  ap_scene *sc = NULL;
+  int rc = ap_scene_load(path, tilt, 3, &sc, msg, sizeof msg);
+  printf("  tilted plane: %s\n", msg);
+  AP_CHECK(rc != AP_OK && strstr(msg, "'roll_l'") && strstr(msg, "level ground"));
+  ap_scene_free(sc);
+  const char *car[] = {"constraints.roll_rl.friction={mu: 0.01}"};
+  runner r;
+  rc = runner_start(&r, "car_ackermann.yaml", car, 1, 1e-10);
+  AP_CHECK(rc == AP_ERR_SINGULAR);
+  runner_stop(&r);
+}
+
 int main(void) {
   printf("friction under a planar chassis:\n");
   test_skid("simulation.mode=minimal");
@@ -152,5 +222,7 @@ int main(void) {
   test_brake("simulation.mode=minimal");
   test_brake("simulation.mode=projected");
   test_tip_message();
+  test_refusals();
+  test_growing_brake();
   return ap_check_finish("test_planar_friction");
 }

@@ -160,7 +160,8 @@ static fr_work carve(const ap_bmodel *M, double *S) {
   return w;
 }
 
-/* The active rows (not dropped by a mode) into w->act, the sliding contacts' normal rows last
+/* The active rows (not dropped by a mode; a wheel's row .z under a planar chassis, zero up to
+ * round-off, left out) into w->act, the sliding contacts' normal rows last
  * (so that a row that repeats others is dropped before them, see frictionless); the normal row
  * of sliding contact j (in the order of M->cons) at w->nidx[j], -1 for a wheel whose F_n is
  * its load; returns the number of sliding contacts. */
@@ -175,8 +176,10 @@ static int active_rows(const ap_bmodel *M, const double *S, fr_work *w) {
         w->nidx[p++] = by_load ? -1 : w->na;
         if (!by_load) w->act[w->na++] = c->row + c->hrow, w->nrow++;
       }
+      int zero_z = c->wheel >= 0 && ap_bm_wheel_by_load(M, c);   /* .z vanishes: planar */
       for (int r = 0; !pass && r < c->nrows; r++)
-        if (!(c->fric >= 0 && dropped(M, S, c, r)) && !(sliding && r == c->hrow))
+        if (!(c->fric >= 0 && dropped(M, S, c, r)) && !(sliding && r == c->hrow) &&
+            !(zero_z && r == c->hrow))
           w->act[w->na++] = c->row + r;
     }
   return p;
