@@ -64,14 +64,7 @@ static ap_sim *start(const ap_model *m, ap_mode mode) {
   bs_disk p = bs_disk_default();
   double q[7], v[6];
   bs_disk_turn_free(&p, 0.3, 3.0, 0.4, q, v);
-  ap_sim_def def = ap_sim_def_default();
-  def.mode = mode, def.method = "dop853", def.rtol = 1e-12, def.atol = 1e-14;
-  ap_sim *s = NULL;
-  char msg[1024] = "";
-  int rc = ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg);
-  if (rc != AP_OK) printf("  sim_create: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, "dop853", 1e-12, 1e-14, q, v);
 }
 
 typedef struct ratio_ev {
