@@ -15,7 +15,8 @@
  * lifts the caster too: a planar chassis cannot tip, the run stops saying so. Refused: friction
  * under a planar chassis on a tilted plane, a sliding wheel of the four-wheeled car.
  * A brake torque growing with time: the drive wheels slip where the never-slipping run's
- * friction_ratio (its true load below) reaches mu (1e-9 relative). */
+ * friction_ratio (its true load below) reaches mu (1e-9 relative); growing faster, it tips
+ * the robot: the planar run stops where the free chassis' caster lifts off (1e-9). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -180,6 +181,38 @@ static void test_growing_brake(void) {
   runner_stop(&a), runner_stop(&b);
 }
 
+/* Brakes growing as 8 t N m: the braking tips the robot nose down, the caster's load falls to
+ * 0. On a planar chassis the run stops there with the tipping message; on the free chassis the
+ * caster lifts off (roll_c.lift_off) at the same time (the same motion and loads until then). */
+static void test_tip_mid_run(void) {
+  const char *sets[] = {"effects.brake_l.torque=-8*t", "effects.brake_r.torque=-8*t",
+                        "joints.chassis.kind=planar", "initial.chassis={vx: 1}"};
+  runner a, b;
+  double tp = NAN, tf = NAN;
+  AP_CHECK_EQ_INT(runner_start(&a, "diff_drive_brake.yaml", sets, 4, 1e-12), AP_OK);
+  if (a.sim) {
+    int rc = ap_sim_advance(a.sim, 1.0);
+    const char *msg = ap_sim_message(a.sim), *at = strstr(msg, "at t = ");
+    if (at) tp = atof(at + 7);
+    printf("  planar, brakes 8 t N m: %s\n", msg);
+    AP_CHECK(rc == AP_ERR_UNSUPPORTED && strstr(msg, "contact 'roll_c'") &&
+             strstr(msg, "planar chassis cannot"));
+  }
+  AP_CHECK_EQ_INT(runner_start(&b, "diff_drive_brake.yaml", sets, 2, 1e-12), AP_OK);
+  if (b.sim) {
+    AP_CHECK_EQ_INT(ap_sim_advance(b.sim, 0.395), AP_OK);
+    for (int i = 0; i < ap_sim_event_count(b.sim); i++) {
+      ap_event_record rec;
+      AP_CHECK_EQ_INT(ap_sim_event_get(b.sim, i, &rec), AP_OK);
+      if (strcmp(rec.name, "roll_c.lift_off") == 0 && isnan(tf)) tf = rec.t;
+    }
+  }
+  printf("  the caster's load vanishes at t = %.15g (planar, stopped), %.15g (free, lift-off): "
+         "%.2g apart\n", tp, tf, fabs(tp - tf));
+  AP_CHECK_LE(fabs(tp - tf), 1e-9 * tf);
+  runner_stop(&a), runner_stop(&b);
+}
+
 /* Refused under a planar chassis: friction on a tilted plane (the loads assume z = 0), and a
  * sliding wheel of the four-wheeled car (statically indeterminate loads), as on a free one. */
 static void test_refusals(void) {
@@ -208,5 +241,6 @@ int main(void) {
   test_tip_message();
   test_refusals();
   test_growing_brake();
+  test_tip_mid_run();
   return ap_check_finish("test_planar_friction");
 }
