@@ -536,3 +536,21 @@ void bs_dae_cases(bs_case c[BS_DAE_CASES]) {
   c[5].name = "Hoffmann hinge", c[5].m = bs_hoffmann_primitive(&hp);
   bs_hoffmann_primitive_state(&hp, 0.3, -0.5, 0.5, 0.6, c[5].q0, c[5].v0);
 }
+
+void bs_disk_turn_free(const bs_disk *p, double th, double Om, double psi, double *q,
+                       double *v) {
+  double wa, wn, e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0};
+  double a[3], bu[3], R[9], w[3];
+  bs_disk_steady_rates(p, th, Om, &wa, &wn);
+  for (int i = 0; i < 3; i++) {
+    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
+    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
+  }
+  for (int i = 0; i < 3; i++) R[i] = e1[i], R[3 + i] = -bu[i], R[6 + i] = a[i];  /* columns */
+  q[0] = 0.1, q[1] = -0.2, q[2] = p->r * cos(th);
+  ap_quat_from_matrix(R, q + 3);
+  for (int i = 0; i < 3; i++) w[i] = wa * bu[i] + wn * a[i], v[3 + i] = w[i];
+  v[0] = p->r * (w[1] * bu[2] - w[2] * bu[1]);   /* vc = r w x bu: the contact point at rest */
+  v[1] = p->r * (w[2] * bu[0] - w[0] * bu[2]);
+  v[2] = p->r * (w[0] * bu[1] - w[1] * bu[0]);
+}

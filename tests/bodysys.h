@@ -82,6 +82,13 @@ int bs_disk_state(const ap_model *m, ap_data *d, double psi, double th, double p
 /* Steady circular rolling at lean th and precession rate Om: w_a and w_n. */
 void bs_disk_steady_rates(const bs_disk *p, double th, double Om, double *wa, double *wn);
 
+/* The steady turn of bs_disk_steady_rates for the disk on a free joint (bs_free_ball with
+ * AP_SHAPE_DISK): q (7) = centre at (0.1, -0.2, r cos th), quaternion (heading psi, lean th
+ * from upright, the axis a = R e_z to the left and down), v (6) = centre velocity (the contact
+ * point at rest), world angular velocity w_a b_up + w_n a. */
+void bs_disk_turn_free(const bs_disk *p, double th, double Om, double psi, double *q,
+                       double *v);
+
 /* The lean from upright (rad) of a disk state: a_z = -sin(lean). */
 double bs_disk_lean(const double *q);
 

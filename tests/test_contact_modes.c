@@ -431,20 +431,8 @@ static void test_painleve(void) {
  * start. */
 static void test_disk_turn(ap_mode mode) {
   bs_disk p = bs_disk_default();
-  double th = 0.3, Om = 3.0, wa, wn, psi = 0.4, g[3] = {0, 0, -G};
-  bs_disk_steady_rates(&p, th, Om, &wa, &wn);
-  double e1[3] = {cos(psi), sin(psi), 0}, left[3] = {-sin(psi), cos(psi), 0}, a[3], bu[3], R[9];
-  for (int i = 0; i < 3; i++) {
-    a[i] = cos(th) * left[i] - sin(th) * (i == 2);
-    bu[i] = sin(th) * left[i] + cos(th) * (i == 2);
-  }
-  for (int i = 0; i < 3; i++) R[i] = e1[i], R[3 + i] = -bu[i], R[6 + i] = a[i];  /* columns */
-  double q[7] = {0.1, -0.2, p.r * cos(th), 0, 0, 0, 0}, v[6], w[3];
-  ap_quat_from_matrix(R, q + 3);
-  for (int i = 0; i < 3; i++) w[i] = wa * bu[i] + wn * a[i], v[3 + i] = w[i];
-  v[0] = p.r * (w[1] * bu[2] - w[2] * bu[1]);   /* vc = r w x bu: the contact point at rest */
-  v[1] = p.r * (w[2] * bu[0] - w[0] * bu[2]);
-  v[2] = p.r * (w[0] * bu[1] - w[1] * bu[0]);
+  double th = 0.3, Om = 3.0, g[3] = {0, 0, -G}, q[7], v[6];
+  bs_disk_turn_free(&p, th, Om, 0.4, q, v);
   double need = Om * hypot(v[0], v[1]) / G;
   for (int above = 0; above < 2; above++) {
     ap_constraint_def c = ap_constraint_def_default();

@@ -100,10 +100,20 @@ static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
   return rc;
 }
 
-/* Normal force and tangential force (2) of contact c from the data's multipliers. */
-static double contact_forces(const ap_data *d, const ap_mcon *c, double *ft) {
+/* Normal force and tangential force (2) of contact c from the data's multipliers (a wheel
+ * under a planar chassis: its load, model/loads.c). */
+static double contact_forces(const ap_model *m, const ap_data *d, const ap_mcon *c,
+                             double *ft) {
   ft[0] = d->lambda[c->row], ft[1] = d->lambda[c->row + 1];
-  return d->lambda[c->row + c->hrow];
+  return ap_cfr_contact_normal(m, d, d->lambda, c);
+}
+
+/* A wheel under a planar chassis cannot leave the ground: the run stops. */
+static int tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
+  return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "contact '%s': the wheel's load falls to %.6g N at "
+                     "t = %.17g: the vehicle would tip or lift that wheel, which a planar "
+                     "chassis cannot (its joint keeps the chassis level): put the chassis on a "
+                     "free joint (docs/vehicles.md)", c->name, fn, t);
 }
 
 static int value(double t, const double *q, const double *v, const ap_data *d, void *user,
@@ -117,10 +127,11 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   *out = 1.0;
   switch (e->kind) {
     case EV_SLIP:
-      if (mode == AP_CM_ROLLING) *out = mu_of(c) * contact_forces(d, c, ft) - hypot(ft[0], ft[1]);
+      if (mode == AP_CM_ROLLING)
+        *out = mu_of(c) * contact_forces(e->cm->s->m, d, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = contact_forces(d, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = contact_forces(e->cm->s->m, d, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {
@@ -186,17 +197,19 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
   switch (e->kind) {
     case EV_SLIP:
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->d, c, ft);
+      fn = contact_forces(s->m, s->d, c, ft);
+      if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, fn);
       if (unilateral(c) && fn <= 0) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
       else slide_against(s, c, ft);
       break;
     case EV_LIFT:
+      if (ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, 0.0);
       ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
       break;
     case EV_STICK:
       ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->d, c, ft);
+      fn = contact_forces(s->m, s->d, c, ft);
       if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
       break;
     default:
@@ -207,7 +220,8 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
- * from the start (along -F_t), one whose normal force is negative flies (unilateral). */
+ * from the start (along -F_t), one whose normal force is negative flies (unilateral); a wheel
+ * under a planar chassis with a negative load stops the run (tips). */
 static int initial_cone(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   const ap_bmodel *M = ap_bm(s->m);
@@ -218,16 +232,21 @@ static int initial_cone(ap_sim *s) {
   int rc = forces_at(s, s->t, q, v), changed = 0;
   for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
-    if (ap_cfr_mode(M, scratch(s->d), c) != AP_CM_ROLLING) continue;
-    double fn = contact_forces(s->d, c, ft);
+    int mode = ap_cfr_mode(M, scratch(s->d), c);
+    double fn = mode == AP_CM_AIRBORNE ? 0.0 : contact_forces(s->m, s->d, c, ft);
+    if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(M, c)) {   /* sliding or rolling */
+      rc = tips(s, c, s->t, fn);
+      break;
+    }
+    if (mode != AP_CM_ROLLING) continue;
     if (unilateral(c) && fn < 0) {
       ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
     } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
       slide_against(s, c, ft), changed = 1;
     }
   }
-  if (rc != AP_OK) rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
-                                    s->d->msg);
+  if (rc != AP_OK && rc != AP_ERR_UNSUPPORTED)
+    rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", s->d->msg);
   if (rc == AP_OK && changed) rc = ap_drv_restart_state(s, s->t, q, v);
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);

@@ -20,8 +20,17 @@
  * of one axle) are left out of S (their share of the reactions is carried by the rows they
  * repeat; v' is unchanged); a sliding contact's normal row that depends on the others is
  * refused (its F_n is not unique). A sphere has u = 0 (its friction has no moment about
- * its centre along the normal). Cost: only while a contact slides; a model without modes has
- * an empty block and never calls this. Double build only. */
+ * its centre along the normal).
+ *
+ * A wheel under a planar chassis has no normal row (it vanishes there: the joint holds the
+ * chassis up); its F_n is its load N_j(v', lambda) (model/loads.c), affine in the
+ * accelerations and multipliers. A unit F_n,i moves them by (g^-1 f_i - X u_i, -u_i), X =
+ * g^-1 A^T, so the loads are N = N0 + B F_n with B_ji the change of N_j it makes (evaluated
+ * exactly, the load being affine), and such a row of the system above reads
+ * (I - B)_j F_n = N0_j: the loads are solved with the accelerations, not lagged. They are
+ * unique for three non-collinear contacts; with four or more rigid ones a sliding wheel stops
+ * the run as on a free chassis (statically indeterminate). Cost: only while a contact
+ * slides; a model without modes has an empty block and never calls this. Double build only. */
 #include <math.h>
 #include <string.h>
 
@@ -38,7 +47,7 @@ size_t ap_cfr_scratch_size(const ap_bmodel *M) {
   if (!M->nfric) return 0;
   size_t k = (size_t)M->k, b = (size_t)M->b, nf = (size_t)M->nfric;
   return nf * fr_stride(M) + k * k + k * b + b * b + 2 * k + 4 * b + b * nf + k * nf +
-         nf * nf + 2 * nf;
+         nf * nf + 2 * nf + (M->nwheel ? 2 * k + 2 * b + nf : 0);
 }
 
 int ap_cfr_mode(const ap_bmodel *M, const double *S, const ap_mcon *c) {
@@ -57,10 +66,12 @@ double ap_cfr_normal_force(const ap_bmodel *M, const double *S, const ap_mcon *c
   return block(M, S, c)[1];
 }
 
-/* Row r of c dropped by its mode. */
+/* Row r of c dropped by its mode (a sliding wheel under a planar chassis keeps no row: its
+ * row .z vanishes there, its F_n is its load). */
 static int dropped(const ap_bmodel *M, const double *S, const ap_mcon *c, int r) {
   int mode = ap_cfr_mode(M, S, c);
-  return mode == AP_CM_AIRBORNE || (mode == AP_CM_SLIDING && r != c->hrow);
+  return mode == AP_CM_AIRBORNE ||
+         (mode == AP_CM_SLIDING && (r != c->hrow || ap_bm_wheel_by_load(M, c)));
 }
 
 void ap_cfr_rows(const ap_bmodel *M, double *S, const ap_mcon *c, double *A, double *a0) {
@@ -132,7 +143,8 @@ static double solve_nopivot(int n, double *Mx, double *y) {
 
 typedef struct fr_work {
   double *Lg, *X, *Sm, *y, *z, *rhs, *lam0, *U, *F, *Mp, *lamN, *act, *nidx, *drop;
-  int na;
+  double *vd0, *vd, *lf0, *lf, *N0;   /* wheel loads: v', lambda (all rows), loads at F_n = 0 */
+  int na, nrow;                       /* active rows; sliding contacts with a normal row */
 } fr_work;
 
 static fr_work carve(const ap_bmodel *M, double *S) {
@@ -143,27 +155,32 @@ static fr_work carve(const ap_bmodel *M, double *S) {
   w.rhs = w.z + k, w.lam0 = w.rhs + b, w.act = w.lam0 + b, w.U = w.act + b;
   w.F = w.U + b * nf, w.Mp = w.F + k * nf, w.lamN = w.Mp + nf * nf, w.nidx = w.lamN + nf;
   w.drop = w.nidx + nf;
-  w.na = 0;
+  w.vd0 = w.drop + b, w.vd = w.vd0 + k, w.lf0 = w.vd + k, w.lf = w.lf0 + b, w.N0 = w.lf + b;
+  w.na = w.nrow = 0;
   return w;
 }
 
-/* The active rows (not dropped by a mode) into w->act, the sliding contacts' normal rows last
+/* The active rows (not dropped by a mode; a wheel's row .z under a planar chassis, zero up to
+ * round-off, left out) into w->act, the sliding contacts' normal rows last
  * (so that a row that repeats others is dropped before them, see frictionless); the normal row
- * of sliding contact j (in the order of M->cons) at w->nidx[j]; returns the number of sliding
- * contacts. */
+ * of sliding contact j (in the order of M->cons) at w->nidx[j], -1 for a wheel whose F_n is
+ * its load; returns the number of sliding contacts. */
 static int active_rows(const ap_bmodel *M, const double *S, fr_work *w) {
   int p = 0;
   for (int pass = 0; pass < 2; pass++)
     for (int ci = 0; ci < M->nc; ci++) {
       const ap_mcon *c = &M->cons[ci];
       int sliding = c->fric >= 0 && ap_cfr_mode(M, S, c) == AP_CM_SLIDING;
-      for (int r = 0; r < c->nrows; r++) {
-        if (c->fric >= 0 && dropped(M, S, c, r)) continue;
-        int normal = sliding && r == c->hrow;
-        if (normal != pass) continue;
-        if (normal) w->nidx[p++] = w->na;
-        w->act[w->na++] = c->row + r;
+      if (pass && sliding) {
+        int by_load = ap_bm_wheel_by_load(M, c);
+        w->nidx[p++] = by_load ? -1 : w->na;
+        if (!by_load) w->act[w->na++] = c->row + c->hrow, w->nrow++;
       }
+      int zero_z = c->wheel >= 0 && ap_bm_wheel_by_load(M, c);   /* .z vanishes: planar */
+      for (int r = 0; !pass && r < c->nrows; r++)
+        if (!(c->fric >= 0 && dropped(M, S, c, r)) && !(sliding && r == c->hrow) &&
+            !(zero_z && r == c->hrow))
+          w->act[w->na++] = c->row + r;
     }
   return p;
 }
@@ -233,12 +250,7 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
   for (int a = 0; a < na; a++)
     for (int c = 0; c < na; c++)
       w->Sm[a + (size_t)c * na] = arow_dot(M, d, w, a, w->X + (size_t)c * k);
-  int np = 0;
-  for (int ci = 0; ci < M->nc; ci++) {
-    const ap_mcon *c = &M->cons[ci];
-    np += c->fric >= 0 && ap_cfr_mode(M, ap_bm_scratch(d), c) == AP_CM_SLIDING;
-  }
-  if (chol_skip(na, w->Sm, w->drop, na - np, 1e-12) >= 0) {
+  if (chol_skip(na, w->Sm, w->drop, na - w->nrow, 1e-12) >= 0) {
     AP_BM_MSG(d, "model '%s': sliding contacts: a sliding contact's normal row depends on the "
               "other %d active constraint rows at t = %.17g (the normal forces are not unique: "
               "statically indeterminate contacts)", m->name, na - 1, d->t);
@@ -273,6 +285,60 @@ static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c,
   chol_solve(w->na, w->Sm, U);
 }
 
+/* Wheels whose F_n is their load (under a planar chassis): v'0 = g^-1 (Q - h + A^T lambda0)
+ * and lambda0 on every row (0 on the dropped ones) at F_n = 0, and each such wheel's load
+ * there, N0. */
+static int load_base(const ap_model *m, ap_data *d, fr_work *w, const ap_mcon *const *sl,
+                     int p) {
+  const ap_bmodel *M = ap_bm(m);
+  int k = M->k;
+  memcpy(w->vd0, w->y, sizeof(double) * (size_t)k);
+  memset(w->lf0, 0, sizeof(double) * (size_t)M->b);
+  for (int a = 0; a < w->na; a++) {
+    for (int j = 0; j < k; j++) w->vd0[j] += w->X[(size_t)a * k + j] * w->lam0[a];
+    w->lf0[(int)w->act[a]] = w->lam0[a];
+  }
+  for (int i = 0; i < p; i++) {
+    if (w->nidx[i] >= 0) continue;
+    int unique = 1, ci = (int)(sl[i] - M->cons);
+    int rc = ap_bm_wheel_load_at(m, d, w->vd0, w->lf0, ci, &w->N0[i], &unique);
+    if (rc != AP_OK) return rc;
+    if (!unique) {
+      AP_BM_MSG(d, "model '%s': contact '%s' slides under a planar chassis whose wheel loads "
+                "are statically indeterminate (4 or more rigid contacts, or collinear ones) at "
+                "t = %.17g: the normal forces are not unique: statically indeterminate "
+                "contacts (give the wheels a suspension on a free chassis, docs/vehicles.md)",
+                m->name, sl[i]->name, d->t);
+      return AP_ERR_SINGULAR;
+    }
+  }
+  return AP_OK;
+}
+
+/* Column j of I - B for the wheels whose F_n is their load: a unit F_n,j changes v' by
+ * g^-1 f_j - X u_j (w->z holds g^-1 f_j) and lambda by -u_j, and load i by B_ij (exact: the
+ * load is affine in v' and lambda). */
+static int load_column(const ap_model *m, ap_data *d, fr_work *w, const ap_mcon *const *sl,
+                       int p, int j) {
+  const ap_bmodel *M = ap_bm(m);
+  int k = M->k;
+  const double *u = w->U + (size_t)j * w->na;
+  memcpy(w->lf, w->lf0, sizeof(double) * (size_t)M->b);
+  for (int i = 0; i < k; i++) w->vd[i] = w->vd0[i] + w->z[i];
+  for (int a = 0; a < w->na; a++) {
+    for (int i = 0; i < k; i++) w->vd[i] -= w->X[(size_t)a * k + i] * u[a];
+    w->lf[(int)w->act[a]] -= u[a];
+  }
+  for (int i = 0; i < p; i++) {
+    if (w->nidx[i] >= 0) continue;
+    double L;
+    int rc = ap_bm_wheel_load_at(m, d, w->vd, w->lf, (int)(sl[i] - M->cons), &L, NULL);
+    if (rc != AP_OK) return rc;
+    w->Mp[i + (size_t)j * p] = (i == j) - (L - w->N0[i]);
+  }
+  return AP_OK;
+}
+
 int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   const ap_bmodel *M = ap_bm(m);
   fr_work w = carve(M, S);
@@ -285,20 +351,25 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   for (int ci = 0; ci < M->nc && ns < 64; ci++)
     if (M->cons[ci].fric >= 0 && ap_cfr_mode(M, S, &M->cons[ci]) == AP_CM_SLIDING)
       sl[ns++] = &M->cons[ci];
-  for (int j = 0; j < p; j++)
+  if (p > w.nrow) rc = load_base(m, d, &w, sl, p);
+  for (int j = 0; rc == AP_OK && j < p; j++) {
     coulomb(M, d, S, sl[j], &w, w.F + (size_t)j * k, w.U + (size_t)j * w.na);
-  for (int i = 0; i < p; i++) {
-    w.lamN[i] = w.lam0[(int)w.nidx[i]];
-    for (int j = 0; j < p; j++)
-      w.Mp[i + (size_t)j * p] = (i == j) + w.U[(int)w.nidx[i] + (size_t)j * w.na];
+    if (p > w.nrow) rc = load_column(m, d, &w, sl, p, j);
   }
-  double small = solve_nopivot(p, w.Mp, w.lamN);
+  if (rc != AP_OK) return rc;
+  for (int i = 0; i < p; i++) {
+    int n = (int)w.nidx[i];
+    w.lamN[i] = n >= 0 ? w.lam0[n] : w.N0[i];
+    for (int j = 0; n >= 0 && j < p; j++)
+      w.Mp[i + (size_t)j * p] = (i == j) + w.U[n + (size_t)j * w.na];
+  }
+  double m00 = w.Mp[0], small = solve_nopivot(p, w.Mp, w.lamN);
   if (small < 0) {
     AP_BM_MSG(d, "model '%s': contact '%s' slides in a state where the normal force has no "
               "solution or several (Painleve's paradox: 1 + u = %.6g <= 0, the friction "
               "pushes the contact into the ground harder than the normal force can resist) at "
               "t = %.17g: lower mu_kinetic or model the impact", m->name, sl[0]->name,
-              p == 1 ? 1.0 + w.U[(int)w.nidx[0]] : small, d->t);
+              p == 1 ? m00 : small, d->t);
     return AP_ERR_SINGULAR;
   }
   for (int j = 0; j < p; j++) {
@@ -306,6 +377,15 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
     block(M, S, sl[j])[1] = w.lamN[j];
   }
   return AP_OK;
+}
+
+double ap_cfr_contact_normal(const ap_model *m, const ap_data *d, const double *lam,
+                             const ap_mcon *c) {
+  const ap_bmodel *M = ap_bm(m);
+  double fn = NAN;
+  if (!ap_bm_wheel_by_load(M, c)) return lam[c->row + c->hrow];
+  return ap_bm_wheel_load_at(m, d, d->vdot, lam, (int)(c - M->cons), &fn, NULL) == AP_OK ? fn
+                                                                                    : NAN;
 }
 
 /* ---- choosing the modes from a state ------------------------------------------------------ */

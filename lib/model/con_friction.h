@@ -39,6 +39,11 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S);
  * added to F (3; with t1 NULL: to F (2) in tangent coordinates); nothing in the other modes. */
 void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,
                            const double *t1, const double *t2, double *F);
+/* The normal force of contact c at the data's state after the reactions (v', multipliers lam
+ * (b)): its row .z's multiplier, or under a planar chassis the wheel's load (model/loads.c);
+ * NaN when the load cannot be evaluated. */
+double ap_cfr_contact_normal(const ap_model *m, const ap_data *d, const double *lam,
+                             const ap_mcon *c);
 /* 1 when contact c lifts off (def.unilateral, or by default when it has a friction coefficient). */
 int ap_cfr_unilateral(const ap_mcon *c);
 /* The gap of contact c whatever its mode (m; contact.c), after the position stage. */

@@ -410,15 +410,6 @@ static int ground_plane(ap_builder *b, const char *nm, ap_mcon *c) {
   return AP_OK;
 }
 
-/* The joint that holds body b's chassis (its ancestor joined to the ground). */
-static const ap_mjoint *chassis_joint(const ap_bmodel *M, int b) {
-  for (;;) {
-    const ap_mjoint *j = &M->joints[M->bodies[b].joint];
-    if (j->parent == AP_GROUND) return j;
-    b = j->parent;
-  }
-}
-
 /* Rolling, or a wheel's knife edge: the shape's lowest point touches the ground. On a
  * plane-contact joint the joint holds it there; on any other joint the constraint adds the
  * contact row .z (last row, holonomic) and a geometry block of its own. */
@@ -457,11 +448,6 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
     FAIL("constraint '%s': friction and lift-off (mu %g, unilateral %d) need a rolling contact "
          "of a body that is not on a plane-contact joint (a free body, a wheel on its axle): "
          "the plane-contact joint cannot leave the ground", nm, d->mu, d->unilateral);
-  if (modes && J->kind != AP_JOINT_PLANE_CONTACT &&
-      chassis_joint(M, d->body)->kind == AP_JOINT_PLANAR)
-    FAIL("constraint '%s': friction and lift-off (mu %g) need the wheel's normal force, which "
-         "under a planar chassis the joint carries (the contact row's multiplier is 0): put "
-         "the chassis on a free joint (docs/vehicles.md)", nm, d->mu);
   if (!(d->restitution >= 0 && d->restitution <= 1) || (d->restitution > 0 && !modes))
     FAIL("constraint '%s': restitution %g: it must lie in [0, 1], on a unilateral contact "
          "(unilateral or friction given)", nm, d->restitution);
@@ -472,6 +458,11 @@ static int contact_compile(ap_builder *b, ap_bmodel *M, const char *nm, ap_mcon 
          d->mu_kinetic);
   if (J->kind == AP_JOINT_PLANE_CONTACT) return AP_OK;
   c->wheel = M->nwheel++;
+  if (modes && c->plane && ap_bm_wheel_by_load(M, c))
+    FAIL("constraint '%s': friction and lift-off (mu %g) under a planar chassis use the wheel "
+         "loads, which assume level ground z = 0 (this ground: %s): put the chassis on a free "
+         "joint (docs/vehicles.md)", nm, d->mu, c->plane == 2 ? "a sphere" : "a tilted or "
+         "raised plane");
   c->hrow = c->nrows++;
   c->nhol = 1;
   if (modes) c->fric = M->nfric++;
@@ -505,7 +496,9 @@ static void contact_force(const ap_bmodel *M, double *S, const ap_mcon *c, const
     v3_axpy(lam[0], n, F);
   }
   if (c->nhol) v3_axpy(lam[c->hrow], gn, F);
-  if (c->fric >= 0) ap_cfr_friction_force(M, S, c, lam[c->hrow], t1, t2, F);   /* sliding */
+  if (c->fric >= 0)   /* sliding; under a planar chassis F_n is the wheel's load */
+    ap_cfr_friction_force(M, S, c, ap_bm_wheel_by_load(M, c) ? ap_cfr_normal_force(M, S, c)
+                                                              : lam[c->hrow], t1, t2, F);
 }
 
 static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const double *lam,

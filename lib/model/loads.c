@@ -122,31 +122,35 @@ static int z_rows_independent(const double *A, int b, int k, const int *zr, int 
   return ok;
 }
 
-int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
-                     double *normal, ap_load_kind *kind, int *count) {
-  const ap_bmodel *M = ap_bm(m);
-  const ap_mcon *me = &M->cons[constraint];
-  double *S = ap_bm_scratch(d);
-  int root = chassis_of(M, me->def.body), n = 0, zr[64];
-  int planar = M->joints[M->bodies[root].joint].kind == AP_JOINT_PLANAR;
-  double c[3] = {0, 0, 0}, p[3];
+/* The wheel contacts under chassis `root`: their number, their centroid c (3) and their rows
+ * .z (the first 64) into zr. */
+static int contacts_of(const ap_bmodel *M, double *S, int root, double *c, int *zr) {
+  int n = 0;
+  double p[3];
+  c[0] = c[1] = c[2] = 0.0;
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *w = &M->cons[ci];
     if (w->wheel < 0 || !ap_bm_in_subtree(M, w->def.body, root)) continue;
     contact_point(M, S, w, p);
     v3_axpy(1.0, p, c);
-    if (n < 64) zr[n] = w->row + w->hrow;
+    if (zr && n < 64) zr[n] = w->row + w->hrow;
     n++;
   }
-  if (count) *count = n;
-  if (!planar && n <= 64 && z_rows_independent(d->A, M->b, M->k, zr, n)) {
-    *normal = lam[me->row + me->hrow];   /* the contact row's own multiplier: unique */
-    *kind = AP_LOAD_UNIQUE;
-    return AP_OK;
-  }
-  for (int i = 0; i < 3; i++) c[i] /= n;
+  for (int i = 0; n && i < 3; i++) c[i] /= n;
+  return n;
+}
+
+/* The load of wheel contact `constraint` redistributed from the chassis' balance at the
+ * accelerations vd and multipliers lam (the n contacts of chassis root, centroid c): affine
+ * in (vd, lam). *rank gets the rank of S. */
+static int redistributed(const ap_model *m, const ap_data *d, const double *vd,
+                         const double *lam, int constraint, int root, int planar, int n,
+                         const double *c, double *normal, int *rank) {
+  const ap_bmodel *M = ap_bm(m);
+  const ap_mcon *me = &M->cons[constraint];
+  double *S = ap_bm_scratch(d), p[3];
   double Fi[3], Ti[3], Fe[3], Te[3], Fc[3], Tc[3];
-  inertial_wrench(M, S, d->vdot, root, c, Fi, Ti);
+  inertial_wrench(M, S, vd, root, c, Fi, Ti);
   int rc = ap_eff_subtree_wrench(M, S, d->t, d->v, root, c, Fe, Te);
   if (rc == AP_OK) rc = ap_con_subtree_wrench(M, S, lam, root, -1, c, Fc, Tc);
   if (rc != AP_OK) return rc;
@@ -164,9 +168,43 @@ int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int
   double RM[3], mm[2], y[2];
   for (int i = 0; i < 3; i++) RM[i] = Ti[i] - Te[i] - Tc[i];
   mm[0] = -RM[1], mm[1] = RM[0];
-  int r = pinv2(Saa, Sab, Sbb, mm, y);
+  *rank = pinv2(Saa, Sab, Sbb, mm, y);
   *normal = (Fi[2] - Fe[2] - Fc[2]) / n + ai * y[0] + bi * y[1];
   if (planar) *normal += lam[me->row + me->hrow];
-  *kind = n > r + 1 || !planar ? AP_LOAD_MIN_NORM : r < 2 ? AP_LOAD_JOINT : AP_LOAD_UNIQUE;
   return AP_OK;
+}
+
+int ap_bm_wheel_by_load(const ap_bmodel *M, const ap_mcon *c) {
+  return c->wheel >= 0 &&
+         M->joints[M->bodies[chassis_of(M, c->def.body)].joint].kind == AP_JOINT_PLANAR;
+}
+
+int ap_bm_wheel_load_at(const ap_model *m, const ap_data *d, const double *vd,
+                        const double *lam, int constraint, double *normal, int *unique) {
+  const ap_bmodel *M = ap_bm(m);
+  int root = chassis_of(M, M->cons[constraint].def.body), r = 0;
+  double c[3];
+  int n = contacts_of(M, ap_bm_scratch(d), root, c, NULL);
+  int rc = redistributed(m, d, vd, lam, constraint, root, 1, n, c, normal, &r);
+  if (unique) *unique = n <= r + 1;
+  return rc;
+}
+
+int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
+                     double *normal, ap_load_kind *kind, int *count) {
+  const ap_bmodel *M = ap_bm(m);
+  const ap_mcon *me = &M->cons[constraint];
+  int root = chassis_of(M, me->def.body), zr[64], r;
+  int planar = M->joints[M->bodies[root].joint].kind == AP_JOINT_PLANAR;
+  double c[3];
+  int n = contacts_of(M, ap_bm_scratch(d), root, c, zr);
+  if (count) *count = n;
+  if (!planar && n <= 64 && z_rows_independent(d->A, M->b, M->k, zr, n)) {
+    *normal = lam[me->row + me->hrow];   /* the contact row's own multiplier: unique */
+    *kind = AP_LOAD_UNIQUE;
+    return AP_OK;
+  }
+  int rc = redistributed(m, d, d->vdot, lam, constraint, root, planar, n, c, normal, &r);
+  *kind = n > r + 1 || !planar ? AP_LOAD_MIN_NORM : r < 2 ? AP_LOAD_JOINT : AP_LOAD_UNIQUE;
+  return rc;
 }

@@ -526,6 +526,14 @@ int ap_con_subtree_wrench(const ap_bmodel *M, double *S, const double *lambda, i
  * is known, and how many contacts share it. */
 int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
                      double *normal, ap_load_kind *kind, int *count);
+/* 1 when wheel contact c's normal force is its load, not its row's multiplier: a wheel under
+ * a planar chassis (the joint holds the chassis up; the contact row .z vanishes). */
+int ap_bm_wheel_by_load(const ap_bmodel *M, const ap_mcon *c);
+/* The load of such a wheel at the accelerations vd (k) and the multipliers lam (b), after the
+ * velocity stage at the data's state: affine in (vd, lam), the friction law's F_n. *unique
+ * (may be NULL): 0 when the chassis' loads are statically indeterminate (minimum-norm). */
+int ap_bm_wheel_load_at(const ap_model *m, const ap_data *d, const double *vd,
+                        const double *lam, int constraint, double *normal, int *unique);
 void ap_bm_destroy(void *impl);
 #endif
 
