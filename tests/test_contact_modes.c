@@ -484,7 +484,7 @@ static void test_disk_turn(ap_mode mode) {
 
 /* Refusals, each with the constraint's name: a NaN or infinite mu, mu_kinetic above mu, a
  * restitution outside [0, 1] or without lift-off, friction on a plane-contact joint (which
- * cannot leave the ground), and DAE mode. */
+ * cannot leave the ground). (DAE mode: tests/test_contact_dae.c.) */
 static void test_refusals(void) {
   double g[3] = {0, 0, -G};
   struct { double mu, muk, e; int uni; } bad[] = {
@@ -500,18 +500,6 @@ static void test_refusals(void) {
     printf("  refused (%d): %s\n", rc, msg);
     AP_CHECK(rc != AP_OK && strstr(msg, "'roll'") != NULL);
   }
-  ap_model *m = ball(0.5, -1, 0.0);
-  double q[7] = {0, 0, R, 1, 0, 0, 0}, v[6] = {0};
-  ap_sim_def def = ap_sim_def_default();
-  def.mode = AP_MODE_DAE;
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  int rc = m ? ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg) : AP_ERR_ARG;
-  printf("  DAE mode: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_ERR_UNSUPPORTED);
-  AP_CHECK(strstr(msg, "DAE") != NULL);
-  ap_sim_free(s);
-  ap_model_free(m);
   (void)g;
 }
 

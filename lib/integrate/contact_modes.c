@@ -13,17 +13,19 @@
  *   NAME.lift_off  rolling, sliding: F_n             -> airborne
  *   NAME.stick     sliding:   s . s_ref               -> rolling when the sticking force lies
  *                                                       in the cone, else sliding along -F_t
- *   NAME.touchdown airborne:  the gap                 -> rolling
+ *   NAME.touchdown airborne:  the gap                 -> rolling, sliding or airborne (the
+ *                                                       impact, contact_impact.c)
  * s_ref is the slip direction at the last accepted step (the "contact modes" stage after the
  * events stage keeps it): s . s_ref falls through 0 where the slip speed reaches 0.
  *
  * A switch changes the mode (the rows the model drops) in the data; the driver then restarts
  * the stepper at the event with ap_drv_restart_state, which puts q on the new holonomic rows
- * and v on the new velocity rows nearest in the kinetic-energy metric. At touchdown that
- * projection is the sticking plastic impact v+ = v- - g^-1 A^T (A g^-1 A^T)^-1 (A v- + a0)
- * (ap_impact; Carnot: the energy lost is the kinetic energy of v+ - v-). The number of free
+ * and v on the new velocity rows nearest in the kinetic-energy metric. At touchdown the hook
+ * has made the impact's velocity jump already (sticking, sliding or bouncing: contact_impact.c),
+ * which that projection keeps. The number of free
  * speeds changes at a switch: in minimal mode the stepper is created again for the new state
- * size (sim.c). DAE mode is refused. */
+ * size (sim.c); in DAE mode IDA is made again (contact_dae.c), and the events read the forces
+ * from IDA's multipliers. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,7 +48,16 @@ struct ap_drv_contacts {
   int nc;            /* contacts with modes */
   int *ci;           /* their constraint index */
   cm_event *ev;      /* EV_N per contact */
+  double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
+  char *armed;       /* (by constraint) airborne and the gap has exceeded gap_tol */
 };
+
+/* A contact that has just left the ground has a gap of third order in the time (at lift-off
+ * the centre's path osculates the ground), below the integration error at first: IDA's BDF,
+ * restarted at order 1, made it -2.5e-12 m 2e-6 s after a lift-off, and the touchdown event
+ * fired there. Its touchdown watches gap + gap_tol until the gap at an accepted step exceeds
+ * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that. */
+static double gap_tol(const ap_sim *s) { return s->def.atol + s->def.rtol * s->m->lscale; }
 
 static const ap_mcon *con(const ap_sim *s, int ci) { return &ap_bm(s->m)->cons[ci]; }
 static double *scratch(const ap_data *d) { return ap_bm_scratch(d); }
@@ -58,6 +69,8 @@ void ap_drv_contacts_free(ap_sim *s) {
   if (!s->cm) return;
   free(s->cm->ci);
   free(s->cm->ev);
+  free(s->cm->lam);
+  free(s->cm->armed);
   free(s->cm);
   s->cm = NULL;
 }
@@ -65,14 +78,13 @@ void ap_drv_contacts_free(ap_sim *s) {
 int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (!ap_model_is_body_model(s->m) || ap_bm(s->m)->nfric == 0) return AP_OK;
   const ap_bmodel *M = ap_bm(s->m);
-  if (s->def.mode == AP_MODE_DAE)
-    return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "system '%s': contacts with friction or lift-off "
-                       "(contact modes) run in minimal, projected and plain modes, not yet in "
-                       "DAE mode", s->m->name);
   s->cm = calloc(1, sizeof *s->cm);
   if (s->cm) s->cm->ci = calloc((size_t)M->nfric, sizeof(int));
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
-  if (!s->cm || !s->cm->ci || !s->cm->ev) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
+  if (s->cm) s->cm->armed = calloc((size_t)M->nc, 1);
+  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
+    return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
   d->t = t0, d->speeds_from_e = 0;
@@ -100,10 +112,10 @@ static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
   return rc;
 }
 
-/* Normal force and tangential force (2) of contact c from the data's multipliers. */
-static double contact_forces(const ap_data *d, const ap_mcon *c, double *ft) {
-  ft[0] = d->lambda[c->row], ft[1] = d->lambda[c->row + 1];
-  return d->lambda[c->row + c->hrow];
+/* Normal force and tangential force (2) of contact c from the multipliers lam. */
+static double contact_forces(const double *lam, const ap_mcon *c, double *ft) {
+  ft[0] = lam[c->row], ft[1] = lam[c->row + 1];
+  return lam[c->row + c->hrow];
 }
 
 static int value(double t, const double *q, const double *v, const ap_data *d, void *user,
@@ -112,15 +124,22 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   const ap_bmodel *M = ap_bm(e->cm->s->m);
   const ap_mcon *c = &M->cons[e->ci];
   double *S = scratch(d), ft[2], sl[2];
+  const double *lam = d->lambda;
+  ap_sim *s = e->cm->s;
   int mode = ap_cfr_mode(M, S, c);
-  (void)t, (void)q;
+  (void)q;
   *out = 1.0;
+  if (s->dae && (e->kind == EV_SLIP || e->kind == EV_LIFT) && mode != AP_CM_AIRBORNE) {
+    if (ap_dae_multipliers(s->dae, t, e->cm->lam) != AP_OK) return -1;   /* IDA's own */
+    lam = e->cm->lam;
+  }
   switch (e->kind) {
     case EV_SLIP:
-      if (mode == AP_CM_ROLLING) *out = mu_of(c) * contact_forces(d, c, ft) - hypot(ft[0], ft[1]);
+      if (mode == AP_CM_ROLLING)
+        *out = mu_of(c) * contact_forces(lam, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = contact_forces(d, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = contact_forces(lam, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {
@@ -130,7 +149,8 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
       }
       break;
     default:
-      if (mode == AP_CM_AIRBORNE) *out = ap_contact_gap(M, S, c);
+      if (mode == AP_CM_AIRBORNE)
+        *out = ap_contact_gap(M, S, c) + (e->cm->armed[e->ci] ? 0.0 : gap_tol(s));
       break;
   }
   return 0;
@@ -143,37 +163,16 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
   ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_SLIDING);
 }
 
-/* Touchdown: the contact's rows back (rolling); the restart's projection is then the sticking
- * plastic impact. With restitution e > 0 the impact is the projection onto the rows with the
- * normal one's target e |vn| instead of 0 (vn < 0 the closing speed of the contact point), in
- * the same metric: a sphere keeps its angular momentum about the contact point and bounces at
- * e |vn|, airborne again; a bounce slower than AP_CM_BOUNCE_MIN (1 + max |v_i|) ends in
- * rolling (plastic), which bounds the number of bounces (e^N |vn| < that speed). */
-#define AP_CM_BOUNCE_MIN 1e-6
-static int touchdown(ap_sim *s, const ap_mcon *c, double t, const double *q, double *v) {
-  const ap_bmodel *M = ap_bm(s->m);
-  ap_data *d = s->d;
-  double *S = scratch(d), e = c->def.restitution, vn = 0.0, vmax = 0.0;
-  ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
-  if (!(e > 0)) return AP_OK;
-  ap_basis basis = d->basis;
-  int sfe = d->speeds_from_e, r = c->row + c->hrow;
-  d->t = t, d->speeds_from_e = 0, d->basis = AP_BASIS_ORTHONORMAL;
-  memcpy(d->q, q, sizeof(double) * (size_t)s->n);
-  int rc = ap_partition(s->m, d);
-  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
-  if (rc == AP_OK) {
-    vn = d->a0[r];
-    for (int j = 0; j < s->k; j++) vn += d->A[r + (size_t)j * s->b] * v[j];
-    for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
-  }
-  if (rc == AP_OK && -e * vn > AP_CM_BOUNCE_MIN * (1.0 + vmax)) {
-    d->a0[r] += e * vn;                 /* A_n v + a0_n = -e vn after the impact */
-    rc = ap_core_project_here(s->m, d, v, NULL);
-    if (rc == AP_OK) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
-  }
-  d->basis = basis, d->speeds_from_e = sfe;
-  s->ev_stamp = -1;
+/* Before a contact flies: q onto the rolling mode's manifold, so that the gap the touchdown
+ * event watches starts at round-off (IDA holds it only to its tolerance: a gap of -1e-13 at
+ * the lift-off made the touchdown fire at once), and the gap's round-off read as 0. */
+static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
+  double *x = malloc(sizeof(double) * (size_t)s->n);
+  if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  memcpy(x, q, sizeof(double) * (size_t)s->n);
+  int rc = ap_drv_consistent_coordinates(s, t, x, q);
+  free(x);
+  ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
   return rc;
 }
 
@@ -186,21 +185,24 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
   switch (e->kind) {
     case EV_SLIP:
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->d, c, ft);
-      if (unilateral(c) && fn <= 0) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
-      else slide_against(s, c, ft);
+      fn = contact_forces(s->d->lambda, c, ft);
+      if (unilateral(c) && fn <= 0) {
+        if (lift(s, c, rec->t, q) != AP_OK) return -1;
+      } else {
+        slide_against(s, c, ft);
+      }
       break;
     case EV_LIFT:
-      ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
+      if (lift(s, c, rec->t, q) != AP_OK) return -1;
       break;
     case EV_STICK:
       ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->d, c, ft);
+      fn = contact_forces(s->d->lambda, c, ft);
       if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
       break;
     default:
-      if (touchdown(s, c, rec->t, q, v) != AP_OK) return -1;
+      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK) return -1;
       break;
   }
   return 0;
@@ -219,7 +221,7 @@ static int initial_cone(ap_sim *s) {
   for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
     if (ap_cfr_mode(M, scratch(s->d), c) != AP_CM_ROLLING) continue;
-    double fn = contact_forces(s->d, c, ft);
+    double fn = contact_forces(s->d->lambda, c, ft);
     if (unilateral(c) && fn < 0) {
       ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
     } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
@@ -259,27 +261,38 @@ int ap_drv_contacts_events(ap_sim *s) {
   return AP_OK;
 }
 
-/* The stage after events: the slip direction of each sliding contact at the accepted state
- * (the stick event's reference). */
+/* The stage after events, at the accepted state: the slip direction of each sliding contact
+ * (the stick event's reference), and the airborne contacts' touchdown armed (gap_tol). */
+static void keep_slip(ap_sim *s, const ap_mcon *c) {
+  const ap_bmodel *M = ap_bm(s->m);
+  double *S = scratch(s->d), sl[2], vmax = 0.0;
+  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(s->d->v[j]));
+  ap_cfr_slip(M, S, c, s->d->v, sl);
+  double ns = hypot(sl[0], sl[1]), *dir = ap_cfr_slip_dir(M, S, c);
+  if (ns > 1e-13 * (1.0 + vmax)) dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+}
+
 int ap_drv_stage_contacts(ap_sim *s, double *t) {
   struct ap_drv_contacts *cm = s->cm;
   const ap_bmodel *M = ap_bm(s->m);
-  double *S = scratch(s->d), sl[2], vmax = 0.0;
+  double *S = scratch(s->d);
   int any = 0;
-  for (int i = 0; i < cm->nc; i++) any |= ap_cfr_mode(M, S, con(s, cm->ci[i])) == AP_CM_SLIDING;
+  for (int i = 0; i < cm->nc; i++) {
+    int mode = ap_cfr_mode(M, S, con(s, cm->ci[i]));
+    if (mode != AP_CM_AIRBORNE) cm->armed[cm->ci[i]] = 0;
+    any |= mode == AP_CM_SLIDING || (mode == AP_CM_AIRBORNE && !cm->armed[cm->ci[i]]);
+  }
   if (!any) return AP_OK;
-  ap_drv_load_state(s, *t, s->y);
+  ap_drv_load_state(s, *t, s->dae ? s->ytry : s->y);
   s->ev_stamp = -1;
   int rc = ap_fwd_position(s->m, s->d);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", s->d->msg);
   if (s->def.mode == AP_MODE_MINIMAL) ap_core_speeds(s->m, s->d);
-  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(s->d->v[j]));
   for (int i = 0; i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
-    if (ap_cfr_mode(M, S, c) != AP_CM_SLIDING) continue;
-    ap_cfr_slip(M, S, c, s->d->v, sl);
-    double ns = hypot(sl[0], sl[1]), *dir = ap_cfr_slip_dir(M, S, c);
-    if (ns > 1e-13 * (1.0 + vmax)) dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+    int mode = ap_cfr_mode(M, S, c);
+    if (mode == AP_CM_SLIDING) keep_slip(s, c);
+    if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s)) cm->armed[c - M->cons] = 1;
   }
   return AP_OK;
 }

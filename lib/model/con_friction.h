@@ -39,6 +39,10 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S);
  * added to F (3; with t1 NULL: to F (2) in tangent coordinates); nothing in the other modes. */
 void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c, double fn,
                            const double *t1, const double *t2, double *F);
+/* Sliding contact c: its Coulomb force per unit normal force as a generalized force (k),
+ * f = -mu_k T^T s^ (the tangent rows T and the direction s^ of the last evaluation): the
+ * friction term ap_cfr_friction adds to Q is f F_n. */
+void ap_cfr_coulomb(const ap_bmodel *M, const double *S, const ap_mcon *c, double *f);
 /* 1 when contact c lifts off (def.unilateral, or by default when it has a friction coefficient). */
 int ap_cfr_unilateral(const ap_mcon *c);
 /* The gap of contact c whatever its mode (m; contact.c), after the position stage. */
