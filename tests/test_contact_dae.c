@@ -60,7 +60,10 @@ static void bowling(ap_mode mode, double *out) {
   AP_CHECK(s != NULL);
   if (!s) return ap_model_free(m);
   AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_SLIDING);
+  ap_event_record r0;                                    /* sliding from t0: its slip event */
+  AP_CHECK(last_event(s, "roll.slip", &r0) && r0.t == 0.0 && ap_sim_event_count(s) == 1);
   AP_CHECK_EQ_INT(ap_sim_advance(s, 2 * ts), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 2);
   AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_ROLLING);
   ap_event_record r;
   int found = last_event(s, "roll.stick", &r);

@@ -50,6 +50,7 @@ struct ap_drv_contacts {
   cm_event *ev;      /* EV_N per contact */
   double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
   char *armed;       /* (by constraint) airborne and the gap has exceeded gap_tol */
+  char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
 };
 
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
@@ -82,7 +83,8 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (s->cm) s->cm->ci = calloc((size_t)M->nfric, sizeof(int));
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
   if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
-  if (s->cm) s->cm->armed = calloc((size_t)M->nc, 1);
+  if (s->cm) s->cm->armed = calloc(2 * (size_t)M->nc, 1);
+  if (s->cm && s->cm->armed) s->cm->lifted = s->cm->armed + M->nc;
   if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
     return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
@@ -224,6 +226,7 @@ static int initial_cone(ap_sim *s) {
     double fn = contact_forces(s->d->lambda, c, ft);
     if (unilateral(c) && fn < 0) {
       ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
+      cm->lifted[cm->ci[i]] = 1;
     } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
       slide_against(s, c, ft), changed = 1;
     }
@@ -234,6 +237,14 @@ static int initial_cone(ap_sim *s) {
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);
   return rc;
+}
+
+/* Contact c slides from t0 (slip), or was made airborne at t0 by a negative normal force
+ * (lift_off). */
+static int at_start(const ap_sim *s, const ap_mcon *c, int kind) {
+  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
+  return (kind == EV_SLIP && mode == AP_CM_SLIDING) ||
+         (kind == EV_LIFT && mode == AP_CM_AIRBORNE && s->cm->lifted[c - ap_bm(s->m)->cons]);
 }
 
 int ap_drv_contacts_events(ap_sim *s) {
@@ -255,6 +266,8 @@ int ap_drv_contacts_events(ap_sim *s) {
       def.direction = AP_EVENT_FALLING, def.action = AP_EVENT_SWITCH;
       def.stage = AP_EVENT_REACTIONS;
       int rc = ap_sim_add_event(s, &def);
+      if (rc == AP_OK && at_start(s, c, kind))   /* a switch at t0: recorded like the others */
+        rc = ap_drv_event_note(s, ap_drv_event_defined(s) - 1, s->t, -1);
       if (rc != AP_OK) return rc;
     }
   }

@@ -126,6 +126,9 @@ double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
 int ap_drv_evaluate_current(ap_sim *s);
 /* The number of events added to the simulation (event.c). */
 int ap_drv_event_defined(const ap_sim *s);
+/* Record event i as having crossed (direction) at t with the current state s->q, s->v: a
+ * switch made at creation (a contact sliding from t0). */
+int ap_drv_event_note(ap_sim *s, int i, double t, int direction);
 /* Events (event.c): free them with the simulation. */
 void ap_drv_events_free(ap_sim *s);
 /* The error weights s->wt, all 1 (free_coords.c). */
