@@ -123,6 +123,41 @@ static void dome(ap_mode mode, double *out) {
   ap_model_free(m);
 }
 
+/* A thin uniform disk (r = 0.3 m, 1.5 kg) sliding and spinning with its axis 50 deg from the
+ * vertical, mu = 0.3 (test_sliding_disk of tests/test_contact_modes.c): its friction has a
+ * moment that changes the normal force (1 + u != 1), so the Coulomb force must use the
+ * coupled F_n, here IDA's own multiplier. F_n / (m g) at 0.02, 0.04, 0.06, 0.08 s and the state
+ * after 0.08 s into out (4 + 6; F_n from IDA's multipliers in DAE mode, from the coupled solve
+ * in minimal mode), and |F_t| / F_n = mu of the reported contact force. */
+static void sliding_disk(ap_mode mode, double *out) {
+  double r = 0.3, mu = 0.3, tilt = 50 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "slide", c.mu = mu;
+  ap_model *m = bs_free_ball(AP_SHAPE_DISK, r, 1.5, &c, g);
+  double q[7] = {0, 0, r * sin(tilt), cos(tilt / 2), sin(tilt / 2), 0, 0};
+  double v[6] = {1.0, 0.5, 0.0, 0.0, 0.0, 6.0}, worst = 0.0;
+  ap_sim *s = m ? start(m, mode, q, v) : NULL;
+  AP_CHECK(s != NULL);
+  if (!s) return ap_model_free(m);
+  int n = 0;
+  for (int i = 1; i <= 4 && ap_sim_advance(s, 0.02 * i) == AP_OK; i++) {
+    const double *lambda = NULL;
+    ap_contact_force f;
+    if (ap_sim_contact_mode(s, 0) != AP_CONTACT_SLIDING || ap_sim_reactions(s, &lambda) != AP_OK ||
+        ap_body_contact_force(m, ap_sim_data(s), lambda, 0, &f) != AP_OK)
+      break;
+    worst = fmax(worst, fabs(f.friction_ratio - mu));
+    out[n++] = f.normal / (1.5 * G);
+  }
+  memcpy(out + 4, ap_sim_q(s), 3 * sizeof *out), memcpy(out + 7, ap_sim_v(s), 3 * sizeof *out);
+  printf("  sliding disk (%s, axis 50 deg from vertical, mu %g): |F_t| / F_n - mu worst %.1e "
+         "over %d times\n", mode_name(mode), mu, worst, n);
+  AP_CHECK_EQ_INT(n, 4);
+  AP_CHECK_LE(worst, TOLF);
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 /* The DAE run against the minimal-mode run: each of n numbers within tol. */
 static void against_minimal(const char *what, const double *dae, const double *min, int n,
                             double tol) {
@@ -135,14 +170,17 @@ static void against_minimal(const char *what, const double *dae, const double *m
 
 int main(void) {
   printf("contact modes in DAE mode (rtol %.0e, atol %.0e):\n", RTOL, ATOL);
-  double b[2][4], d[2][4];
+  double b[2][4], d[2][4], k[2][10];
   for (int i = 0; i < 2; i++) {
     ap_mode mode = i ? AP_MODE_DAE : AP_MODE_MINIMAL;
     bowling(mode, b[i]);
     dome(mode, d[i]);
+    sliding_disk(mode, k[i]);
   }
   against_minimal("bowling ball (t*, vx, w_y r, loss)", b[1], b[0], 2, TOLF);
   against_minimal("ball off a dome (angle, time, x, z after 0.15 s)", d[1], d[0], 4, TOLF);
+  against_minimal("sliding disk (F_n / m g at 4 times, centre and velocity after 0.08 s)", k[1],
+                  k[0], 10, TOLF);
   AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_contact_dae");
 }
