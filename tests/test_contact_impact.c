@@ -18,9 +18,10 @@
  *
  * The jump is applied to the run's own pre-impact state (the touchdown record's v), so it is
  * checked to 1e-12 in every mode (round-off of the projections); the state after it is read
- * at T = t_touchdown + 2e-4 s (before the slip of 1 % of |s-| left after the impact ends) and carried back along the motion after the impact (sliding:
- * v_t' = -mu g s^, w' = 5 mu g / (2 r) (-s^_y, s^_x, 0); flying: vz' = -g), which the methods
- * integrate exactly (velocities linear in t). The touchdown time and vz- against sqrt(2 h / g)
+ * at T = t_touchdown + 2e-4 s (before the slip of 1 % of |s-| left after the impact ends) and
+ * carried back along the motion after the impact (sliding: v_t' = -mu g s^,
+ * w' = 5 mu g / (2 r) (-s^_y, s^_x, 0); flying: vz' = -g), which the methods integrate exactly
+ * (velocities linear in t). The touchdown time and vz- against sqrt(2 h / g)
  * and V = sqrt(2 g h): 1e-12 with dop853 at rtol 1e-12, 10 rtol in DAE mode at rtol 1e-10
  * (tests/test_contact_dae.c). With mu 1 % above 2/7 |s| / ((1 + e) V) the impact sticks
  * (rolling afterwards: no sliding impact), 1 % below it slides. */
