@@ -51,6 +51,7 @@ struct ap_drv_contacts {
   double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
   char *armed;       /* (by constraint) airborne and the gap has exceeded gap_tol */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
+  char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
 };
 
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
@@ -83,8 +84,9 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (s->cm) s->cm->ci = calloc((size_t)M->nfric, sizeof(int));
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
   if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
-  if (s->cm) s->cm->armed = calloc(2 * (size_t)M->nc, 1);
-  if (s->cm && s->cm->armed) s->cm->lifted = s->cm->armed + M->nc;
+  if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
+  if (s->cm && s->cm->armed)
+    s->cm->lifted = s->cm->armed + M->nc, s->cm->made = s->cm->lifted + M->nc;
   if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
     return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
@@ -308,6 +310,18 @@ int ap_drv_stage_contacts(ap_sim *s, double *t) {
     if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s)) cm->armed[c - M->cons] = 1;
   }
   return AP_OK;
+}
+
+int ap_drv_contacts_switched(ap_sim *s) {
+  struct ap_drv_contacts *cm = s->cm;
+  const ap_bmodel *M = ap_bm(s->m);
+  int changed = 0;
+  for (int i = 0; i < cm->nc; i++) {
+    char mode = (char)ap_cfr_mode(M, scratch(s->d), con(s, cm->ci[i]));
+    changed |= mode != cm->made[cm->ci[i]];
+    cm->made[cm->ci[i]] = mode;
+  }
+  return changed;
 }
 
 int ap_sim_contact_mode(const ap_sim *s, int constraint) {

@@ -158,6 +158,9 @@ void ap_drv_contacts_free(ap_sim *s);
  * and the number of multipliers change with the modes). */
 int ap_drv_dae_coulomb(void *user, ap_data *d, double *W);
 int ap_drv_dae_remake(ap_sim *s, double t, double *y);
+/* 1 when a contact's mode changed since the last call (contact_modes.c; IDA is made again
+ * only then, a restart with the same modes keeps it). */
+int ap_drv_contacts_switched(ap_sim *s);
 /* Contact impacts (contact_impact.c): the velocity jump at the touchdown of contact ci at
  * (t, q), v in and out, and the contact's mode after it. */
 int ap_drv_contact_impact(ap_sim *s, int ci, double t, const double *q, double *v);

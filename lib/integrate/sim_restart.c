@@ -98,6 +98,7 @@ int ap_drv_dae_make(ap_sim *s, double t, double *y, double *yp) {
   double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, y, d->vdot);
   ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL, NULL};
   ap_dae_couple cp = {ap_drv_dae_coulomb, s};
+  if (s->cm) ap_drv_contacts_switched(s);   /* the modes IDA is made for */
   int rc = ap_dae_create(s->m, d, t, y, yp, &o, s->def.rank_rtol, s->cm ? &cp : NULL, &s->dae,
                          s->msg, sizeof s->msg);
   if (rc == AP_OK) ap_dae_state(s->dae, y);
@@ -183,7 +184,8 @@ int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v) 
   if (rc == AP_OK) rc = state_from(s, t, y);
   if (rc != AP_OK) return rc;
   s->stats.restarts++;
-  if (s->dae) return s->cm ? ap_drv_dae_remake(s, t, y) : restart_dae(s, t, y);
+  if (s->dae)
+    return s->cm && ap_drv_contacts_switched(s) ? ap_drv_dae_remake(s, t, y) : restart_dae(s, t, y);
   if (s->cm) {   /* contact modes: the state size may have changed with the rows */
     ap_step_free(s->st);
     s->st = NULL;
