@@ -15,6 +15,10 @@
  * the step size: the impulses are scaled like v and q, where the multipliers themselves
  * scale like v / h (see "Scaling").
  *
+ * With coupled forces (ap_dae_couple: a sliding contact's Coulomb force, contact_dae.c) F_v
+ * has - W_s Lambda' besides, W (k x b) the generalized force per unit multiplier of each row,
+ * and the Newton matrix's multiplier columns are -cj (A_s^T + W_s).
+ *
  * A_s, a0_s are the bs independent rows of A, a0, and phi_s, Phi_s the nps independent rows of
  * phi and of its Jacobian Phi_q ("kept rows", below). The last rows are the
  * implicit holonomic constraints (loop closures, unit-quaternion norms) of a body model in the
