@@ -46,6 +46,11 @@ ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rto
 ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
                        const ap_constraint_def *c, const double *g);
 
+/* A thin uniform ellipsoid (body "rod", semi-axes a, a, c_half (m), mass (kg)) on a free joint
+ * with the contact c and gravity g; NULL (failure counted) when it does not build. */
+ap_model *bs_free_rod(double a, double c_half, double mass, const ap_constraint_def *c,
+                      const double *g);
+
 /* A uniform sphere (body "ball") on the given joint with the contact c (its body set to the
  * ball), which must not compile: the builder's status (AP_OK, failure counted, when it did
  * compile) and its message in msg. */

@@ -119,6 +119,67 @@ static void drop(ap_mode mode, double e, double mu_factor) {
   ap_model_free(m);
 }
 
+/* The rod of test_painleve (tests/test_contact_modes.c: a thin ellipsoid, semi-axes 0.01, 0.01,
+ * 0.5 m, 1 kg, k^2 = (a^2 + c^2) / 5, at 45 deg, its tip at r = (r_x, 0, r_z) from the centre,
+ * mu = 2) dropped 1 mm onto the plane at vz = -0.5 m/s while moving at 10 m/s along +x or -x,
+ * without spin. Planar impulse P = (P_x, P_z) at the tip: the tip's velocity changes by W P,
+ * W = I / m + q q^T / (m k^2), q = (r_z, -r_x), and w_y by (r_z P_x - r_x P_z) / (m k^2). The
+ * sticking impulse P = -W^-1 u- (u- the tip's velocity).
+ * +x: it lies in the cone (|P_x| / P_z = 1.35 < mu: Painleve's configuration, where sliding
+ *     would have 1 + u = -0.43 < 0, is resolved by sticking), and the normal force after it
+ *     would pull (F_n < 0), so the rod flies off at once: v+ = v- + P / m and w_y+ from the
+ *     closed form, then free flight (v' = -g e_z, w constant) to T = 0.01 s, to 1e-12 of the
+ *     largest speed (round-off).
+ * -x: the sticking impulse would pull (P_z < 0): outside the cone, the impact slides. */
+static void rod_impact(void) {
+  double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
+  ap_constraint_def cd = ap_constraint_def_default();
+  cd.name = "tip", cd.mu = mu;
+  ap_model *m = bs_free_rod(a, c, 1.0, &cd, g);
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th)), I = (a * a + c * c) / 5;
+  double cbx = -a * a * sin(th) / h, cbz = -c * c * cos(th) / h;   /* support point, body axes */
+  double rx = cos(th) * cbx - sin(th) * cbz, rz = sin(th) * cbx + cos(th) * cbz;
+  double W[4] = {1 + rz * rz / I, -rz * rx / I, -rz * rx / I, 1 + rx * rx / I};  /* xx xz zx zz */
+  double det = W[0] * W[3] - W[1] * W[2];
+  for (int dir = 1; dir >= -1; dir -= 2) {
+    double q[7] = {0, 0, h + 1e-3, cos(-th / 2), 0, sin(-th / 2), 0};
+    double v[6] = {dir * 10.0, 0, -0.5, 0, 0, 0};
+    ap_sim *s = bs_start(m, AP_MODE_MINIMAL, "dop853", 1e-12, 1e-14, q, v);
+    AP_CHECK(s != NULL);
+    if (!s) continue;
+    AP_CHECK_EQ_INT(ap_sim_advance(s, 0.01), AP_OK);
+    ap_event_record r;
+    int ok = ap_sim_event_count(s) == 1 && ap_sim_event_get(s, 0, &r) == AP_OK;
+    AP_CHECK(ok);
+    if (!ok) {
+      ap_sim_free(s);
+      continue;
+    }
+    double px = -(W[3] * r.v[0] - W[1] * r.v[2]) / det;
+    double pz = -(-W[2] * r.v[0] + W[0] * r.v[2]) / det;
+    double ex[6] = {r.v[0] + px, 0, r.v[2] + pz - G * (0.01 - r.t), 0, (rz * px - rx * pz) / I, 0};
+    double err = 0.0, big = 0.0;   /* round-off relative to the largest speed (w_y ~ 30) */
+    for (int i = 0; i < 6; i++) err = fmax(err, fabs(ap_sim_v(s)[i] - ex[i]));
+    for (int i = 0; i < 6; i++) big = fmax(big, fabs(ex[i]));
+    printf("  rod at 45 deg, mu 2, moving %s: sticking impulse (%.4g, %.4g) N s: %s\n",
+           dir > 0 ? "+x" : "-x", px, pz, dir > 0 ? "in the cone" : "pulls: slides");
+    if (dir > 0) {
+      printf("    sticks, flies at once; v, w_y 0.01 s later off the closed form by %.1e "
+             "(largest speed %.3g)\n", err, big);
+      AP_CHECK(pz > 0 && fabs(px) < mu * pz);
+      AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_AIRBORNE);
+      AP_CHECK_LE(err, 1e-12 * big);
+    } else {
+      AP_CHECK(pz < 0);
+      AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_SLIDING);
+    }
+    ap_sim_free(s);
+  }
+  ap_model_free(m);
+}
+
 int main(void) {
   printf("sliding impacts (ball dropped from %g m with slip and spin):\n", H);
   ap_mode modes[3] = {AP_MODE_MINIMAL, AP_MODE_PROJECTED, AP_MODE_DAE};
@@ -127,6 +188,7 @@ int main(void) {
       drop(modes[i], j ? 0.5 : 0.0, 0.99);
       drop(modes[i], j ? 0.5 : 0.0, 1.01);
     }
+  rod_impact();
   AP_CHECK_EQ_INT(bs_failures(), 0);
   return ap_check_finish("test_contact_impact");
 }

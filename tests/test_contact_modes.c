@@ -376,24 +376,8 @@ static void test_painleve(void) {
   double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
   ap_constraint_def cd = ap_constraint_def_default();
   cd.name = "slide", cd.mu = mu;
-  ap_model *m = NULL;
-  ap_builder *b = NULL;
-  AP_CHECK_EQ_INT(ap_builder_create("rod", &b), AP_OK);
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "rod", bd.shape.kind = AP_SHAPE_ELLIPSOID;
-  bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c;
-  AP_CHECK_EQ_INT(ap_body_def_uniform(&bd, 1.0), AP_OK);
-  AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
-  cd.body = 0;
-  AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &cd, NULL), AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  memcpy(e.gravity, g, sizeof e.gravity);
-  AP_CHECK_EQ_INT(ap_builder_add_effect(b, &e, NULL), AP_OK);
-  AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_OK);
-  ap_builder_free(b);
+  ap_model *m = bs_free_rod(a, c, 1.0, &cd, g);
+  AP_CHECK(m != NULL);
   if (!m) return;
   /* body z along (-sin th, 0, cos th) (pitch -th: R = Ry(-th)); u = -R^T e_z = (-sin th, 0,
    * -cos th) in body axes; support point c_b = D^2 u / sqrt(u^T D^2 u); r = R c_b */

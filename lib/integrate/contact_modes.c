@@ -180,6 +180,8 @@ static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   return rc;
 }
 
+static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v);
+
 static int on_switch(const ap_event_record *rec, double *q, double *v, void *user) {
   const cm_event *e = user;
   ap_sim *s = e->cm->s;
@@ -206,10 +208,44 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
       if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
       break;
     default:
-      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK) return -1;
+      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK ||
+          after_impact(s, c, rec->t, q, v) != AP_OK)
+        return -1;
       break;
   }
   return 0;
+}
+
+/* With the forces of the current state in the data (forces_at): a contact whose normal force
+ * is negative flies (unilateral), a rolling one whose sticking force lies outside its cone
+ * slides (along -F_t). 2 when it flies, 1 when it slides, 0 when its mode stays. */
+static int by_forces(ap_sim *s, const ap_mcon *c) {
+  double ft[2], fn = contact_forces(s->d->lambda, c, ft);
+  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
+  if (mode == AP_CM_AIRBORNE) return 0;
+  if (unilateral(c) && fn < 0) {
+    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
+    return 2;
+  }
+  if (mode != AP_CM_ROLLING || !(mu_of(c) >= 0) || !(hypot(ft[0], ft[1]) > mu_of(c) * fn))
+    return 0;
+  slide_against(s, c, ft);
+  return 1;
+}
+
+/* After an impact (the hook's q, v+ on the new mode's rows): the forces there decide at once,
+ * as at creation (a rod that sticks at a touchdown where the ground would have to pull flies
+ * off again; a switch at the cut itself would only be recorded, its hook not called). */
+static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v) {
+  if (ap_cfr_mode(ap_bm(s->m), scratch(s->d), c) == AP_CM_AIRBORNE) return AP_OK;
+  int rc = forces_at(s, t, q, v);
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact '%s' after "
+                                      "its impact at t = %.17g: %s", c->name, t, s->d->msg);
+  if (by_forces(s, c) == 2) {
+    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_ROLLING);   /* lift projects q */
+    rc = lift(s, c, t, q);
+  }
+  return rc;
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
@@ -217,7 +253,7 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
 static int initial_cone(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   const ap_bmodel *M = ap_bm(s->m);
-  double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL, ft[2];
+  double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL;
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
@@ -225,13 +261,9 @@ static int initial_cone(ap_sim *s) {
   for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
     if (ap_cfr_mode(M, scratch(s->d), c) != AP_CM_ROLLING) continue;
-    double fn = contact_forces(s->d->lambda, c, ft);
-    if (unilateral(c) && fn < 0) {
-      ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
-      cm->lifted[cm->ci[i]] = 1;
-    } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
-      slide_against(s, c, ft), changed = 1;
-    }
+    int to = by_forces(s, c);
+    changed |= to != 0;
+    if (to == 2) cm->lifted[cm->ci[i]] = 1;
   }
   if (rc != AP_OK) rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s",
                                     s->d->msg);

@@ -316,9 +316,13 @@ static int cut_at(ap_sim *s, double *tp, double t1, const int *sw, int first, ev
   for (int i = 0; i < ev->count; i++) {
     if (!sw[i]) continue;
     hooked = 1;
-    if (ev->list[i].def.on_switch(&ev->rec[sw[i] - 1], q, v, ev->list[i].def.user) < 0)
-      return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed at t = %.17g",
-                         ev->list[i].name, t);
+    s->msg[0] = '\0';   /* a hook of the library's (contact modes) may say why it failed */
+    if (ev->list[i].def.on_switch(&ev->rec[sw[i] - 1], q, v, ev->list[i].def.user) < 0) {
+      char why[600];
+      snprintf(why, sizeof why, "%s%.590s", s->msg[0] ? ": " : "", s->msg);
+      return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed at t = %.17g%s",
+                         ev->list[i].name, t, why);
+    }
   }
   return hooked ? ap_drv_restart_state(s, t, q, v) : AP_OK;
 }
