@@ -168,8 +168,7 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
 }
 
 /* Before a contact flies: q onto the rolling mode's manifold, so that the gap the touchdown
- * event watches starts at round-off (IDA holds it only to its tolerance: a gap of -1e-13 at
- * the lift-off made the touchdown fire at once), and the gap's round-off read as 0. */
+ * event watches starts at round-off (IDA holds it only to its tolerance), then airborne. */
 static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   double *x = malloc(sizeof(double) * (size_t)s->n);
   if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
