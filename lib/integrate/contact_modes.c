@@ -49,7 +49,7 @@ struct ap_drv_contacts {
   int *ci;           /* their constraint index */
   cm_event *ev;      /* EV_N per contact */
   double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
-  char *armed;       /* (by constraint) airborne and the gap has exceeded gap_tol */
+  char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
 };
@@ -58,8 +58,19 @@ struct ap_drv_contacts {
  * the centre's path osculates the ground), below the integration error at first: IDA's BDF,
  * restarted at order 1, made it -2.5e-12 m 2e-6 s after a lift-off, and the touchdown event
  * fired there. Its touchdown watches gap + gap_tol until the gap at an accepted step exceeds
- * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that. */
+ * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that.
+ * Likewise a slip that starts from 0 (slip onset) has s . s_ref of round-off size at first,
+ * and the stick event was recorded at the slip's own time: it watches s . s_ref + slip_tol,
+ * slip_tol = atol + rtol max |v_i|, until |s| exceeds slip_tol at an accepted step. */
 static double gap_tol(const ap_sim *s) { return s->def.atol + s->def.rtol * s->m->lscale; }
+static double slip_tol(const ap_sim *s, const double *v) {
+  double vmax = 0.0;
+  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
+  return s->def.atol + s->def.rtol * vmax;
+}
+static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
+  return cm->armed[ci] == mode + 1;
+}
 
 static const ap_mcon *con(const ap_sim *s, int ci) { return &ap_bm(s->m)->cons[ci]; }
 static double *scratch(const ap_data *d) { return ap_bm_scratch(d); }
@@ -149,12 +160,13 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
       if (mode == AP_CM_SLIDING) {
         const double *dir = ap_cfr_slip_dir(M, S, c);
         ap_cfr_slip(M, S, c, v, sl);
-        *out = sl[0] * dir[0] + sl[1] * dir[1];
+        *out = sl[0] * dir[0] + sl[1] * dir[1] +
+               (armed(e->cm, e->ci, AP_CM_SLIDING) ? 0.0 : slip_tol(s, v));
       }
       break;
     default:
       if (mode == AP_CM_AIRBORNE)
-        *out = ap_contact_gap(M, S, c) + (e->cm->armed[e->ci] ? 0.0 : gap_tol(s));
+        *out = ap_contact_gap(M, S, c) + (armed(e->cm, e->ci, mode) ? 0.0 : gap_tol(s));
       break;
   }
   return 0;
@@ -308,7 +320,8 @@ int ap_drv_contacts_events(ap_sim *s) {
 }
 
 /* The stage after events, at the accepted state: the slip direction of each sliding contact
- * (the stick event's reference), and the airborne contacts' touchdown armed (gap_tol). */
+ * (the stick event's reference), its stick event armed once |s| > slip_tol, and the airborne
+ * contacts' touchdown armed once the gap > gap_tol. */
 static void keep_slip(ap_sim *s, const ap_mcon *c) {
   const ap_bmodel *M = ap_bm(s->m);
   double *S = scratch(s->d), sl[2], vmax = 0.0;
@@ -316,6 +329,7 @@ static void keep_slip(ap_sim *s, const ap_mcon *c) {
   ap_cfr_slip(M, S, c, s->d->v, sl);
   double ns = hypot(sl[0], sl[1]), *dir = ap_cfr_slip_dir(M, S, c);
   if (ns > 1e-13 * (1.0 + vmax)) dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+  if (ns > slip_tol(s, s->d->v)) s->cm->armed[c - M->cons] = 1 + AP_CM_SLIDING;
 }
 
 int ap_drv_stage_contacts(ap_sim *s, double *t) {
@@ -325,7 +339,7 @@ int ap_drv_stage_contacts(ap_sim *s, double *t) {
   int any = 0;
   for (int i = 0; i < cm->nc; i++) {
     int mode = ap_cfr_mode(M, S, con(s, cm->ci[i]));
-    if (mode != AP_CM_AIRBORNE) cm->armed[cm->ci[i]] = 0;
+    if (!armed(cm, cm->ci[i], mode)) cm->armed[cm->ci[i]] = 0;
     any |= mode == AP_CM_SLIDING || (mode == AP_CM_AIRBORNE && !cm->armed[cm->ci[i]]);
   }
   if (!any) return AP_OK;
@@ -338,7 +352,8 @@ int ap_drv_stage_contacts(ap_sim *s, double *t) {
     const ap_mcon *c = con(s, cm->ci[i]);
     int mode = ap_cfr_mode(M, S, c);
     if (mode == AP_CM_SLIDING) keep_slip(s, c);
-    if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s)) cm->armed[c - M->cons] = 1;
+    if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s))
+      cm->armed[c - M->cons] = 1 + AP_CM_AIRBORNE;
   }
   return AP_OK;
 }
