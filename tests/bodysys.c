@@ -215,12 +215,20 @@ ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
   return free_body(&bd, mass, c, g);
 }
 
-ap_model *bs_free_rod(double a, double c_half, double mass, const ap_constraint_def *c,
-                      const double *g) {
+ap_model *bs_leaning_rod(const char *name, double mu, bs_rod *geo) {
+  double a = 0.01, c = 0.5, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -9.81};
+  /* body z along (-sin th, 0, cos th) (pitch -th: R = Ry(-th)); u = -R^T e_z = (-sin th, 0,
+   * -cos th) in body axes; support point c_b = D^2 u / sqrt(u^T D^2 u); r = R c_b */
+  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th));
+  double cbx = -a * a * sin(th) / h, cbz = -c * c * cos(th) / h;
+  *geo = (bs_rod){a, c, th, h, cos(th) * cbx - sin(th) * cbz, sin(th) * cbx + cos(th) * cbz,
+                  (a * a + c * c) / 5};
   ap_body_def bd = ap_body_def_default();
   bd.name = "rod", bd.shape.kind = AP_SHAPE_ELLIPSOID;
-  bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c_half;
-  return free_body(&bd, mass, c, g);
+  bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c;
+  ap_constraint_def cd = ap_constraint_def_default();
+  cd.name = name, cd.mu = mu;
+  return free_body(&bd, 1.0, &cd, g);
 }
 
 int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,

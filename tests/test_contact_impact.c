@@ -132,19 +132,15 @@ static void drop(ap_mode mode, double e, double mu_factor) {
  *     largest speed (round-off).
  * -x: the sticking impulse would pull (P_z < 0): outside the cone, the impact slides. */
 static void rod_impact(void) {
-  double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
-  ap_constraint_def cd = ap_constraint_def_default();
-  cd.name = "tip", cd.mu = mu;
-  ap_model *m = bs_free_rod(a, c, 1.0, &cd, g);
-  AP_CHECK(m != NULL);
-  if (!m) return;
-  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th)), I = (a * a + c * c) / 5;
-  double cbx = -a * a * sin(th) / h, cbz = -c * c * cos(th) / h;   /* support point, body axes */
-  double rx = cos(th) * cbx - sin(th) * cbz, rz = sin(th) * cbx + cos(th) * cbz;
+  bs_rod p;
+  ap_model *m = bs_leaning_rod("tip", 2.0, &p);
+  double mu = 2.0, I = p.k2, rx = p.rx, rz = p.rz;   /* unit mass: I = k^2 */
   double W[4] = {1 + rz * rz / I, -rz * rx / I, -rz * rx / I, 1 + rx * rx / I};  /* xx xz zx zz */
   double det = W[0] * W[3] - W[1] * W[2];
+  AP_CHECK(m != NULL);
+  if (!m) return;
   for (int dir = 1; dir >= -1; dir -= 2) {
-    double q[7] = {0, 0, h + 1e-3, cos(-th / 2), 0, sin(-th / 2), 0};
+    double q[7] = {0, 0, p.h + 1e-3, cos(-p.th / 2), 0, sin(-p.th / 2), 0};
     double v[6] = {dir * 10.0, 0, -0.5, 0, 0, 0};
     ap_sim *s = bs_start(m, AP_MODE_MINIMAL, "dop853", 1e-12, 1e-14, q, v);
     AP_CHECK(s != NULL);

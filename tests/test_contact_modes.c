@@ -373,18 +373,12 @@ static void test_sliding_disk(ap_mode mode) {
  * number in its message (printed to 6 digits, checked to 1e-5); toward -x it is 2.4 and it
  * starts, sliding. */
 static void test_painleve(void) {
-  double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
-  ap_constraint_def cd = ap_constraint_def_default();
-  cd.name = "slide", cd.mu = mu;
-  ap_model *m = bs_free_rod(a, c, 1.0, &cd, g);
+  bs_rod p;
+  double mu = 2.0;
+  ap_model *m = bs_leaning_rod("slide", mu, &p);
   AP_CHECK(m != NULL);
   if (!m) return;
-  /* body z along (-sin th, 0, cos th) (pitch -th: R = Ry(-th)); u = -R^T e_z = (-sin th, 0,
-   * -cos th) in body axes; support point c_b = D^2 u / sqrt(u^T D^2 u); r = R c_b */
-  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th));
-  double cb[3] = {-a * a * sin(th) / h, 0, -c * c * cos(th) / h};
-  double rx = cos(th) * cb[0] - sin(th) * cb[2], rz = sin(th) * cb[0] + cos(th) * cb[2];
-  double k2 = (a * a + c * c) / 5;
+  double th = p.th, h = p.h, rx = p.rx, rz = p.rz, k2 = p.k2;
   for (int dir = 1; dir >= -1; dir -= 2) {
     double ref = (1 + rx * (rx + mu * dir * rz) / k2) / (1 + rx * rx / k2);
     double q[7] = {0, 0, h, cos(-th / 2), 0, sin(-th / 2), 0}, v[6] = {dir * 1.0, 0, 0, 0, 0, 0};
