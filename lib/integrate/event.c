@@ -316,13 +316,15 @@ static int cut_at(ap_sim *s, double *tp, double t1, const int *sw, int first, ev
   for (int i = 0; i < ev->count; i++) {
     if (!sw[i]) continue;
     hooked = 1;
-    s->msg[0] = '\0';   /* a hook of the library's (contact modes) may say why it failed */
+    char why[sizeof s->msg + 2];        /* a hook of the library's (contact modes) may say why */
+    memcpy(why, s->msg, sizeof s->msg);
+    s->msg[0] = '\0';
     if (ev->list[i].def.on_switch(&ev->rec[sw[i] - 1], q, v, ev->list[i].def.user) < 0) {
-      char why[600];
-      snprintf(why, sizeof why, "%s%.590s", s->msg[0] ? ": " : "", s->msg);
+      snprintf(why, sizeof why, "%s%s", s->msg[0] ? ": " : "", s->msg);
       return ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed at t = %.17g%s",
                          ev->list[i].name, t, why);
     }
+    if (!s->msg[0]) memcpy(s->msg, why, sizeof s->msg);
   }
   return hooked ? ap_drv_restart_state(s, t, q, v) : AP_OK;
 }
