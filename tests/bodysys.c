@@ -188,14 +188,13 @@ void bs_disk_read(const double *q, const double *v, double *th, double *thd, dou
 
 /* ---- a free ball on the ground ------------------------------------------------------------ */
 
-ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
-                       const ap_constraint_def *c, const double *g) {
-  ap_builder *b = builder("ball");
+/* The body bd (uniform, of mass) on a free joint with the contact c and gravity g. */
+static ap_model *free_body(ap_body_def *bd, double mass, const ap_constraint_def *c,
+                           const double *g) {
+  ap_builder *b = builder(bd->name);
   if (!b) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = radius;
-  int good = ok(b, ap_body_def_uniform(&bd, mass), "ball inertia") &&
-             ok(b, ap_builder_add_body(b, &bd, NULL), "ball");
+  int good = ok(b, ap_body_def_uniform(bd, mass), "body inertia") &&
+             ok(b, ap_builder_add_body(b, bd, NULL), bd->name);
   ap_joint_def j = ap_joint_def_default();
   j.kind = AP_JOINT_FREE, j.child = 0;
   good = good && ok(b, ap_builder_add_joint(b, &j, NULL), "free joint");
@@ -207,6 +206,29 @@ ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
   good = good && ok(b, ap_builder_add_effect(b, &e, NULL), "gravity");
   if (!good) return ap_builder_free(b), NULL;
   return bs_compile(b);
+}
+
+ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
+                       const ap_constraint_def *c, const double *g) {
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = radius;
+  return free_body(&bd, mass, c, g);
+}
+
+ap_model *bs_leaning_rod(const char *name, double mu, bs_rod *geo) {
+  double a = 0.01, c = 0.5, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -9.81};
+  /* body z along (-sin th, 0, cos th) (pitch -th: R = Ry(-th)); u = -R^T e_z = (-sin th, 0,
+   * -cos th) in body axes; support point c_b = D^2 u / sqrt(u^T D^2 u); r = R c_b */
+  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th));
+  double cbx = -a * a * sin(th) / h, cbz = -c * c * cos(th) / h;
+  *geo = (bs_rod){a, c, th, h, cos(th) * cbx - sin(th) * cbz, sin(th) * cbx + cos(th) * cbz,
+                  (a * a + c * c) / 5};
+  ap_body_def bd = ap_body_def_default();
+  bd.name = "rod", bd.shape.kind = AP_SHAPE_ELLIPSOID;
+  bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c;
+  ap_constraint_def cd = ap_constraint_def_default();
+  cd.name = name, cd.mu = mu;
+  return free_body(&bd, 1.0, &cd, g);
 }
 
 int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,

@@ -46,6 +46,16 @@ ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rto
 ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
                        const ap_constraint_def *c, const double *g);
 
+/* The leaning rod of the Painleve tests: a thin uniform ellipsoid (body "rod", semi-axes a =
+ * 0.01, 0.01, c = 0.5 m, 1 kg) on a free joint with the contact name (mu) and gravity 9.81 m/s^2
+ * along -z. At the tilt th = 45 deg (q = (0, 0, z, cos(-th/2), 0, sin(-th/2), 0)) its centre is
+ * h above its lowest point, which is at r = (rx, 0, rz) from the centre; k2 = (a^2 + c^2) / 5
+ * (m^2) about a transverse axis. NULL (failure counted) when it does not build. */
+typedef struct bs_rod {
+  double a, c, th, h, rx, rz, k2;
+} bs_rod;
+ap_model *bs_leaning_rod(const char *name, double mu, bs_rod *geo);
+
 /* A uniform sphere (body "ball") on the given joint with the contact c (its body set to the
  * ball), which must not compile: the builder's status (AP_OK, failure counted, when it did
  * compile) and its message in msg. */

@@ -107,7 +107,13 @@ static void test_bowling(ap_mode mode) {
   if (!s) return ap_model_free(m);
   AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_SLIDING);
   ap_event_record r;
-  one_event(s, 2 * ts, "roll.stick", AP_CONTACT_ROLLING, &r);
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 1);   /* sliding from t0: roll.slip at 0 */
+  AP_CHECK(ap_sim_event_get(s, 0, &r) == AP_OK && !strcmp(r.name, "roll.slip") && r.t == 0.0);
+  AP_CHECK_EQ_INT(ap_sim_advance(s, 2 * ts), AP_OK);
+  AP_CHECK_EQ_INT(ap_sim_event_count(s), 2);
+  AP_CHECK_EQ_INT(ap_sim_event_get(s, 1, &r), AP_OK);
+  AP_CHECK(strcmp(r.name, "roll.stick") == 0);
+  AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_ROLLING);
   const double *vq = ap_sim_v(s);
   double loss = 0.5 * MASS * v0 * v0 - energy(m, ap_sim_q(s), vq);
   double ref_loss = MASS * v0 * v0 / 7;
@@ -309,7 +315,7 @@ static void test_incline(ap_mode mode) {
            fabs(x - ex), fabs(wy - wacc * T), ap_sim_event_count(s));
     AP_CHECK_EQ_INT(mode0, above ? AP_CONTACT_ROLLING : AP_CONTACT_SLIDING);
     AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), mode0);
-    AP_CHECK_EQ_INT(ap_sim_event_count(s), 0);
+    AP_CHECK_EQ_INT(ap_sim_event_count(s), above ? 0 : 1);   /* below: roll.slip at t0 */
     AP_CHECK_NEAR(x, ex, 1e-9);
     AP_CHECK_NEAR(wy, wacc * T, 1e-9);
     ap_sim_free(s);
@@ -367,34 +373,12 @@ static void test_sliding_disk(ap_mode mode) {
  * number in its message (printed to 6 digits, checked to 1e-5); toward -x it is 2.4 and it
  * starts, sliding. */
 static void test_painleve(void) {
-  double a = 0.01, c = 0.5, mu = 2.0, th = 45 * 3.14159265358979323846 / 180, g[3] = {0, 0, -G};
-  ap_constraint_def cd = ap_constraint_def_default();
-  cd.name = "slide", cd.mu = mu;
-  ap_model *m = NULL;
-  ap_builder *b = NULL;
-  AP_CHECK_EQ_INT(ap_builder_create("rod", &b), AP_OK);
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "rod", bd.shape.kind = AP_SHAPE_ELLIPSOID;
-  bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c;
-  AP_CHECK_EQ_INT(ap_body_def_uniform(&bd, 1.0), AP_OK);
-  AP_CHECK_EQ_INT(ap_builder_add_body(b, &bd, NULL), AP_OK);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
-  cd.body = 0;
-  AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &cd, NULL), AP_OK);
-  ap_effect_def e = ap_effect_def_default();
-  memcpy(e.gravity, g, sizeof e.gravity);
-  AP_CHECK_EQ_INT(ap_builder_add_effect(b, &e, NULL), AP_OK);
-  AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_OK);
-  ap_builder_free(b);
+  bs_rod p;
+  double mu = 2.0;
+  ap_model *m = bs_leaning_rod("slide", mu, &p);
+  AP_CHECK(m != NULL);
   if (!m) return;
-  /* body z along (-sin th, 0, cos th) (pitch -th: R = Ry(-th)); u = -R^T e_z = (-sin th, 0,
-   * -cos th) in body axes; support point c_b = D^2 u / sqrt(u^T D^2 u); r = R c_b */
-  double h = sqrt(a * a * sin(th) * sin(th) + c * c * cos(th) * cos(th));
-  double cb[3] = {-a * a * sin(th) / h, 0, -c * c * cos(th) / h};
-  double rx = cos(th) * cb[0] - sin(th) * cb[2], rz = sin(th) * cb[0] + cos(th) * cb[2];
-  double k2 = (a * a + c * c) / 5;
+  double th = p.th, h = p.h, rx = p.rx, rz = p.rz, k2 = p.k2;
   for (int dir = 1; dir >= -1; dir -= 2) {
     double ref = (1 + rx * (rx + mu * dir * rz) / k2) / (1 + rx * rx / k2);
     double q[7] = {0, 0, h, cos(-th / 2), 0, sin(-th / 2), 0}, v[6] = {dir * 1.0, 0, 0, 0, 0, 0};
@@ -472,7 +456,7 @@ static void test_disk_turn(ap_mode mode) {
 
 /* Refusals, each with the constraint's name: a NaN or infinite mu, mu_kinetic above mu, a
  * restitution outside [0, 1] or without lift-off, friction on a plane-contact joint (which
- * cannot leave the ground), and DAE mode. */
+ * cannot leave the ground). (DAE mode: tests/test_contact_dae.c.) */
 static void test_refusals(void) {
   double g[3] = {0, 0, -G};
   struct { double mu, muk, e; int uni; } bad[] = {
@@ -488,18 +472,6 @@ static void test_refusals(void) {
     printf("  refused (%d): %s\n", rc, msg);
     AP_CHECK(rc != AP_OK && strstr(msg, "'roll'") != NULL);
   }
-  ap_model *m = ball(0.5, -1, 0.0);
-  double q[7] = {0, 0, R, 1, 0, 0, 0}, v[6] = {0};
-  ap_sim_def def = ap_sim_def_default();
-  def.mode = AP_MODE_DAE;
-  ap_sim *s = NULL;
-  char msg[512] = "";
-  int rc = m ? ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg) : AP_ERR_ARG;
-  printf("  DAE mode: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_ERR_UNSUPPORTED);
-  AP_CHECK(strstr(msg, "DAE") != NULL);
-  ap_sim_free(s);
-  ap_model_free(m);
   (void)g;
 }
 

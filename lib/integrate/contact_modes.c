@@ -13,17 +13,19 @@
  *   NAME.lift_off  rolling, sliding: F_n             -> airborne
  *   NAME.stick     sliding:   s . s_ref               -> rolling when the sticking force lies
  *                                                       in the cone, else sliding along -F_t
- *   NAME.touchdown airborne:  the gap                 -> rolling
+ *   NAME.touchdown airborne:  the gap                 -> rolling, sliding or airborne (the
+ *                                                       impact, contact_impact.c)
  * s_ref is the slip direction at the last accepted step (the "contact modes" stage after the
  * events stage keeps it): s . s_ref falls through 0 where the slip speed reaches 0.
  *
  * A switch changes the mode (the rows the model drops) in the data; the driver then restarts
  * the stepper at the event with ap_drv_restart_state, which puts q on the new holonomic rows
- * and v on the new velocity rows nearest in the kinetic-energy metric. At touchdown that
- * projection is the sticking plastic impact v+ = v- - g^-1 A^T (A g^-1 A^T)^-1 (A v- + a0)
- * (ap_impact; Carnot: the energy lost is the kinetic energy of v+ - v-). The number of free
+ * and v on the new velocity rows nearest in the kinetic-energy metric. At touchdown the hook
+ * has made the impact's velocity jump already (sticking, sliding or bouncing: contact_impact.c),
+ * which that projection keeps. The number of free
  * speeds changes at a switch: in minimal mode the stepper is created again for the new state
- * size (sim.c). DAE mode is refused. */
+ * size (sim.c); in DAE mode IDA is made again (contact_dae.c), and the events read the forces
+ * from IDA's multipliers. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,7 +48,29 @@ struct ap_drv_contacts {
   int nc;            /* contacts with modes */
   int *ci;           /* their constraint index */
   cm_event *ev;      /* EV_N per contact */
+  double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
+  char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
+  char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
+  char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
 };
+
+/* A contact that has just left the ground has a gap of third order in the time (at lift-off
+ * the centre's path osculates the ground), below the integration error at first: IDA's BDF,
+ * restarted at order 1, made it -2.5e-12 m 2e-6 s after a lift-off, and the touchdown event
+ * fired there. Its touchdown watches gap + gap_tol until the gap at an accepted step exceeds
+ * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that.
+ * Likewise a slip that starts from 0 (slip onset) has s . s_ref of round-off size at first,
+ * and the stick event was recorded at the slip's own time: it watches s . s_ref + slip_tol,
+ * slip_tol = atol + rtol max |v_i|, until |s| exceeds slip_tol at an accepted step. */
+static double gap_tol(const ap_sim *s) { return s->def.atol + s->def.rtol * s->m->lscale; }
+static double slip_tol(const ap_sim *s, const double *v) {
+  double vmax = 0.0;
+  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
+  return s->def.atol + s->def.rtol * vmax;
+}
+static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
+  return cm->armed[ci] == mode + 1;
+}
 
 static const ap_mcon *con(const ap_sim *s, int ci) { return &ap_bm(s->m)->cons[ci]; }
 static double *scratch(const ap_data *d) { return ap_bm_scratch(d); }
@@ -58,6 +82,8 @@ void ap_drv_contacts_free(ap_sim *s) {
   if (!s->cm) return;
   free(s->cm->ci);
   free(s->cm->ev);
+  free(s->cm->lam);
+  free(s->cm->armed);
   free(s->cm);
   s->cm = NULL;
 }
@@ -65,14 +91,15 @@ void ap_drv_contacts_free(ap_sim *s) {
 int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (!ap_model_is_body_model(s->m) || ap_bm(s->m)->nfric == 0) return AP_OK;
   const ap_bmodel *M = ap_bm(s->m);
-  if (s->def.mode == AP_MODE_DAE)
-    return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "system '%s': contacts with friction or lift-off "
-                       "(contact modes) run in minimal, projected and plain modes, not yet in "
-                       "DAE mode", s->m->name);
   s->cm = calloc(1, sizeof *s->cm);
   if (s->cm) s->cm->ci = calloc((size_t)M->nfric, sizeof(int));
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
-  if (!s->cm || !s->cm->ci || !s->cm->ev) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
+  if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
+  if (s->cm && s->cm->armed)
+    s->cm->lifted = s->cm->armed + M->nc, s->cm->made = s->cm->lifted + M->nc;
+  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
+    return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
   d->t = t0, d->speeds_from_e = 0;
@@ -100,12 +127,11 @@ static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
   return rc;
 }
 
-/* Normal force and tangential force (2) of contact c from the data's multipliers (a wheel
- * under a planar chassis: its load, model/loads.c). */
-static double contact_forces(const ap_model *m, const ap_data *d, const ap_mcon *c,
-                             double *ft) {
-  ft[0] = d->lambda[c->row], ft[1] = d->lambda[c->row + 1];
-  return ap_cfr_contact_normal(m, d, d->lambda, c);
+/* Normal force and tangential force (2) of contact c from the multipliers lam (the data's, or
+ * IDA's own in DAE mode); a wheel under a planar chassis: its load (model/loads.c). */
+static double contact_forces(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft) {
+  ft[0] = lam[c->row], ft[1] = lam[c->row + 1];
+  return ap_cfr_contact_normal(s->m, s->d, lam, c);
 }
 
 /* A wheel under a planar chassis cannot leave the ground: the run stops. */
@@ -122,26 +148,34 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   const ap_bmodel *M = ap_bm(e->cm->s->m);
   const ap_mcon *c = &M->cons[e->ci];
   double *S = scratch(d), ft[2], sl[2];
+  const double *lam = d->lambda;
+  ap_sim *s = e->cm->s;
   int mode = ap_cfr_mode(M, S, c);
-  (void)t, (void)q;
+  (void)q;
   *out = 1.0;
+  if (s->dae && (e->kind == EV_SLIP || e->kind == EV_LIFT) && mode != AP_CM_AIRBORNE) {
+    if (ap_dae_multipliers(s->dae, t, e->cm->lam) != AP_OK) return -1;   /* IDA's own */
+    lam = e->cm->lam;
+  }
   switch (e->kind) {
     case EV_SLIP:
       if (mode == AP_CM_ROLLING)
-        *out = mu_of(c) * contact_forces(e->cm->s->m, d, c, ft) - hypot(ft[0], ft[1]);
+        *out = mu_of(c) * contact_forces(s, lam, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = contact_forces(e->cm->s->m, d, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = contact_forces(s, lam, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {
         const double *dir = ap_cfr_slip_dir(M, S, c);
         ap_cfr_slip(M, S, c, v, sl);
-        *out = sl[0] * dir[0] + sl[1] * dir[1];
+        *out = sl[0] * dir[0] + sl[1] * dir[1] +
+               (armed(e->cm, e->ci, AP_CM_SLIDING) ? 0.0 : slip_tol(s, v));
       }
       break;
     default:
-      if (mode == AP_CM_AIRBORNE) *out = ap_contact_gap(M, S, c);
+      if (mode == AP_CM_AIRBORNE)
+        *out = ap_contact_gap(M, S, c) + (armed(e->cm, e->ci, mode) ? 0.0 : gap_tol(s));
       break;
   }
   return 0;
@@ -154,39 +188,19 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
   ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_SLIDING);
 }
 
-/* Touchdown: the contact's rows back (rolling); the restart's projection is then the sticking
- * plastic impact. With restitution e > 0 the impact is the projection onto the rows with the
- * normal one's target e |vn| instead of 0 (vn < 0 the closing speed of the contact point), in
- * the same metric: a sphere keeps its angular momentum about the contact point and bounces at
- * e |vn|, airborne again; a bounce slower than AP_CM_BOUNCE_MIN (1 + max |v_i|) ends in
- * rolling (plastic), which bounds the number of bounces (e^N |vn| < that speed). */
-#define AP_CM_BOUNCE_MIN 1e-6
-static int touchdown(ap_sim *s, const ap_mcon *c, double t, const double *q, double *v) {
-  const ap_bmodel *M = ap_bm(s->m);
-  ap_data *d = s->d;
-  double *S = scratch(d), e = c->def.restitution, vn = 0.0, vmax = 0.0;
-  ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
-  if (!(e > 0)) return AP_OK;
-  ap_basis basis = d->basis;
-  int sfe = d->speeds_from_e, r = c->row + c->hrow;
-  d->t = t, d->speeds_from_e = 0, d->basis = AP_BASIS_ORTHONORMAL;
-  memcpy(d->q, q, sizeof(double) * (size_t)s->n);
-  int rc = ap_partition(s->m, d);
-  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
-  if (rc == AP_OK) {
-    vn = d->a0[r];
-    for (int j = 0; j < s->k; j++) vn += d->A[r + (size_t)j * s->b] * v[j];
-    for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
-  }
-  if (rc == AP_OK && -e * vn > AP_CM_BOUNCE_MIN * (1.0 + vmax)) {
-    d->a0[r] += e * vn;                 /* A_n v + a0_n = -e vn after the impact */
-    rc = ap_core_project_here(s->m, d, v, NULL);
-    if (rc == AP_OK) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
-  }
-  d->basis = basis, d->speeds_from_e = sfe;
-  s->ev_stamp = -1;
+/* Before a contact flies: q onto the rolling mode's manifold, so that the gap the touchdown
+ * event watches starts at round-off (IDA holds it only to its tolerance), then airborne. */
+static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
+  double *x = malloc(sizeof(double) * (size_t)s->n);
+  if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  memcpy(x, q, sizeof(double) * (size_t)s->n);
+  int rc = ap_drv_consistent_coordinates(s, t, x, q);
+  free(x);
+  ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
   return rc;
 }
+
+static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v);
 
 static int on_switch(const ap_event_record *rec, double *q, double *v, void *user) {
   const cm_event *e = user;
@@ -197,26 +211,67 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
   switch (e->kind) {
     case EV_SLIP:
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->m, s->d, c, ft);
+      fn = contact_forces(s, s->d->lambda, c, ft);
       if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, fn);
-      if (unilateral(c) && fn <= 0) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
-      else slide_against(s, c, ft);
+      if (unilateral(c) && fn <= 0) {
+        if (lift(s, c, rec->t, q) != AP_OK) return -1;
+      } else {
+        slide_against(s, c, ft);
+      }
       break;
     case EV_LIFT:
       if (ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, 0.0);
-      ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
+      if (lift(s, c, rec->t, q) != AP_OK) return -1;
       break;
     case EV_STICK:
       ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
       if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s->m, s->d, c, ft);
+      fn = contact_forces(s, s->d->lambda, c, ft);
       if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
       break;
     default:
-      if (touchdown(s, c, rec->t, q, v) != AP_OK) return -1;
+      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK ||
+          after_impact(s, c, rec->t, q, v) != AP_OK)
+        return -1;
       break;
   }
   return 0;
+}
+
+/* With the forces of the current state in the data (forces_at): a contact whose normal force
+ * is negative flies (unilateral), a rolling one whose sticking force lies outside its cone
+ * slides (along -F_t). 2 when it flies, 1 when it slides, 0 when its mode stays; a wheel under
+ * a planar chassis whose load is negative stops the run (tips: its negative status). */
+static int by_forces(ap_sim *s, const ap_mcon *c, double t) {
+  double ft[2], fn = contact_forces(s, s->d->lambda, c, ft);
+  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
+  if (mode == AP_CM_AIRBORNE) return 0;
+  if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(ap_bm(s->m), c)) return tips(s, c, t, fn);
+  if (unilateral(c) && fn < 0) {
+    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
+    return 2;
+  }
+  if (mode != AP_CM_ROLLING || !(mu_of(c) >= 0) || !(hypot(ft[0], ft[1]) > mu_of(c) * fn))
+    return 0;
+  slide_against(s, c, ft);
+  return 1;
+}
+
+/* After an impact (the hook's q, v+ on the new mode's rows): the forces there decide at once,
+ * as at creation (a rod that sticks at a touchdown where the ground would have to pull flies
+ * off again; a switch at the cut itself would only be recorded, its hook not called). */
+static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v) {
+  if (ap_cfr_mode(ap_bm(s->m), scratch(s->d), c) == AP_CM_AIRBORNE) return AP_OK;
+  int rc = forces_at(s, t, q, v);
+  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact '%s' after "
+                                      "its impact at t = %.17g: %s", c->name, t, s->d->msg);
+  int to = by_forces(s, c, t);
+  if (to < 0) return to;
+  if (to == 2) {
+    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_ROLLING);   /* lift projects q */
+    rc = lift(s, c, t, q);
+  }
+  return rc;
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
@@ -225,7 +280,7 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
 static int initial_cone(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   const ap_bmodel *M = ap_bm(s->m);
-  double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL, ft[2];
+  double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL;
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
@@ -233,17 +288,22 @@ static int initial_cone(ap_sim *s) {
   for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
     int mode = ap_cfr_mode(M, scratch(s->d), c);
-    double fn = mode == AP_CM_AIRBORNE ? 0.0 : contact_forces(s->m, s->d, c, ft);
-    if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(M, c)) {   /* sliding or rolling */
-      rc = tips(s, c, s->t, fn);
+    if (mode == AP_CM_AIRBORNE) continue;
+    if (mode != AP_CM_ROLLING) {          /* sliding from the start: only a tipping wheel */
+      double ft[2], fn = contact_forces(s, s->d->lambda, c, ft);
+      if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(M, c)) {
+        rc = tips(s, c, s->t, fn);
+        break;
+      }
+      continue;
+    }
+    int to = by_forces(s, c, s->t);
+    if (to < 0) {
+      rc = to;
       break;
     }
-    if (mode != AP_CM_ROLLING) continue;
-    if (unilateral(c) && fn < 0) {
-      ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_AIRBORNE), changed = 1;
-    } else if (mu_of(c) >= 0 && hypot(ft[0], ft[1]) > mu_of(c) * fn) {
-      slide_against(s, c, ft), changed = 1;
-    }
+    changed |= to != 0;
+    if (to == 2) cm->lifted[cm->ci[i]] = 1;
   }
   if (rc != AP_OK && rc != AP_ERR_UNSUPPORTED)
     rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", s->d->msg);
@@ -251,6 +311,14 @@ static int initial_cone(ap_sim *s) {
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);
   return rc;
+}
+
+/* Contact c slides from t0 (slip), or was made airborne at t0 by a negative normal force
+ * (lift_off). */
+static int at_start(const ap_sim *s, const ap_mcon *c, int kind) {
+  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
+  return (kind == EV_SLIP && mode == AP_CM_SLIDING) ||
+         (kind == EV_LIFT && mode == AP_CM_AIRBORNE && s->cm->lifted[c - ap_bm(s->m)->cons]);
 }
 
 int ap_drv_contacts_events(ap_sim *s) {
@@ -272,35 +340,63 @@ int ap_drv_contacts_events(ap_sim *s) {
       def.direction = AP_EVENT_FALLING, def.action = AP_EVENT_SWITCH;
       def.stage = AP_EVENT_REACTIONS;
       int rc = ap_sim_add_event(s, &def);
+      if (rc == AP_OK && at_start(s, c, kind))   /* a switch at t0: recorded like the others */
+        rc = ap_drv_event_note(s, ap_drv_event_defined(s) - 1, s->t, -1);
       if (rc != AP_OK) return rc;
     }
   }
   return AP_OK;
 }
 
-/* The stage after events: the slip direction of each sliding contact at the accepted state
- * (the stick event's reference). */
+/* The stage after events, at the accepted state: the slip direction of each sliding contact
+ * (the stick event's reference), its stick event armed once |s| > slip_tol, and the airborne
+ * contacts' touchdown armed once the gap > gap_tol. */
+static void keep_slip(ap_sim *s, const ap_mcon *c) {
+  const ap_bmodel *M = ap_bm(s->m);
+  double *S = scratch(s->d), sl[2], vmax = 0.0;
+  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(s->d->v[j]));
+  ap_cfr_slip(M, S, c, s->d->v, sl);
+  double ns = hypot(sl[0], sl[1]), *dir = ap_cfr_slip_dir(M, S, c);
+  if (ns > 1e-13 * (1.0 + vmax)) dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+  if (ns > slip_tol(s, s->d->v)) s->cm->armed[c - M->cons] = 1 + AP_CM_SLIDING;
+}
+
 int ap_drv_stage_contacts(ap_sim *s, double *t) {
   struct ap_drv_contacts *cm = s->cm;
   const ap_bmodel *M = ap_bm(s->m);
-  double *S = scratch(s->d), sl[2], vmax = 0.0;
+  double *S = scratch(s->d);
   int any = 0;
-  for (int i = 0; i < cm->nc; i++) any |= ap_cfr_mode(M, S, con(s, cm->ci[i])) == AP_CM_SLIDING;
+  for (int i = 0; i < cm->nc; i++) {
+    int mode = ap_cfr_mode(M, S, con(s, cm->ci[i]));
+    if (!armed(cm, cm->ci[i], mode)) cm->armed[cm->ci[i]] = 0;
+    any |= mode == AP_CM_SLIDING || (mode == AP_CM_AIRBORNE && !cm->armed[cm->ci[i]]);
+  }
   if (!any) return AP_OK;
-  ap_drv_load_state(s, *t, s->y);
+  ap_drv_load_state(s, *t, s->dae ? s->ytry : s->y);
   s->ev_stamp = -1;
   int rc = ap_fwd_position(s->m, s->d);
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", s->d->msg);
   if (s->def.mode == AP_MODE_MINIMAL) ap_core_speeds(s->m, s->d);
-  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(s->d->v[j]));
   for (int i = 0; i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
-    if (ap_cfr_mode(M, S, c) != AP_CM_SLIDING) continue;
-    ap_cfr_slip(M, S, c, s->d->v, sl);
-    double ns = hypot(sl[0], sl[1]), *dir = ap_cfr_slip_dir(M, S, c);
-    if (ns > 1e-13 * (1.0 + vmax)) dir[0] = sl[0] / ns, dir[1] = sl[1] / ns;
+    int mode = ap_cfr_mode(M, S, c);
+    if (mode == AP_CM_SLIDING) keep_slip(s, c);
+    if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s))
+      cm->armed[c - M->cons] = 1 + AP_CM_AIRBORNE;
   }
   return AP_OK;
+}
+
+int ap_drv_contacts_switched(ap_sim *s) {
+  struct ap_drv_contacts *cm = s->cm;
+  const ap_bmodel *M = ap_bm(s->m);
+  int changed = 0;
+  for (int i = 0; i < cm->nc; i++) {
+    char mode = (char)ap_cfr_mode(M, scratch(s->d), con(s, cm->ci[i]));
+    changed |= mode != cm->made[cm->ci[i]];
+    cm->made[cm->ci[i]] = mode;
+  }
+  return changed;
 }
 
 int ap_sim_contact_mode(const ap_sim *s, int constraint) {

@@ -15,6 +15,10 @@
  * the step size: the impulses are scaled like v and q, where the multipliers themselves
  * scale like v / h (see "Scaling").
  *
+ * With coupled forces (ap_dae_couple: a sliding contact's Coulomb force, contact_dae.c) F_v
+ * has - W_s Lambda' besides, W (k x b) the generalized force per unit multiplier of each row,
+ * and the Newton matrix's multiplier columns are -cj (A_s^T + W_s).
+ *
  * A_s, a0_s are the bs independent rows of A, a0, and phi_s, Phi_s the nps independent rows of
  * phi and of its Jacobian Phi_q ("kept rows", below). The last rows are the
  * implicit holonomic constraints (loop closures, unit-quaternion norms) of a body model in the
@@ -171,7 +175,8 @@ static int initial_multipliers(ap_dae *s, double t0) {
   if (rc == AP_OK && bs > 0) {
     for (int c = 0; c < bs; c++)
       for (int i = 0; i < k; i++)
-        s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b];
+        s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b] +
+                                    (s->cp.fn ? s->W[i + (size_t)s->rows[c] * k] : 0.0);
     double resid = 0.0;
     rc = ap_la_lstsq_At(bs, k, s->jA, r + n, 0.0, y1 + n + k, &resid, s->qr, s->jpvt);
   }
@@ -193,7 +198,9 @@ static int alloc_arrays(ap_dae *s) {
   s->qr = calloc(cmax * rmax + mx + 2 * cmax * cmax + ap_la_work_size((int)rmax, (int)cmax) +
                  rmax * cmax + 1, sizeof *s->qr);
   s->jpvt = calloc(rmax + ap_la_iwork_size((int)rmax, (int)cmax) + 1, sizeof *s->jpvt);
-  if (!s->qr || !s->jpvt) return AP_ERR_NOMEM;
+  s->W = calloc(2 * k * b + 1, sizeof *s->W);
+  if (!s->qr || !s->jpvt || !s->W) return AP_ERR_NOMEM;
+  s->jW = s->W + k * b;
   s->qr_sub = s->qr + cmax * rmax + mx + 2 * cmax * cmax + ap_la_work_size((int)rmax, (int)cmax);
   s->phi = s->Phi_q + np * n, s->jg = s->phi + np, s->jN = s->jg + k * k;
   s->jA = s->jN + n * k;
@@ -236,14 +243,15 @@ static int ap_dae_nomem(const ap_model *m, char *msg, size_t msg_len) {
 }
 
 int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
-                  const double *yp0, const ap_step_opts *o, double rank_rtol, ap_dae **out,
-                  char *msg, size_t msg_len) {
+                  const double *yp0, const ap_step_opts *o, double rank_rtol,
+                  const ap_dae_couple *cp, ap_dae **out, char *msg, size_t msg_len) {
   *out = NULL;
   ap_dae *s = calloc(1, sizeof *s);
   if (!s) return ap_dae_nomem(m, msg, msg_len);
   s->m = m, s->d = d, s->n = m->n, s->k = m->k, s->b = m->b;
   s->rtol = ap_dae_rtol(o->rtol), s->atol = o->atol * s->rtol / o->rtol;
   s->nphi = m->ev.phi ? m->nphi : 0;
+  if (cp) s->cp = *cp;
   int rc = alloc_arrays(s);
   if (rc == AP_OK) rc = choose_rows(s, rank_rtol);
   if (rc != AP_OK) {
@@ -457,6 +465,32 @@ void ap_dae_stats(const ap_dae *s, ap_step_stats *st) {
   if (IDAGetLastStep(s->mem, &h) == IDA_SUCCESS) st->h_last = h;
 }
 
+void ap_dae_carry_stats(ap_dae *to, const ap_dae *from) {
+  ap_step_stats st;
+  ap_dae_stats(from, &st);
+  to->base_steps += st.steps, to->base_netf += st.err_fails, to->base_ncf += st.rhs_fails;
+  to->nres += from->nres;
+}
+
+int ap_dae_multipliers(ap_dae *s, double t, double *lam) {
+  int kused = 0, nd = s->n + s->k;
+  const double *x = N_VGetArrayPointer(s->yp);
+  if (IDAGetLastOrder(s->mem, &kused) == IDA_SUCCESS && kused > 0) {
+    if (!s->dk) s->dk = N_VNew_Serial(s->ny, s->ctx);
+    if (!s->dk) return AP_ERR_NOMEM;
+    int flag = IDAGetDky(s->mem, t, 1, s->dk);
+    if (flag != IDA_SUCCESS) {
+      snprintf(s->msg, sizeof s->msg, "IDA: no multipliers at t = %.17g (flag %d)", t, flag);
+      return flag == IDA_BAD_T ? AP_ERR_ARG : AP_ERR_SOLVER;
+    }
+    x = N_VGetArrayPointer(s->dk);
+  }
+  memset(lam, 0, sizeof(double) * (size_t)(s->b + s->nphi));
+  for (int c = 0; c < s->bs; c++) lam[s->rows[c]] = x[nd + c];
+  for (int c = 0; c < s->nps; c++) lam[s->b + s->prows[c]] = x[nd + s->bs + c];
+  return AP_OK;
+}
+
 const char *ap_dae_message(const ap_dae *s) { return s->msg; }
 
 int ap_dae_dky(ap_dae *s, double t, double *y) {
@@ -488,5 +522,6 @@ void ap_dae_free(ap_dae *s) {
   free(s->rows);
   free(s->qr);
   free(s->jpvt);
+  free(s->W);
   free(s);
 }

@@ -22,6 +22,16 @@
 
 typedef struct ap_dae ap_dae;
 
+/* Forces the multipliers apply besides A_s^T lambda: a sliding contact's Coulomb force
+ * -mu_k F_n s^ with F_n its normal row's multiplier (contact_dae.c). After the velocity stage of
+ * each residual, fn writes W (k x b, column r: the generalized force per unit multiplier of row
+ * r, zero for the rows without one) and may correct d->Q; returns AP_OK or a negative status
+ * with d->msg set. The residual then reads F_v = g v' + h - Q - (A_s^T + W_s) lambda. */
+typedef struct ap_dae_couple {
+  int (*fn)(void *user, ap_data *d, double *W);
+  void *user;
+} ap_dae_couple;
+
 /* IDA's tolerances are the user's divided by this factor (dae.c: BDF's global error against the
  * Runge-Kutta methods'), but rtol not below min(rtol, 1e-12). */
 #define AP_DAE_TOL_FACTOR 10.0
@@ -34,8 +44,9 @@ double ap_dae_rtol(double rtol);
  * ap_partition). The data d is borrowed: it must hold the position stage at (t0, q0) on entry,
  * and the residual then writes its position and velocity stages with AP_BASIS_NONE. */
 int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
-                  const double *yp0, const ap_step_opts *o, double rank_rtol, ap_dae **out,
-                  char *msg, size_t msg_len);
+                  const double *yp0, const ap_step_opts *o, double rank_rtol,
+                  const ap_dae_couple *cp, ap_dae **out, char *msg, size_t msg_len);
+/* cp: the multipliers' coupled forces, or NULL (none). */
 /* One internal step, not past tout; *t and y (n + k + b + nphi) receive the state reached. A
  * step never stops short of tout by a sliver (it may stop halfway to tout instead). */
 int ap_dae_one(ap_dae *s, double tout, double *t, double *y);
@@ -61,6 +72,12 @@ int ap_dae_phi_rows(const ap_dae *s, const int **rows);
  * multipliers' entries 0). AP_ERR_ARG when t is outside the last step. */
 int ap_dae_dky(ap_dae *s, double t, double *y);
 void ap_dae_stats(const ap_dae *s, ap_step_stats *st);
+/* Add the counters of `from` (an IDA made before, now replaced) to those of `to`. */
+void ap_dae_carry_stats(ap_dae *to, const ap_dae *from);
+/* IDA's multipliers at t within the last step into lam (b + nphi, all rows; dropped rows 0):
+ * the derivative of the impulses' interpolating polynomial (IDAGetDky of order 1); right after
+ * a (re)start, the initial multipliers. */
+int ap_dae_multipliers(ap_dae *s, double t, double *lam);
 const char *ap_dae_message(const ap_dae *s);
 void ap_dae_free(ap_dae *s);
 

@@ -39,6 +39,9 @@ struct ap_dae {
   double *Ms, *gf;          /* M = g^-1 A_s^T (k x bs); g's factor */
   double *Pl, *Pm;          /* the multipliers' maps for their weights: (bs x k), (nps x n) */
   double *Sf, *colw;        /* their factor (max(b, nphi)^2) and a column (max(b, nphi)) */
+  ap_dae_couple cp;         /* coupled forces of the multipliers (fn NULL: none) */
+  double *W, *jW;           /* (k x b) their columns, at the residual and at the Jacobian's
+                               base point */
   double *qr, *qr_sub;      /* row_qr's scratch; the kept rows as a matrix */
   int *jpvt, *cand;         /* row_qr's row order and integer scratch; a candidate choice */
   long nres;                /* residual evaluations, the Newton matrix's included */

@@ -39,6 +39,7 @@ int ap_dae_residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
   d->basis = AP_BASIS_NONE, d->speeds_from_e = 0;
   int rc = ap_fwd_position(m, d);
   if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
+  if (rc == AP_OK && s->cp.fn) rc = s->cp.fn(s->cp.user, d, s->W);   /* before F_v reads Q */
   if (rc != AP_OK) return res_fail(s, rc);
   const double *lambda = y1 + n + k, *mu = lambda + bs;   /* the impulses' derivatives */
   ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v - Phi_s^T mu */
@@ -64,6 +65,10 @@ int ap_dae_residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
       r[n + i] -= a * lambda[c];
     }
     r[n + k + c] = fc;
+  }
+  for (int c = 0; s->cp.fn && c < bs; c++) {               /* - W_s lambda */
+    const double *w = s->W + (size_t)s->rows[c] * k;
+    for (int i = 0; i < k; i++) r[n + i] -= w[i] * lambda[c];
   }
   return 0;
 }
@@ -170,6 +175,7 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
   for (int c = 0; c < np; c++)
     for (int i = 0; i < n; i++)
       s->jP[c + (size_t)i * np] = s->Phi_q[s->prows[c] + (size_t)i * s->nphi];
+  if (s->cp.fn) memcpy(s->jW, s->W, sizeof(double) * (size_t)k * b);
   ap_dae_multiplier_scales(s);
   SUNMatZero(J);
   for (int j = 0; j < nd; j++) {                           /* q and v columns */
@@ -192,9 +198,10 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
       for (int r = 0; r < bs; r++) col[nd + r] = s->jA[r + (size_t)c * bs];
     }
   }
-  for (int c = 0; c < bs; c++) {                           /* cj dF_v/dlambda = -cj A_s^T */
+  for (int c = 0; c < bs; c++) {                    /* cj dF_v/dlambda = -cj (A_s^T + W_s) */
     double *col = SUNDenseMatrix_Column(J, nd + c);
     for (int i = 0; i < k; i++) col[n + i] = -cj * s->jA[c + (size_t)i * bs];
+    for (int i = 0; s->cp.fn && i < k; i++) col[n + i] -= cj * s->jW[i + (size_t)s->rows[c] * k];
   }
   for (int r = 0; r < np; r++) {                           /* cj dF_q/dmu = -cj Phi_q^T */
     double *col = SUNDenseMatrix_Column(J, nd + bs + r);

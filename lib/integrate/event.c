@@ -316,11 +316,14 @@ static int cut_at(ap_sim *s, double *tp, double t1, const int *sw, int first, ev
   for (int i = 0; i < ev->count; i++) {
     if (!sw[i]) continue;
     hooked = 1;
+    char why[sizeof s->msg];            /* a hook of the library's (contact modes) may say why */
+    memcpy(why, s->msg, sizeof s->msg);
     s->msg[0] = '\0';
     if (ev->list[i].def.on_switch(&ev->rec[sw[i] - 1], q, v, ev->list[i].def.user) < 0)
       return s->msg[0] ? AP_ERR_UNSUPPORTED   /* the hook said why (ap_drv_fail) */
                        : ap_drv_fail(s, AP_ERR_CALLBACK, "event '%s': its switch hook failed "
                                      "at t = %.17g", ev->list[i].name, t);
+    if (!s->msg[0]) memcpy(s->msg, why, sizeof s->msg);
   }
   return hooked ? ap_drv_restart_state(s, t, q, v) : AP_OK;
 }
@@ -532,3 +535,11 @@ void ap_drv_events_free(ap_sim *s) {
 }
 
 int ap_drv_event_defined(const ap_sim *s) { return s->ev ? s->ev->count : 0; }
+
+int ap_drv_event_note(ap_sim *s, int i, double t, int direction) {
+  if (!s->ev || i < 0 || i >= s->ev->count) return AP_ERR_ARG;
+  ap_event_record *r = NULL;
+  memcpy(s->d->q, s->q, sizeof(double) * (size_t)s->n);   /* the current state: unchanged */
+  memcpy(s->d->v, s->v, sizeof(double) * (size_t)s->k);
+  return record(s, i, t, direction, &r);
+}

@@ -126,6 +126,9 @@ double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot);
 int ap_drv_evaluate_current(ap_sim *s);
 /* The number of events added to the simulation (event.c). */
 int ap_drv_event_defined(const ap_sim *s);
+/* Record event i as having crossed (direction) at t with the current state s->q, s->v: a
+ * switch made at creation (a contact sliding from t0). */
+int ap_drv_event_note(ap_sim *s, int i, double t, int direction);
 /* Events (event.c): free them with the simulation. */
 void ap_drv_events_free(ap_sim *s);
 /* The error weights s->wt, all 1 (free_coords.c). */
@@ -139,6 +142,8 @@ int ap_drv_consistent_coordinates(ap_sim *s, double t0, const double *q0, double
 int ap_drv_consistent_speeds(ap_sim *s, double t0, const double *q0, const double *v0,
                               int refuse);
 int ap_drv_setup_dae(ap_sim *s);
+/* IDA made for (t, y) (the data holds the Appell solve there; yp: ny of scratch). */
+int ap_drv_dae_make(ap_sim *s, double t, double *y, double *yp);
 int ap_drv_make_stepper(ap_sim *s, double t0);
 /* Contact modes (contact_modes.c): the initial modes from (t0, q0, v0) before the state is put
  * on the constraints, their switch events once the stepper exists, the stage that keeps the
@@ -148,6 +153,17 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
 int ap_drv_contacts_events(ap_sim *s);
 int ap_drv_stage_contacts(ap_sim *s, double *t);
 void ap_drv_contacts_free(ap_sim *s);
+/* DAE mode with contact modes (contact_dae.c): the residual's Coulomb forces of the sliding
+ * contacts (ap_dae_couple, user = the ap_sim), and IDA made again at a switch (the kept rows
+ * and the number of multipliers change with the modes). */
+int ap_drv_dae_coulomb(void *user, ap_data *d, double *W);
+int ap_drv_dae_remake(ap_sim *s, double t, double *y);
+/* 1 when a contact's mode changed since the last call (contact_modes.c; IDA is made again
+ * only then, a restart with the same modes keeps it). */
+int ap_drv_contacts_switched(ap_sim *s);
+/* Contact impacts (contact_impact.c): the velocity jump at the touchdown of contact ci at
+ * (t, q), v in and out, and the contact's mode after it. */
+int ap_drv_contact_impact(ap_sim *s, int ci, double t, const double *q, double *v);
 
 /* Inputs and controllers (sim_input.c): free them with the simulation; the time the next
  * internal step must stop at, for an advance to tout (events of t alone, controller

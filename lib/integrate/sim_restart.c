@@ -83,20 +83,25 @@ int ap_drv_consistent_speeds(ap_sim *s, double t0, const double *q0, const doubl
 /* DAE mode: y = (q, v, lambda, mu), y' = (q', v', 0, 0), from the Appell solve at t0 (mu = 0:
  * on the exact solution the GGL multipliers vanish; lambda: dae.c solves for the multipliers of
  * the independent rows it keeps). */
-int ap_drv_setup_dae(ap_sim *s) {
+int ap_drv_setup_dae(ap_sim *s) { return ap_drv_dae_make(s, s->t, s->y, s->ytry); }
+
+/* IDA at (t, y) with the Appell solve's q', v' in the data; yp (ny) is scratch. With contact
+ * modes the residual carries the sliding contacts' Coulomb forces (contact_dae.c). */
+int ap_drv_dae_make(ap_sim *s, double t, double *y, double *yp) {
   ap_data *d = s->d;
   int nalg = s->b + (s->m->ev.phi ? s->m->nphi : 0);
   s->ny = s->n + s->k + nalg;
-  double *yp = s->ytry;
-  memset(s->y + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
+  memset(y + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
   memcpy(yp, d->qdot, sizeof(double) * (size_t)s->n);
   memcpy(yp + s->n, d->vdot, sizeof(double) * (size_t)s->k);
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
-  double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, s->y, d->vdot);
+  double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, y, d->vdot);
   ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL, NULL};
-  int rc = ap_dae_create(s->m, d, s->t, s->y, yp, &o, s->def.rank_rtol, &s->dae, s->msg,
-                         sizeof s->msg);
-  if (rc == AP_OK) ap_dae_state(s->dae, s->y);
+  ap_dae_couple cp = {ap_drv_dae_coulomb, s};
+  if (s->cm) ap_drv_contacts_switched(s);   /* the modes IDA is made for */
+  int rc = ap_dae_create(s->m, d, t, y, yp, &o, s->def.rank_rtol, s->cm ? &cp : NULL, &s->dae,
+                         s->msg, sizeof s->msg);
+  if (rc == AP_OK) ap_dae_state(s->dae, y);
   return rc;
 }
 
@@ -179,7 +184,8 @@ int ap_drv_restart_state(ap_sim *s, double t, const double *q, const double *v) 
   if (rc == AP_OK) rc = state_from(s, t, y);
   if (rc != AP_OK) return rc;
   s->stats.restarts++;
-  if (s->dae) return restart_dae(s, t, y);
+  if (s->dae)
+    return s->cm && ap_drv_contacts_switched(s) ? ap_drv_dae_remake(s, t, y) : restart_dae(s, t, y);
   if (s->cm) {   /* contact modes: the state size may have changed with the rows */
     ap_step_free(s->st);
     s->st = NULL;

@@ -433,3 +433,10 @@ void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c
   else
     for (int i = 0; i < 3; i++) F[i] -= mu * fn * (b[4] * t1[i] + b[5] * t2[i]);
 }
+
+void ap_cfr_coulomb(const ap_bmodel *M, const double *S, const ap_mcon *c, double *f) {
+  const double *b = block(M, S, c), *T = b + FR_HEAD;
+  double mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu;
+  int k = M->k;
+  for (int j = 0; j < k; j++) f[j] = -mu * (b[4] * T[j] + b[5] * T[k + 1 + j]);
+}

@@ -44,6 +44,10 @@ void ap_cfr_friction_force(const ap_bmodel *M, const double *S, const ap_mcon *c
  * NaN when the load cannot be evaluated. */
 double ap_cfr_contact_normal(const ap_model *m, const ap_data *d, const double *lam,
                              const ap_mcon *c);
+/* Sliding contact c: its Coulomb force per unit normal force as a generalized force (k),
+ * f = -mu_k T^T s^ (the tangent rows T and the direction s^ of the last evaluation): the
+ * friction term ap_cfr_friction adds to Q is f F_n. */
+void ap_cfr_coulomb(const ap_bmodel *M, const double *S, const ap_mcon *c, double *f);
 /* 1 when contact c lifts off (def.unilateral, or by default when it has a friction coefficient). */
 int ap_cfr_unilateral(const ap_mcon *c);
 /* The gap of contact c whatever its mode (m; contact.c), after the position stage. */
