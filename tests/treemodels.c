@@ -1,6 +1,7 @@
 /* Large body models for the tree path (treemodels.h). */
 #include "treemodels.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -126,6 +127,89 @@ void tm_disks_state(const ap_model *m, int N, double *q, double *v) {
     vi[0] = vi[1] = 0;
     for (int r = 0; r < 3; r++) vi[2 + r] = spin * R[6 + r] + (r == 2 ? turn : 0.0);
     given[5 * i + 2] = given[5 * i + 3] = given[5 * i + 4] = 1;
+  }
+  complete(m, q, given, v);
+  free(given);
+}
+
+static int fleet_trailer(int i, int every) { return every > 0 && i % every == every - 1; }
+
+static void fleet_wheel(ap_builder *b, int i, int chassis, double y, const char *side) {
+  char name[64];
+  snprintf(name, sizeof name, "wheel_%s%d", side, i + 1);
+  ap_body_def d = ap_body_def_default();
+  d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = 0.1;
+  check(ap_body_def_uniform(&d, 0.5), name);
+  int id = -1;
+  check(ap_builder_add_body(b, &d, &id), name);
+  ap_joint_def j = ap_joint_def_default();   /* axis (joint z) along the chassis y axis */
+  j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = chassis, j.child = id;
+  j.parent_frame.pos[1] = y;
+  j.parent_frame.quat[0] = sqrt(0.5), j.parent_frame.quat[1] = -sqrt(0.5);
+  int jid = -1;
+  check(ap_builder_add_joint(b, &j, &jid), name);
+  ap_effect_def e = ap_effect_def_default();
+  e.kind = AP_EFFECT_JOINT_DAMPING, e.joint = jid, e.damping = 0.02 * (1 + i % 3);
+  check(ap_builder_add_effect(b, &e, NULL), name);
+  ap_constraint_def c = ap_constraint_def_default();
+  snprintf(name, sizeof name, "roll_%s%d", side, i + 1);
+  c.name = name, c.kind = AP_CON_ROLLING, c.body = id;
+  check(ap_builder_add_constraint(b, &c, NULL), name);
+}
+
+ap_model *tm_fleet(int N, int trailer_every, ap_path path) {
+  ap_builder *b = NULL;
+  char name[64];
+  check(ap_builder_create("fleet", &b), "builder");
+  for (int i = 0; i < N; i++) {
+    snprintf(name, sizeof name, "chassis%d", i + 1);
+    int ch = add_box(b, name, 10.0 + i % 4, 0.1, 0.6);
+    ap_joint_def j = ap_joint_def_default();
+    j.name = name, j.kind = AP_JOINT_PLANAR, j.child = ch, j.parent_frame.pos[2] = 0.1;
+    check(ap_builder_add_joint(b, &j, NULL), name);
+    fleet_wheel(b, i, ch, 0.25, "l");
+    fleet_wheel(b, i, ch, -0.25, "r");
+    if (!fleet_trailer(i, trailer_every)) continue;
+    snprintf(name, sizeof name, "trailer%d", i + 1);
+    int tr = add_box(b, name, 4.0, 0.2, 0.3);
+    j = ap_joint_def_default();
+    j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = ch, j.child = tr;
+    j.parent_frame.pos[0] = -0.3, j.child_frame.pos[0] = 0.5;   /* axis: z (default) */
+    check(ap_builder_add_joint(b, &j, NULL), name);
+    snprintf(name, sizeof name, "trailer%d.axle", i + 1);
+    knife(b, name, tr);
+  }
+  ap_effect_def e = ap_effect_def_default();   /* gravity on every body */
+  check(ap_builder_add_effect(b, &e, NULL), "gravity");
+  return compile(b, path);
+}
+
+/* Index of the speed (or coordinate) named "<name><i>.<what>", or exit. */
+static int fleet_index(const ap_model *m, int speed, const char *name, int i, const char *what) {
+  char full[96];
+  snprintf(full, sizeof full, "%s%d.%s", name, i + 1, what);
+  int n = speed ? ap_model_k(m) : ap_model_n(m);
+  for (int c = 0; c < n; c++)
+    if (strcmp(speed ? ap_model_speed_name(m, c) : ap_model_coord_name(m, c), full) == 0) return c;
+  die("fleet index", full);
+  return -1;
+}
+
+void tm_fleet_state(const ap_model *m, int N, int trailer_every, double *q, double *v) {
+  int n = ap_model_n(m), k = ap_model_k(m);
+  int *given = xcalloc((size_t)k, sizeof *given);
+  memset(q, 0, sizeof(double) * (size_t)n);
+  memset(v, 0, sizeof(double) * (size_t)k);
+  for (int i = 0; i < N; i++) {   /* chassis x, y, heading; wheel rates; trailer angle */
+    q[fleet_index(m, 0, "chassis", i, "x")] = 2.0 * (i % 32);
+    q[fleet_index(m, 0, "chassis", i, "y")] = 2.0 * (i / 32);
+    q[fleet_index(m, 0, "chassis", i, "heading")] = 0.7 * i;
+    int wl = fleet_index(m, 1, "wheel_l", i, "angle_dot");
+    int wr = fleet_index(m, 1, "wheel_r", i, "angle_dot");
+    v[wl] = 6.0 + 0.5 * (i % 7), v[wr] = 12.0 - 0.75 * (i % 5);
+    given[wl] = given[wr] = 1;
+    if (fleet_trailer(i, trailer_every))
+      q[fleet_index(m, 0, "trailer", i, "angle")] = 0.2 * ((i % 2) ? -1.0 : 1.0);
   }
   complete(m, q, given, v);
   free(given);

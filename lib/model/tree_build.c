@@ -130,6 +130,7 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
   P->sm.coord_names = m->coord_names, P->sm.speed_names = m->speed_names;
   P->sm.constraint_names = m->constraint_names;
   P->sm.ev.impl = &P->shadow;
+  P->sm.ops_impl = P;   /* with no ops: the shadow of this plan (evaluate.c's close_loops) */
   return AP_OK;
 }
 
@@ -139,13 +140,14 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
 #define TREE_WS_DOUBLES(X)                                                                 \
   X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
   X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
-  X(ws->rb, b) X(work_dbl, ndw)
-#define TREE_WS_INTS(X) X(ws->avoid, k) X(work_int, niw)
+  X(ws->rb, b) X(ws->hp, nhd) X(work_dbl, ndw)
+#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi) X(work_int, niw)
 
 #define WS_ADD(f_, c_) ap_arena_add(L, #f_, (c_));
 static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
   size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, niw = 0;
-  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw);
+  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw), nhi = 0;
+  size_t nhd = ap_tree_hol_ws_size(P, &nhi);
   ap_arena *L = Ld;
   ap_arena_init(L, "tree workspace doubles", sizeof(double), 0);
   TREE_WS_DOUBLES(WS_ADD)
@@ -207,6 +209,7 @@ int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why
         for (int c = fofs[tbody[a]]; c < fofs[tbody[a] + 1]; c++) P->kspeed[p++] = fidx[c];
     rc = make_shadow(m, M, P);
   }
+  if (rc == AP_OK) rc = ap_tree_hol_plan(P);
   if (rc != AP_OK) {
     ap_tree_plan_free(P);
     return rc;
@@ -220,6 +223,7 @@ void ap_tree_plan_free(ap_tplan *P) {
   if (!P) return;
   free(P->sjoints);
   free(P->ints);
+  free(P->hints);
   free(P);
 }
 

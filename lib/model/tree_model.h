@@ -34,6 +34,13 @@ typedef struct ap_tplan {
   ap_model sm;              /* an ap_model around the shadow (names, messages) */
   ap_ops ops;               /* the operators (ap_tree_ops), the model's m->ops */
   size_t nd, ni;            /* workspace: doubles, ints */
+  /* implicit holonomic rows (wheel contacts' rows .z; tree_project.c), by tree: */
+  int *hints;               /* every int array below, one block (NULL without such rows) */
+  int nhol, hmax, hkmax;    /* rows; most rows of one tree; most speeds of a tree with rows */
+  int *hofs, *hcon, *hrow;  /* (ntree+1), (nhol), (nhol): rows of tree t, constraint and row */
+  int *hphi;                /* (nhol) each row's place in the constraint order of phi */
+  int *tkofs, *kloc;        /* (ntree+1) tree t's speeds in kspeed; (k, by position) place in
+                               its tree's list */
 } ap_tplan;
 
 typedef struct ap_tree_ws {
@@ -45,6 +52,8 @@ typedef struct ap_tree_ws {
   double *x;                /* (k) temporary */
   double *rb;               /* (b) temporary */
   int *avoid;               /* (k) speeds to keep independent (ap_tree_complete_speeds) */
+  double *hp;               /* projection of the holonomic rows (ap_tree_hol_ws_size) */
+  int *hip;
   ap_la_tree_work W;
 } ap_tree_ws;
 
@@ -86,6 +95,16 @@ void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, dou
 void ap_tree_com_accel(const ap_tree_ws *ws, const double *vdot, int body, double *U,
                        double *a);
 static inline size_t ap_tree_twist_len(const ap_tree_ws *ws) { return 6 * (size_t)ws->P->T.nb; }
+
+/* Implicit holonomic rows on the tree path (tree_project.c). hol_plan: their lists by tree
+ * (after the forest; AP_ERR_NOMEM); hol_ws_size: the projection's doubles and ints.
+ * close_rows: the Gauss-Newton projection of phi = 0 (evaluate.c's close_loops for the
+ * shadow), minimum-norm tree by tree, q += N dv on the model's joints; the shadow's scratch
+ * (ws->S) holds the kinematics at q on return. hol_residual: max |phi| at q. */
+int ap_tree_hol_plan(ap_tplan *P);
+size_t ap_tree_hol_ws_size(const ap_tplan *P, size_t *nint);
+int ap_tree_close_rows(const void *plan, ap_data *d, double *q, double *change);
+int ap_tree_hol_residual(const ap_tplan *P, ap_data *d, const double *q, double *phi_max);
 
 /* The compile-time choice of the path (system.h, ap_path): on AP_PATH_TREE, or AP_PATH_AUTO
  * with at least AP_TREE_AUTO_K speeds and a model the plan takes, the plan is attached to m
