@@ -28,6 +28,8 @@ typedef struct ap_tplan {
   int *rcon, *rrow;         /* (b, by position) constraint and its row */
   int *kspeed;              /* (k) global speed of each entry of the blocks' speed lists */
   int lmax;                 /* capacity of one tree's free speeds */
+  int comp;                 /* component mode (every tree small: AP_TREE_COMP_K): the dense
+                               path's partition on each tree's block (lib/linalg/tree_comp.c) */
   const ap_bmodel *M;       /* the model's own tables (free speeds, effects) */
   ap_bmodel shadow;         /* no speeds, one twist column */
   ap_mjoint *sjoints;       /* the shadow's joints: free speeds removed from the columns */
@@ -55,7 +57,12 @@ typedef struct ap_tree_ws {
   double *hp;               /* projection of the holonomic rows (ap_tree_hol_ws_size) */
   int *hip;
   ap_la_tree_work W;
+  ap_la_comp_work CW;       /* component mode */
 } ap_tree_ws;
+
+/* Component mode when every tree has at most this many speeds (a vehicle, a disk; a chain of
+ * trailers takes the body-local elimination, whose cost stays linear in its length). */
+#define AP_TREE_COMP_K 32
 
 /* The plan of a compiled body model, or AP_ERR_UNSUPPORTED with the reason in why (the
  * element that keeps the model on the dense path). */
@@ -73,6 +80,9 @@ int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws);
  * set by the caller); the partition in d is replaced. */
 int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
                             double *v);
+/* u = B e + w, A w + rhs = 0 (e, rhs may be NULL), in the plan's mode; the dropped rows'
+ * residual. */
+double ap_tree_solve(ap_tree_ws *ws, const double *e, const double *rhs, double *u);
 /* y = g x;  r = A x (+ a0 when with_a0);  qdot = N v. */
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r,

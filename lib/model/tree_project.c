@@ -41,7 +41,8 @@ int ap_tree_hol_plan(ap_tplan *P) {
   P->hphi = ip, ip += nh;
   P->kloc = ip, ip += k;
   int *fill = ip;   /* (nt + 1) fill pointers */
-  for (int ci = 0; ci < M->nc; ci++) P->hofs[hol_tree(P, &M->cons[ci]) + 1] += M->cons[ci].nhol;
+  for (int ci = 0; ci < M->nc; ci++)
+    if (M->cons[ci].nhol) P->hofs[hol_tree(P, &M->cons[ci]) + 1] += M->cons[ci].nhol;
   for (int t = 0; t < nt; t++) P->hofs[t + 1] += P->hofs[t];
   for (int t = 0; t < nt; t++) fill[t] = P->hofs[t];
   for (int ci = 0, s = 0; ci < M->nc; ci++) {
@@ -109,15 +110,7 @@ static void gradient(const ap_tplan *P, ap_tree_ws *ws, int p, double *JlT) {
   memset(F, 0, sizeof F);
   c->kind->tree_row(&P->shadow, ws->S, c, P->hrow[p], ws->S + P->shadow.off_con +
                     (size_t)P->hcon[p] * CON_STRIDE, ws->rho + 6 * (size_t)i, F, &a0);
-  for (int a = i; a >= 0; a = T->parent[a]) {
-    for (int f = T->fofs[a]; f < T->fofs[a + 1]; f++) {
-      const double *S6 = ws->g.S + 6 * (size_t)f;
-      double s = 0.0;
-      for (int r = 0; r < 6; r++) s += S6[r] * F[r];
-      JlT[P->kloc[f]] = s;
-    }
-    if (T->parent[a] >= 0) v3_cross_add(ws->g.d + 3 * (size_t)a, F + 3, F);
-  }
+  ap_la_tree_row_coeffs(T, &ws->g, i, F, P->kloc, JlT);
 }
 
 /* One Gauss-Newton step: dv (k) of minimum norm with Jl dv = -phi, tree by tree. */
