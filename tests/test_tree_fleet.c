@@ -5,7 +5,8 @@
  * rolling as wheel contacts (a free joint: the contact rows' phi drifts and is projected after
  * every step, so the tree path's projection runs). Also: the automatic choice takes a fleet of
  * 16 speeds or more; ap_body_project_q on both paths gives the same q; the energy agrees at
- * one state; the refusals (a wheel contact with friction; wheel loads on the tree path). */
+ * the tree path picks the dense path's partition; the example scene fleet_16.yaml on both
+ * paths; a wheel contact with friction refused on a forced tree path. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +27,21 @@ static void fleet(int N, int every, double t1) {
   char label[32];
   snprintf(label, sizeof label, "fleet %d", N);
   compare_runs(label, md, mt, x, x + n, t1);
+  /* the tree path picks the dense path's partition (pivoted QR on each robot's block) */
+  ap_data *dd = NULL, *dt = NULL;
+  AP_CHECK_EQ_INT(ap_data_create(md, &dd), AP_OK);
+  AP_CHECK_EQ_INT(ap_data_create(mt, &dt), AP_OK);
+  for (ap_data *d = dd; d; d = d == dd ? dt : NULL) {
+    memcpy(d->q, x, sizeof(double) * (size_t)n);
+    memcpy(d->v, x + n, sizeof(double) * (size_t)k);
+    d->t = 0.0;
+    AP_CHECK_EQ_INT(ap_partition(d == dd ? md : mt, d), AP_OK);
+  }
+  AP_CHECK_EQ_INT(dt->rank, dd->rank);
+  int same = 1;
+  for (int c = dd->rank; c < k; c++) same &= dt->perm[c] == dd->perm[c];
+  AP_CHECK(same);
+  ap_data_free(dd), ap_data_free(dt);
   free(x);
   ap_model_free(md), ap_model_free(mt);
 }
@@ -111,8 +127,21 @@ static void rolling_free(int N, double t1) {
   ap_model_free(md), ap_model_free(mt);
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  if (argc < 2) return fprintf(stderr, "usage: test_tree_fleet SOURCE_ROOT\n"), 2;
+  /* the example fleet (16 robots on motors, parts/robot.yaml) and a single robot */
+  scene_both(argv[1], "fleet_16", "simulation.t_end=0.5");
+  scene_both(argv[1], "diff_drive_motors", "simulation.t_end=2");
   fleet(2, 2, 2.0);
+  /* refused, with the reason: a wheel contact with friction (contact modes) */
+  char file[1024], msg[512] = "";
+  const char *set = "simulation.path=tree";
+  ap_scene *s = NULL;
+  snprintf(file, sizeof file, "%s/examples/scenes/diff_drive_brake.yaml", argv[1]);
+  AP_CHECK(ap_scene_load(file, &set, 1, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(strstr(msg, "friction") != NULL && strstr(msg, "tree path") != NULL);
+  printf("forced tree path with friction: %s\n", msg);
+  ap_scene_free(s);
   fleet(5, 3, 2.0);
   rolling_free(3, 1.0);
   /* the automatic choice: a fleet of 16 speeds or more takes the tree path */
