@@ -453,6 +453,10 @@ static int min_norm_speeds(const ap_model *m, ap_data *d, const double *A, const
 static int tree_complete_speeds(const ap_model *m, ap_data *d, const int *given, double *v) {
   ap_tree_ws *ws = ap_tree_ws_of(d);
   int k = m->k, b = m->b;
+  if (ws->P->comp) {   /* the same least squares, tree by tree */
+    int rc = ap_tree_position(m, d, ws, 1);
+    return rc == AP_OK ? ap_tree_complete_min_norm(m, d, ws, given, v) : rc;
+  }
   double *A = calloc((size_t)b * k + 2 * (size_t)k, sizeof *A);
   if (!A) {
     AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);

@@ -115,6 +115,10 @@ int ap_tree_hol_plan(ap_tplan *P);
 size_t ap_tree_hol_ws_size(const ap_tplan *P, size_t *nint);
 int ap_tree_close_rows(const void *plan, ap_data *d, double *q, double *change);
 int ap_tree_hol_residual(const ap_tplan *P, ap_data *d, const double *q, double *phi_max);
+/* Component mode: the dense path's minimum-norm completion of the speeds not given, tree by
+ * tree on the blocks A_t of the last position stage (at d->q). */
+int ap_tree_complete_min_norm(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
+                              double *v);
 
 /* The compile-time choice of the path (system.h, ap_path): on AP_PATH_TREE, or AP_PATH_AUTO
  * with at least AP_TREE_AUTO_K speeds and a model the plan takes, the plan is attached to m

@@ -160,3 +160,68 @@ int ap_tree_close_rows(const void *plan, ap_data *d, double *q, double *change) 
             P->sm.constraint_names[c->row + P->hrow[worst]], err, AP_LOOP_ITER, tol);
   return AP_ERR_INCONSISTENT;
 }
+
+/* ---- completing speeds in component mode ------------------------------------------------- */
+
+/* The dense path's minimum-norm completion (evaluate.c's min_norm_speeds: least squares on the
+ * rows with the given speeds moved to the right) tree by tree on the blocks A_t of the last
+ * position stage at d->q: A is block diagonal, so the minimum-norm solution of the whole is the
+ * trees' side by side, in O(N) instead of one b x k least-squares problem. */
+int ap_tree_complete_min_norm(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
+                              double *v) {
+  const ap_tplan *P = ws->P;
+  const ap_la_tree *T = &P->T;
+  const ap_la_comp_work *C = &ws->CW;
+  int km = 1, bm = 1;
+  for (int t = 0; t < T->ntree; t++) {
+    km = ws->W.kofs[t + 1] - ws->W.kofs[t] > km ? ws->W.kofs[t + 1] - ws->W.kofs[t] : km;
+    bm = C->rofs[t + 1] - C->rofs[t] > bm ? C->rofs[t + 1] - C->rofs[t] : bm;
+  }
+  size_t lw = ap_la_work_size(km, bm), liw = ap_la_iwork_size(km, bm);
+  double *AfT = calloc((size_t)km * bm + 2 * (size_t)bm + 2 * (size_t)km + lw + 1, sizeof *AfT);
+  int *iw = calloc(liw + (size_t)km + 1, sizeof *iw);
+  if (!AfT || !iw) {
+    free(AfT), free(iw);
+    AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
+    return AP_ERR_NOMEM;
+  }
+  double *rhs = AfT + (size_t)km * bm, *res = rhs + bm, *x = res + bm, *vt = x + km;
+  double *work = vt + km, worst = 0.0, scale = 0.0;
+  int *col = iw + liw, rc = AP_OK;
+  for (int t = 0; t < T->ntree && rc == AP_OK; t++) {
+    int kt = ws->W.kofs[t + 1] - ws->W.kofs[t], bt = C->rofs[t + 1] - C->rofs[t], nf = 0;
+    const double *At = C->A + C->aofs[t];
+    for (int c = 0; c < kt; c++) {
+      int sp = T->fidx[ws->W.kidx[ws->W.kofs[t] + c]];
+      vt[c] = v[sp];
+      if (!given[sp]) col[nf++] = c;
+    }
+    for (int j = 0; j < bt; j++) {
+      double a0 = d->a0[T->ridx[C->rpos[C->rofs[t] + j]]];
+      rhs[j] = -a0, scale = fmax(scale, fabs(a0));
+      for (int c = 0, f = 0; c < kt; c++) {
+        double a = At[j + (size_t)c * bt];
+        scale = fmax(scale, fabs(a * vt[c]));
+        if (f < nf && col[f] == c) AfT[f++ + (size_t)j * nf] = a;
+        else rhs[j] -= a * vt[c];
+      }
+    }
+    double resid = 0.0;
+    if (nf && bt) rc = ap_la_lstsq_At(nf, bt, AfT, rhs, 1e-12, x, &resid, work, iw);
+    for (int f = 0; rc == AP_OK && f < nf; f++) vt[col[f]] = bt ? x[f] : 0.0;
+    for (int j = 0; rc == AP_OK && j < bt; j++) {   /* A_t v + a0 */
+      double r = d->a0[T->ridx[C->rpos[C->rofs[t] + j]]];
+      for (int c = 0; c < kt; c++) r += At[j + (size_t)c * bt] * vt[c];
+      worst = fmax(worst, fabs(r));
+    }
+    for (int c = 0; rc == AP_OK && c < kt; c++) v[T->fidx[ws->W.kidx[ws->W.kofs[t] + c]]] = vt[c];
+  }
+  free(AfT), free(iw);
+  if (rc != AP_OK) return rc;
+  if (worst > 1e-9 * scale) {
+    AP_BM_MSG(d, "model '%s': the given speeds leave the constraints violated by %.3g", m->name,
+              worst);
+    return AP_ERR_INCONSISTENT;
+  }
+  return AP_OK;
+}
