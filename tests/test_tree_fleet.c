@@ -46,35 +46,6 @@ static void fleet(int N, int every, double t1) {
   ap_model_free(md), ap_model_free(mt);
 }
 
-/* N thin disks (radius 0.3, mass 1) on free joints, each with a rolling wheel contact. */
-static ap_model *free_disks(int N, ap_path path) {
-  ap_builder *b = NULL;
-  char name[32];
-  AP_CHECK_EQ_INT(ap_builder_create("free_disks", &b), AP_OK);
-  for (int i = 0; i < N; i++) {
-    snprintf(name, sizeof name, "disk%d", i + 1);
-    ap_body_def d = ap_body_def_default();
-    d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = 0.3;
-    AP_CHECK_EQ_INT(ap_body_def_uniform(&d, 1.0), AP_OK);
-    int id = -1;
-    AP_CHECK_EQ_INT(ap_builder_add_body(b, &d, &id), AP_OK);
-    ap_joint_def j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_FREE, j.child = id;
-    AP_CHECK_EQ_INT(ap_builder_add_joint(b, &j, NULL), AP_OK);
-    ap_constraint_def c = ap_constraint_def_default();
-    snprintf(name, sizeof name, "roll%d", i + 1);
-    c.name = name, c.kind = AP_CON_ROLLING, c.body = id;
-    AP_CHECK_EQ_INT(ap_builder_add_constraint(b, &c, NULL), AP_OK);
-  }
-  ap_effect_def e = ap_effect_def_default();
-  AP_CHECK_EQ_INT(ap_builder_add_effect(b, &e, NULL), AP_OK);
-  AP_CHECK_EQ_INT(ap_builder_set_path(b, path), AP_OK);
-  ap_model *m = NULL;
-  AP_CHECK_EQ_INT(ap_builder_compile(b, &m), AP_OK);
-  ap_builder_free(b);
-  return m;
-}
-
 /* Disks tilted 20-40 degrees, spinning and turning; q closed on the contacts, v completed. */
 static void free_disks_state(const ap_model *m, int N, double *q, double *v) {
   ap_data *d = NULL;
@@ -99,7 +70,7 @@ static void free_disks_state(const ap_model *m, int N, double *q, double *v) {
 }
 
 static void rolling_free(int N, double t1) {
-  ap_model *md = free_disks(N, AP_PATH_DENSE), *mt = free_disks(N, AP_PATH_TREE);
+  ap_model *md = tm_free_disks(N, AP_PATH_DENSE), *mt = tm_free_disks(N, AP_PATH_TREE);
   AP_CHECK_EQ_INT(ap_model_path(mt), AP_PATH_TREE);
   int n = ap_model_n(md), k = ap_model_k(md);
   double *x = calloc((size_t)(2 * n + k), sizeof(double)), *q2 = x + n + k;

@@ -131,8 +131,9 @@ static void family(const char *label, int N, int disks, double t1) {
 
 int main(int argc, char **argv) {
   if (argc < 2) return fprintf(stderr, "usage: test_tree_path SOURCE_ROOT\n"), 2;
-  /* the example scenes the tree path takes (the others have wheel contacts or loops; the
-   * rattleback's spin reversal amplifies any difference of step sequence: docs/large.md) */
+  /* example scenes the tree path takes (vehicles with wheel contacts: test_tree_fleet.c; the
+   * others have loops; the rattleback's spin reversal amplifies any difference of step
+   * sequence: docs/large.md) */
   const char *scenes[] = {"chaplygin_sleigh", "rolling_disk", "skate_incline",
                           "turntable_ball", "heavy_top"};
   for (int i = 0; i < 5; i++) scene_both(argv[1], scenes[i], NULL);

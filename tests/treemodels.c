@@ -69,19 +69,20 @@ ap_model *tm_trailers(int N, ap_path path) {
   return compile(b, path);
 }
 
-ap_model *tm_disks(int N, ap_path path) {
+/* N disks of radius r on joints of one kind, each with a rolling constraint, and gravity. */
+static ap_model *disks(const char *model, int N, ap_joint_kind kind, double r, ap_path path) {
   ap_builder *b = NULL;
   char name[64];
-  check(ap_builder_create("disks", &b), "builder");
+  check(ap_builder_create(model, &b), "builder");
   for (int i = 0; i < N; i++) {
     snprintf(name, sizeof name, "disk%d", i + 1);
     ap_body_def d = ap_body_def_default();
-    d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = 0.5;
+    d.name = name, d.shape.kind = AP_SHAPE_DISK, d.shape.radius = r;
     check(ap_body_def_uniform(&d, 1.0), name);
     int id = -1;
     check(ap_builder_add_body(b, &d, &id), name);
     ap_joint_def j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_PLANE_CONTACT, j.child = id;
+    j.name = name, j.kind = kind, j.child = id;
     check(ap_builder_add_joint(b, &j, NULL), name);
     ap_constraint_def c = ap_constraint_def_default();
     snprintf(name, sizeof name, "roll%d", i + 1);
@@ -91,6 +92,14 @@ ap_model *tm_disks(int N, ap_path path) {
   ap_effect_def e = ap_effect_def_default();   /* gravity on every body */
   check(ap_builder_add_effect(b, &e, NULL), "gravity");
   return compile(b, path);
+}
+
+ap_model *tm_disks(int N, ap_path path) {
+  return disks("disks", N, AP_JOINT_PLANE_CONTACT, 0.5, path);
+}
+
+ap_model *tm_free_disks(int N, ap_path path) {
+  return disks("free_disks", N, AP_JOINT_FREE, 0.3, path);
 }
 
 static void complete(const ap_model *m, double *q, const int *given, double *v) {
