@@ -489,10 +489,10 @@ static int contact_tree_body(const ap_model *m, const ap_bmodel *M, const ap_mco
                              char *why, size_t len) {
   (void)M;
   if (c->nhol == 0 && c->wheel < 0) return c->def.body;
-  if (c->wheel >= 0 && c->plane != 2 && c->fric < 0) return c->def.body;
+  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0) return c->def.body;
   snprintf(why, len, "model '%s': constraint '%s' is a wheel contact %s", m->name, c->name,
            c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
-           : "with friction (contact modes)");
+           : c->plane > 2 ? "on a curved ground" : "with friction (contact modes)");
   return -1;
 }
 
@@ -500,9 +500,9 @@ static void contact_tree_row(const ap_bmodel *Ms, double *S, const ap_mcon *c, i
                              const double *G, const double *rho, double *cv, double *a0) {
   kbody C = ap_kin_body(Ms, S, c->def.body);
   kwheel Wg = ap_contact_geom(Ms, S, c);
-  double n[3], gf[9];
-  const double *gn, *t1, *t2;
-  ground_frame(c, C.o, gf, &gn, &t1, &t2, NULL);
+  double n[3];   /* the ground's frame: z = 0, or the fixed tilted plane's (contact_tree_body) */
+  const double *gn = c->plane ? c->gn : EZ, *t1 = c->plane ? c->gt1 : EX;
+  const double *t2 = c->plane ? c->gt2 : EY;
   if (c->nhol && rr == c->hrow) {   /* the contact row: gn . vP (the ground's Vg is tangent) */
     ap_con_tree_point_row(c, G, C.o, Wg.rc, gn, rho, cv, a0);
     return;
