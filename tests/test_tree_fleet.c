@@ -6,7 +6,8 @@
  * every step, so the tree path's projection runs). Also: the automatic choice takes a fleet of
  * 16 speeds or more; ap_body_project_q on both paths gives the same q; the energy agrees at
  * the tree path picks the dense path's partition; the example scene fleet_16.yaml on both
- * paths; a wheel contact with friction refused on a forced tree path. */
+ * paths; refused on a forced tree path: a wheel contact with friction, wheel loads asked for
+ * (path auto takes the dense path then). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -106,12 +107,24 @@ int main(int argc, char **argv) {
   fleet(2, 2, 2.0);
   /* refused, with the reason: a wheel contact with friction (contact modes) */
   char file[1024], msg[512] = "";
-  const char *set = "simulation.path=tree";
+  const char *set[2] = {"simulation.path=tree", "output.channels=[coordinates]"};
   ap_scene *s = NULL;
   snprintf(file, sizeof file, "%s/examples/scenes/diff_drive_brake.yaml", argv[1]);
-  AP_CHECK(ap_scene_load(file, &set, 1, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(ap_scene_load(file, set, 2, &s, msg, sizeof msg) != AP_OK);
   AP_CHECK(strstr(msg, "friction") != NULL && strstr(msg, "tree path") != NULL);
   printf("forced tree path with friction: %s\n", msg);
+  ap_scene_free(s);
+  /* wheel loads (contact_forces of wheel contacts): auto takes the dense path, tree refuses */
+  snprintf(file, sizeof file, "%s/examples/scenes/fleet_16.yaml", argv[1]);
+  const char *cf[2] = {"output.channels=[coordinates, contact_forces]", "simulation.path=tree"};
+  s = NULL;
+  AP_CHECK_EQ_INT(ap_scene_load(file, cf, 1, &s, msg, sizeof msg), AP_OK);
+  AP_CHECK(s && ap_model_path(ap_scene_model(s)) == AP_PATH_DENSE);
+  ap_scene_free(s);
+  s = NULL;
+  AP_CHECK(ap_scene_load(file, cf, 2, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(strstr(msg, "dense path only") != NULL);
+  printf("forced tree path with wheel loads: %s\n", msg);
   ap_scene_free(s);
   fleet(5, 3, 2.0);
   rolling_free(3, 1.0);
