@@ -44,11 +44,26 @@ static void knife(ap_builder *b, const char *name, int body) {
   check(ap_builder_add_constraint(b, &c, NULL), name);
 }
 
+/* Trailer i + 1 (box: mass, com x, Izz) hinged about the vertical at x = hitch on body prev,
+ * its own origin (the axle, with a knife edge) `behind` m behind the hinge; returns its id. */
+static int trailer(ap_builder *b, int i, int prev, const double *box, double hitch,
+                   double behind) {
+  char name[64];
+  snprintf(name, sizeof name, "trailer%d", i + 1);
+  int id = add_box(b, name, box[0], box[1], box[2]);
+  ap_joint_def j = ap_joint_def_default();
+  j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = prev, j.child = id;
+  j.parent_frame.pos[0] = hitch, j.child_frame.pos[0] = behind;   /* axis: z (default) */
+  check(ap_builder_add_joint(b, &j, NULL), name);
+  snprintf(name, sizeof name, "trailer%d.axle", i + 1);
+  knife(b, name, id);
+  return id;
+}
+
 /* Car: origin at the rear axle, centre of mass 1 m ahead. Trailer i: origin at its axle, hitch
  * 1.2 m ahead of it, hinged 0.5 m behind the previous body's axle. */
 ap_model *tm_trailers(int N, ap_path path) {
   ap_builder *b = NULL;
-  char name[64];
   check(ap_builder_create("trailers", &b), "builder");
   int prev = add_box(b, "car", 1000.0, 1.0, 1500.0);
   ap_joint_def j = ap_joint_def_default();
@@ -56,15 +71,8 @@ ap_model *tm_trailers(int N, ap_path path) {
   check(ap_builder_add_joint(b, &j, NULL), "car joint");
   knife(b, "car.axle", prev);
   for (int i = 0; i < N; i++) {
-    snprintf(name, sizeof name, "trailer%d", i + 1);
-    int id = add_box(b, name, 300.0, 0.4, 250.0);
-    j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = prev, j.child = id;
-    j.parent_frame.pos[0] = -0.5, j.child_frame.pos[0] = 1.2;   /* axis: z (default) */
-    check(ap_builder_add_joint(b, &j, NULL), name);
-    snprintf(name, sizeof name, "trailer%d.axle", i + 1);
-    knife(b, name, id);
-    prev = id;
+    const double box[3] = {300.0, 0.4, 250.0};
+    prev = trailer(b, i, prev, box, -0.5, 1.2);
   }
   return compile(b, path);
 }
@@ -178,15 +186,8 @@ ap_model *tm_fleet(int N, int trailer_every, ap_path path) {
     check(ap_builder_add_joint(b, &j, NULL), name);
     fleet_wheel(b, i, ch, 0.25, "l");
     fleet_wheel(b, i, ch, -0.25, "r");
-    if (!fleet_trailer(i, trailer_every)) continue;
-    snprintf(name, sizeof name, "trailer%d", i + 1);
-    int tr = add_box(b, name, 4.0, 0.2, 0.3);
-    j = ap_joint_def_default();
-    j.name = name, j.kind = AP_JOINT_REVOLUTE, j.parent = ch, j.child = tr;
-    j.parent_frame.pos[0] = -0.3, j.child_frame.pos[0] = 0.5;   /* axis: z (default) */
-    check(ap_builder_add_joint(b, &j, NULL), name);
-    snprintf(name, sizeof name, "trailer%d.axle", i + 1);
-    knife(b, name, tr);
+    const double box[3] = {4.0, 0.2, 0.3};
+    if (fleet_trailer(i, trailer_every)) trailer(b, i, ch, box, -0.3, 0.5);
   }
   ap_effect_def e = ap_effect_def_default();   /* gravity on every body */
   check(ap_builder_add_effect(b, &e, NULL), "gravity");
