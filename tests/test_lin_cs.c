@@ -159,6 +159,8 @@ static const char *const refused[] = {
     "bicycle_falling.yaml",     /* released with a roll rate to fall: no steady state in its
                                    state, no section */
     "bowling_ball.yaml",        /* contact modes: sliding, then rolling: no steady state */
+    "fleet_16.yaml",            /* 16 robots on the tree path (path: auto, k = 80); motors from
+                                   rest: no steady state either */
     "ball_drop_spin.yaml",      /* falling onto the floor */
     "ball_dome_liftoff.yaml",   /* rolling off the top of a dome */
     "diff_drive_skid.yaml",     /* skidding with locked wheels: its contacts slide */

@@ -423,7 +423,7 @@ double ap_la_tree_solve(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tre
 /* The basis block of tree t: one homogeneous sweep per free speed, all at once. */
 static void tree_basis(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W, int t) {
   int lt = W->lofs[t + 1] - W->lofs[t], kt = W->kofs[t + 1] - W->kofs[t], row = 0;
-  double *Bt = W->B + W->bofs[t], *Gt = W->G + W->gofs[t], *ul = W->loc, F[6];
+  double *Bt = W->B + W->bofs[t], *ul = W->loc;
   if (lt == 0) return;
   for (int a = T->tofs[t]; a < T->tofs[t + 1]; a++) {
     int i = T->tbody[a], f0 = T->fofs[i], nf = T->fofs[i + 1] - f0, p = T->parent[i];
@@ -438,6 +438,12 @@ static void tree_basis(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree
     }
     row += nf;
   }
+  ap_la_tree_gram(T, g, W, t);
+}
+
+void ap_la_tree_gram(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W, int t) {
+  int lt = W->lofs[t + 1] - W->lofs[t];
+  double *Gt = W->G + W->gofs[t], F[6];
   memset(Gt, 0, sizeof(double) * (size_t)lt * lt);
   for (int a = T->tofs[t]; a < T->tofs[t + 1]; a++) {
     const double *Yi = W->Y + 6 * (size_t)lt * (a - T->tofs[t]), *Mi = g->M + 13 * (size_t)T->tbody[a];
@@ -448,6 +454,19 @@ static void tree_basis(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree
   }
   for (int jj = 0; jj < lt; jj++)
     for (int ii = jj + 1; ii < lt; ii++) Gt[ii + (size_t)jj * lt] = Gt[jj + (size_t)ii * lt];
+}
+
+void ap_la_tree_body_twist(const ap_la_tree *T, const ap_la_tree_geom *g, int i,
+                           const double *Up, const double *u, double *U) {
+  body_twist(T, g, i, Up ? Up : ZERO6, u, U);
+}
+
+void ap_la_tree_row_coeffs(const ap_la_tree *T, const ap_la_tree_geom *g, int i, double *c,
+                           const int *map, double *y) {
+  for (int a = i; a >= 0; a = T->parent[a]) {
+    for (int f = T->fofs[a]; f < T->fofs[a + 1]; f++) y[map[f]] = dot6(g->S + 6 * (size_t)f, c);
+    if (T->parent[a] >= 0) transport_wrench(g->d + 3 * (size_t)a, c);
+  }
 }
 
 void ap_la_tree_basis(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W) {

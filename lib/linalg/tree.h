@@ -111,6 +111,52 @@ double ap_la_tree_solve(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tre
 /* The basis blocks B_t (columns of B over the tree's speeds) and G_t = B_t^T g B_t. */
 void ap_la_tree_basis(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W);
 
+/* G_t = sum_i Y_i^T M_i Y_i of tree t from the twists of its basis columns in W->Y (6 lt per
+ * body, by place in the tree). U = X_i Up + S_i u (u: body i's nf speeds, local order; Up NULL:
+ * a root). Row coefficients: c (6, overwritten) a covector on body i's twist; y[map[f]] =
+ * S_f . (X^T ... c) for every free column f (by position) of i and its ancestors: the row's
+ * entries of A (or of a gradient) on those speeds, O(depth). */
+void ap_la_tree_gram(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W, int t);
+void ap_la_tree_body_twist(const ap_la_tree *T, const ap_la_tree_geom *g, int i,
+                           const double *Up, const double *u, double *U);
+void ap_la_tree_row_coeffs(const ap_la_tree *T, const ap_la_tree_geom *g, int i, double *c,
+                           const int *map, double *y);
+
+/* ---- component mode (tree_comp.c): the dense path's routines on each tree's block A_t ---- */
+
+typedef struct ap_la_comp_work {
+  int *perm;                /* (k, by tree: kofs) local pivot order of tree t: rank[t] dependent
+                               columns first, then the independent ones ascending */
+  int *kloc;                /* (k, by position) local column of each free column in its tree */
+  int *rank;                /* (ntree) rank of A_t */
+  int *rofs, *rpos;         /* (ntree+1), (b): rows of tree t (positions in ridx), local order */
+  int *aofs;                /* (ntree+1) offsets of A_t and F_t (b_t x k_t) */
+  int *iwork;
+  double *A, *F, *tau;      /* A_t and its QR (ap_la_partition_basis), tau (k, by tree) */
+  double *x, *y, *work;     /* scratch */
+  double rtol;              /* rank tolerance of the last factorization (reactions) */
+} ap_la_comp_work;
+
+size_t ap_la_comp_work_size(const ap_la_tree *T, size_t *nint);
+void ap_la_comp_work_init(const ap_la_tree *T, double *dbl, int *ints, ap_la_comp_work *C);
+/* As ap_la_tree_factor with b0 = the particular v of a0 (A b0 + a0 = 0) and resid = how far
+ * the dropped rows are from consistent; the blocks B_t, G_t in W as ap_la_tree_basis leaves
+ * them (W->lmax must hold every tree's speeds). AP_ERR_SINGULAR (*bad = the tree's root):
+ * R11 of the frozen partition singular to working precision (re-partition). */
+int ap_la_comp_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
+                      ap_la_comp_work *C, int select, double rtol, const double *a0,
+                      double *b0, double *growth, double *resid, int *bad);
+void ap_la_comp_partition(const ap_la_tree *T, const ap_la_tree_work *W,
+                          const ap_la_comp_work *C, int *perm, int *rank);
+/* u = B e + w with A w + rhs = 0 (rhs, e may be NULL), as ap_la_tree_solve; returns the
+ * dropped rows' residual. */
+double ap_la_comp_solve(const ap_la_tree *T, const ap_la_tree_work *W, ap_la_comp_work *C,
+                        const double *e, const double *rhs, double *u);
+/* lambda with A^T lambda = r by least squares on each A_t (the dense path's method); returns
+ * the largest residual. */
+double ap_la_comp_reactions(const ap_la_tree *T, const ap_la_tree_work *W, ap_la_comp_work *C,
+                            const double *r, double *lambda);
+
 /* U (6 nb) = J x: the twists of the speeds x (k). */
 void ap_la_tree_twists(const ap_la_tree *T, const ap_la_tree_geom *g, const double *x,
                        double *U);

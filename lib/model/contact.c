@@ -514,12 +514,18 @@ static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const
   return AP_OK;
 }
 
+/* The tree path takes a contact on a plane-contact joint and a wheel contact on the plane
+ * z = 0 or a fixed tilted plane: every row, the contact row .z among them, is n . vP (or
+ * n . w) on the wheel's own twist (docs/large.md). Refused: a wheel contact on a sphere (its
+ * normal turns with the centre) and one with friction (contact modes rewrite its rows). */
 static int contact_tree_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c,
                              char *why, size_t len) {
   (void)M;
   if (c->nhol == 0 && c->wheel < 0) return c->def.body;
-  snprintf(why, len, "model '%s': constraint '%s' is a wheel contact (an implicit holonomic "
-           "row)", m->name, c->name);
+  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0) return c->def.body;
+  snprintf(why, len, "model '%s': constraint '%s' is a wheel contact %s", m->name, c->name,
+           c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
+           : c->plane > 2 ? "on a curved ground" : "with friction (contact modes)");
   return -1;
 }
 
@@ -527,14 +533,20 @@ static void contact_tree_row(const ap_bmodel *Ms, double *S, const ap_mcon *c, i
                              const double *G, const double *rho, double *cv, double *a0) {
   kbody C = ap_kin_body(Ms, S, c->def.body);
   kwheel Wg = ap_contact_geom(Ms, S, c);
-  double n[3];
-  if (c->def.kind == AP_CON_ROLLING && rr == 2) {   /* no spin: e_z . w - Omega */
-    cv[2] = 1.0;
-    *a0 = rho[2] - G[AP_G_OM];
+  double n[3];   /* the ground's frame: z = 0, or the fixed tilted plane's (contact_tree_body) */
+  const double *gn = c->plane ? c->gn : EZ, *t1 = c->plane ? c->gt1 : EX;
+  const double *t2 = c->plane ? c->gt2 : EY;
+  if (c->nhol && rr == c->hrow) {   /* the contact row: gn . vP (the ground's Vg is tangent) */
+    ap_con_tree_point_row(c, G, C.o, Wg.rc, gn, rho, cv, a0);
+    return;
+  }
+  if (c->def.kind == AP_CON_ROLLING && rr == 2) {   /* no spin: gn . w - Omega */
+    v3_copy(gn, cv);
+    *a0 = v3_dot(gn, rho) - G[AP_G_OM];
     return;
   }
   if (c->def.kind == AP_CON_KNIFE_EDGE) m3_mul_v(C.R, EZ, n);
-  else n[0] = rr == 0, n[1] = rr == 1, n[2] = 0.0;
+  else v3_copy(rr == 0 ? t1 : t2, n);
   ap_con_tree_point_row(c, G, C.o, Wg.rc, n, rho, cv, a0);
 }
 

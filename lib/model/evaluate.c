@@ -75,8 +75,8 @@ static int normalize_quats(const ap_model *m, ap_data *d, double *q, double *cha
   return AP_OK;
 }
 
-/* q += N(q) dv, quaternions re-normalized. */
-static void step_q(const ap_bmodel *M, double *q, const double *dv) {
+/* q += N(q) dv, quaternions re-normalized (model.h). */
+void ap_bm_step_q(const ap_bmodel *M, double *q, const double *dv) {
   for (int j = 0; j < M->nj; j++) {
     const ap_mjoint *J = &M->joints[j];
     for (int i = 0; i < J->ndrivable; i++)
@@ -112,6 +112,7 @@ static int hol_row(const ap_bmodel *M, const double *phi) {
 }
 
 static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, double *change) {
+  if (m->ops_impl && !m->ops) return ap_tree_close_rows(m->ops_impl, d, q, change);   /* shadow */
   const ap_bmodel *M = ap_bm(m);
   int k = M->k, nl = M->nloop;
   double *P = S + M->off_proj, *JlT = P, *phi = JlT + (size_t)nl * k, *rhs = phi + nl;
@@ -128,7 +129,7 @@ static int close_loops(const ap_model *m, ap_data *d, double *q, double *S, doub
     for (int s = 0; s < nl; s++) rhs[s] = -phi[s];
     rc = ap_la_lstsq_At(k, nl, JlT, rhs, 1e-10, dv, &resid, work, iwork);
     if (rc != AP_OK) break;
-    step_q(M, q, dv);
+    ap_bm_step_q(M, q, dv);
     for (int c = 0; c < k; c++) *change += fabs(dv[c]);
   }
   AP_BM_MSG(d, "model '%s': the loop closures and wheel contacts cannot be closed at "
@@ -402,6 +403,7 @@ int ap_body_loop_residual(const ap_model *m, ap_data *d, double *phi_max) {
   const ap_bmodel *M = ap_bm(m);
   *phi_max = 0.0;
   if (!M->nloop) return AP_OK;
+  if (m->ops) return ap_tree_hol_residual(ap_tree_plan(m), d, d->q, phi_max);
   double *S = ap_bm_scratch(d), *JlT = S + M->off_proj, *phi = JlT + (size_t)M->nloop * M->k;
   int rc = ap_kin_position(m, d, d->t, d->q, S);
   if (rc != AP_OK) return rc;
@@ -456,6 +458,10 @@ static int min_norm_speeds(const ap_model *m, ap_data *d, const double *A, const
 static int tree_complete_speeds(const ap_model *m, ap_data *d, const int *given, double *v) {
   ap_tree_ws *ws = ap_tree_ws_of(d);
   int k = m->k, b = m->b;
+  if (ws->P->comp) {   /* the same least squares, tree by tree */
+    int rc = ap_tree_position(m, d, ws, 1);
+    return rc == AP_OK ? ap_tree_complete_min_norm(m, d, ws, given, v) : rc;
+  }
   double *A = calloc((size_t)b * k + 2 * (size_t)k, sizeof *A);
   if (!A) {
     AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
@@ -551,6 +557,7 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   const ap_mcon *c = &M->cons[constraint];
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
+  if (c->wheel >= 0 && m->ops) return AP_ERR_UNSUPPORTED;   /* wheel loads: dense path only */
   if (c->wheel >= 0) return wheel_force(m, d, c, constraint, lam, out);
   int root = c->def.body, k = M->k;
   /* tree path: the twists of v' in this call's own memory (d is shared: read only) */

@@ -481,6 +481,8 @@ int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double 
  * tracking is reset (for assembling states by hand). */
 int ap_bm_project(const ap_model *m, ap_data *d, double *q, double *S, double *change,
                   int track);
+/* q += N(q) dv (dv: k speeds), quaternions re-normalized. */
+void ap_bm_step_q(const ap_bmodel *M, double *q, const double *dv);
 /* track_flat only (no correction of q): the DAE mode's check after each step. */
 int ap_bm_check_q(const ap_model *m, ap_data *d, const double *q, double *S);
 /* 0, or -1 with a message naming the user constraint or user effect that keeps the model from

@@ -130,6 +130,7 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
   P->sm.coord_names = m->coord_names, P->sm.speed_names = m->speed_names;
   P->sm.constraint_names = m->constraint_names;
   P->sm.ev.impl = &P->shadow;
+  P->sm.ops_impl = P;   /* with no ops: the shadow of this plan (evaluate.c's close_loops) */
   return AP_OK;
 }
 
@@ -139,13 +140,15 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
 #define TREE_WS_DOUBLES(X)                                                                 \
   X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
   X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
-  X(ws->rb, b) X(work_dbl, ndw)
-#define TREE_WS_INTS(X) X(ws->avoid, k) X(work_int, niw)
+  X(ws->rb, b) X(ws->hp, nhd) X(comp_dbl, ncd) X(work_dbl, ndw)
+#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi) X(comp_int, nci) X(work_int, niw)
 
 #define WS_ADD(f_, c_) ap_arena_add(L, #f_, (c_));
 static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
   size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, niw = 0;
-  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw);
+  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw), nhi = 0;
+  size_t nhd = ap_tree_hol_ws_size(P, &nhi), nci = 0;
+  size_t ncd = P->comp ? ap_la_comp_work_size(&P->T, &nci) : 0;
   ap_arena *L = Ld;
   ap_arena_init(L, "tree workspace doubles", sizeof(double), 0);
   TREE_WS_DOUBLES(WS_ADD)
@@ -169,6 +172,15 @@ static void capacities(const ap_bmodel *M, ap_tplan *P) {
     lmax = lt > lmax ? lt : lmax;
   }
   P->lmax = lmax;
+  int kmax = 0;   /* component mode: every tree small; its blocks hold all of a tree's speeds */
+  for (int t = 0; t < T->ntree; t++) {
+    int kt = 0;
+    for (int a = T->tofs[t]; a < T->tofs[t + 1]; a++)
+      kt += T->fofs[T->tbody[a] + 1] - T->fofs[T->tbody[a]];
+    kmax = kt > kmax ? kt : kmax;
+  }
+  P->comp = kmax <= AP_TREE_COMP_K;
+  if (P->comp) P->lmax = kmax > 1 ? kmax : 1;
   T->cap = 2 * M->b + 16, T->maxrow = M->b + 1;
   ap_arena Ld, Li;
   ws_layout(P, &Ld, &Li);
@@ -207,6 +219,7 @@ int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why
         for (int c = fofs[tbody[a]]; c < fofs[tbody[a] + 1]; c++) P->kspeed[p++] = fidx[c];
     rc = make_shadow(m, M, P);
   }
+  if (rc == AP_OK) rc = ap_tree_hol_plan(P);
   if (rc != AP_OK) {
     ap_tree_plan_free(P);
     return rc;
@@ -220,6 +233,7 @@ void ap_tree_plan_free(ap_tplan *P) {
   if (!P) return;
   free(P->sjoints);
   free(P->ints);
+  free(P->hints);
   free(P);
 }
 
@@ -229,8 +243,8 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
   memset(dbl, 0, sizeof(double) * P->nd);
   memset(ints, 0, sizeof(int) * P->ni);
   ws->P = P;
-  double *work_dbl = NULL;
-  int *work_int = NULL, i = 0;
+  double *work_dbl = NULL, *comp_dbl = NULL;
+  int *work_int = NULL, *comp_int = NULL, i = 0;
 #define WS_CARVE(f_, c_) f_ = dbl + Ld.e[i++].offset;
   TREE_WS_DOUBLES(WS_CARVE)
 #undef WS_CARVE
@@ -239,6 +253,7 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
   TREE_WS_INTS(WS_CARVE)
 #undef WS_CARVE
   ap_la_tree_work_init(&P->T, P->lmax, work_dbl, work_int, &ws->W);
+  if (P->comp) ap_la_comp_work_init(&P->T, comp_dbl, comp_int, &ws->CW);
 }
 
 /* ---- the compile-time choice ------------------------------------------------------------ */
@@ -287,5 +302,8 @@ int ap_tree_attach(ap_model *m, ap_path path, char *why, size_t why_len) {
   m->ops = &P->ops, m->ops_impl = P, m->ops_destroy = plan_destroy;
   if (m->ev.project_q) m->ev.project_q = shadow_project_q;
   if (m->ev.check_q) m->ev.check_q = shadow_check_q;
+  /* wheel contacts: no phi hook (its Jacobian is dense, nphi x n), so CVODE BDF does not
+   * project inside its step; project_q closes the rows after each step, as for Adams */
+  if (ap_bm(m)->nloop) m->ev.phi = NULL;
   return AP_OK;
 }

@@ -97,6 +97,27 @@ static int factor_status(const ap_model *m, ap_data *d, const ap_tplan *P, int r
   return AP_ERR_UNSUPPORTED;
 }
 
+/* Component mode: the dense path's partition, basis and b0 on each tree's block. */
+static int comp_factor(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) {
+  const ap_tplan *P = ws->P;
+  double growth = 0.0, resid = 0.0;
+  int bad = -1, rc = ap_la_comp_factor(&P->T, &ws->g, &ws->W, &ws->CW, select, d->rank_rtol,
+                                       d->a0, d->b0, &growth, &resid, &bad);
+  if (rc != AP_OK) return factor_status(m, d, P, rc, bad);
+  if (select) {
+    ap_la_comp_partition(&P->T, &ws->W, &ws->CW, d->perm, &d->rank);
+    d->l = m->k - d->rank, d->redundant = m->b - d->rank, d->redundant_manifold = 0;
+  }
+  d->growth = growth, d->resid_a0 = resid;
+  return AP_OK;
+}
+
+double ap_tree_solve(ap_tree_ws *ws, const double *e, const double *rhs, double *u) {
+  const ap_tplan *P = ws->P;
+  return P->comp ? ap_la_comp_solve(&P->T, &ws->W, &ws->CW, e, rhs, u)
+                 : ap_la_tree_solve(&P->T, &ws->g, &ws->W, e, rhs, u);
+}
+
 static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
                     const int *avoid) {
   const ap_tplan *P = ws->P;
@@ -118,6 +139,7 @@ static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
   if (rc != AP_OK) return rc;
   double growth = 0.0;
   int bad = -1;
+  if (P->comp && !avoid) return comp_factor(m, d, ws, select);   /* avoid: body-local */
   rc = ap_la_tree_factor(&P->T, &ws->g, &ws->W, select, avoid, d->rank_rtol, &growth, &bad);
   if (rc != AP_OK) return factor_status(m, d, P, rc, bad);
   if (select) {
@@ -147,7 +169,9 @@ int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const
   ap_la_tree_partition(&P->T, &ws->W, d->perm, &d->rank);
   d->l = k - d->rank, d->redundant = m->b - d->rank, d->redundant_manifold = 0;
   for (int j = 0; j < d->l; j++) d->e[j] = given[d->perm[d->rank + j]] ? v[d->perm[d->rank + j]] : 0.0;
-  double resid = ap_la_tree_solve(&P->T, &ws->g, &ws->W, d->e, d->a0, ws->x), worst = 0.0, sc = 1.0;
+  double resid = ap_la_tree_solve(&P->T, &ws->g, &ws->W, d->e, d->a0, ws->x), worst = 0.0;
+  double sc = 1.0;
+  if (P->comp && (rc = comp_factor(m, d, ws, 1)) != AP_OK) return rc;   /* its own partition */
   for (int c = 0; c < k; c++)
     if (given[c]) worst = fmax(worst, fabs(ws->x[c] - v[c])), sc = fmax(sc, fabs(v[c]));
   for (int s = 0; s < m->b; s++) sc = fmax(sc, fabs(d->a0[s]));
@@ -356,7 +380,7 @@ int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
   rc = ap_con_gamma(&P->sm, d, d->t, d->q, d->v, ws->S, d->gamma);
   if (rc != AP_OK) return rc;
   for (int s = 0; s < b; s++) ws->rb[s] = -d->gamma[s];   /* A w = gamma */
-  d->resid_gamma = ap_la_tree_solve(&P->T, &ws->g, &ws->W, NULL, ws->rb, d->w);
+  d->resid_gamma = ap_tree_solve(ws, NULL, ws->rb, d->w);
   return AP_OK;
 }
 
@@ -412,8 +436,7 @@ static void ops_amul(void *ws, const ap_data *d, const double *x, double *r, dou
   ap_tree_amul(ws, d, x, 1, r, mag);
 }
 static void ops_psolve(void *wsp, const double *r, double *u) {
-  ap_tree_ws *ws = wsp;
-  ap_la_tree_solve(&ws->P->T, &ws->g, &ws->W, NULL, r, u);
+  ap_tree_solve(wsp, NULL, r, u);
 }
 static void ops_nmul(void *wsp, const double *q, const double *v, double *qdot) {
   const ap_tree_ws *ws = wsp;
@@ -438,7 +461,8 @@ static void ops_ws_free(void *ws) { free(ws); }
 
 static void ops_reactions(void *wsp, const double *r, double *lambda) {
   ap_tree_ws *ws = wsp;
-  ap_la_tree_reactions(&ws->P->T, &ws->g, &ws->W, r, lambda, ws->F);
+  if (ws->P->comp) ap_la_comp_reactions(&ws->P->T, &ws->W, &ws->CW, r, lambda);
+  else ap_la_tree_reactions(&ws->P->T, &ws->g, &ws->W, r, lambda, ws->F);
 }
 
 static double *ops_ev_scratch(void *wsp) { return ((ap_tree_ws *)wsp)->S; }

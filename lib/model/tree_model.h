@@ -28,12 +28,21 @@ typedef struct ap_tplan {
   int *rcon, *rrow;         /* (b, by position) constraint and its row */
   int *kspeed;              /* (k) global speed of each entry of the blocks' speed lists */
   int lmax;                 /* capacity of one tree's free speeds */
+  int comp;                 /* component mode (every tree small: AP_TREE_COMP_K): the dense
+                               path's partition on each tree's block (lib/linalg/tree_comp.c) */
   const ap_bmodel *M;       /* the model's own tables (free speeds, effects) */
   ap_bmodel shadow;         /* no speeds, one twist column */
   ap_mjoint *sjoints;       /* the shadow's joints: free speeds removed from the columns */
   ap_model sm;              /* an ap_model around the shadow (names, messages) */
   ap_ops ops;               /* the operators (ap_tree_ops), the model's m->ops */
   size_t nd, ni;            /* workspace: doubles, ints */
+  /* implicit holonomic rows (wheel contacts' rows .z; tree_project.c), by tree: */
+  int *hints;               /* every int array below, one block (NULL without such rows) */
+  int nhol, hmax, hkmax;    /* rows; most rows of one tree; most speeds of a tree with rows */
+  int *hofs, *hcon, *hrow;  /* (ntree+1), (nhol), (nhol): rows of tree t, constraint and row */
+  int *hphi;                /* (nhol) each row's place in the constraint order of phi */
+  int *tkofs, *kloc;        /* (ntree+1) tree t's speeds in kspeed; (k, by position) place in
+                               its tree's list */
 } ap_tplan;
 
 typedef struct ap_tree_ws {
@@ -45,8 +54,15 @@ typedef struct ap_tree_ws {
   double *x;                /* (k) temporary */
   double *rb;               /* (b) temporary */
   int *avoid;               /* (k) speeds to keep independent (ap_tree_complete_speeds) */
+  double *hp;               /* projection of the holonomic rows (ap_tree_hol_ws_size) */
+  int *hip;
   ap_la_tree_work W;
+  ap_la_comp_work CW;       /* component mode */
 } ap_tree_ws;
+
+/* Component mode when every tree has at most this many speeds (a vehicle, a disk; a chain of
+ * trailers takes the body-local elimination, whose cost stays linear in its length). */
+#define AP_TREE_COMP_K 32
 
 /* The plan of a compiled body model, or AP_ERR_UNSUPPORTED with the reason in why (the
  * element that keeps the model on the dense path). */
@@ -64,6 +80,9 @@ int ap_tree_velocity(const ap_model *m, ap_data *d, ap_tree_ws *ws);
  * set by the caller); the partition in d is replaced. */
 int ap_tree_complete_speeds(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
                             double *v);
+/* u = B e + w, A w + rhs = 0 (e, rhs may be NULL), in the plan's mode; the dropped rows'
+ * residual. */
+double ap_tree_solve(ap_tree_ws *ws, const double *e, const double *rhs, double *u);
 /* y = g x;  r = A x (+ a0 when with_a0);  qdot = N v. */
 void ap_tree_gmul(ap_tree_ws *ws, const double *x, double *y);
 void ap_tree_amul(ap_tree_ws *ws, const ap_data *d, const double *x, int with_a0, double *r,
@@ -86,6 +105,20 @@ void ap_tree_point_jacobian(const ap_tree_ws *ws, int body, const double *x, dou
 void ap_tree_com_accel(const ap_tree_ws *ws, const double *vdot, int body, double *U,
                        double *a);
 static inline size_t ap_tree_twist_len(const ap_tree_ws *ws) { return 6 * (size_t)ws->P->T.nb; }
+
+/* Implicit holonomic rows on the tree path (tree_project.c). hol_plan: their lists by tree
+ * (after the forest; AP_ERR_NOMEM); hol_ws_size: the projection's doubles and ints.
+ * close_rows: the Gauss-Newton projection of phi = 0 (evaluate.c's close_loops for the
+ * shadow), minimum-norm tree by tree, q += N dv on the model's joints; the shadow's scratch
+ * (ws->S) holds the kinematics at q on return. hol_residual: max |phi| at q. */
+int ap_tree_hol_plan(ap_tplan *P);
+size_t ap_tree_hol_ws_size(const ap_tplan *P, size_t *nint);
+int ap_tree_close_rows(const void *plan, ap_data *d, double *q, double *change);
+int ap_tree_hol_residual(const ap_tplan *P, ap_data *d, const double *q, double *phi_max);
+/* Component mode: the dense path's minimum-norm completion of the speeds not given, tree by
+ * tree on the blocks A_t of the last position stage (at d->q). */
+int ap_tree_complete_min_norm(const ap_model *m, ap_data *d, ap_tree_ws *ws, const int *given,
+                              double *v);
 
 /* The compile-time choice of the path (system.h, ap_path): on AP_PATH_TREE, or AP_PATH_AUTO
  * with at least AP_TREE_AUTO_K speeds and a model the plan takes, the plan is attached to m

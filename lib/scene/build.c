@@ -62,17 +62,37 @@ static int add_rest(sc_ctx *c, sc_scene *s, ap_builder *b) {
   return AP_OK;
 }
 
+/* The output asks for the load of a wheel contact (a rolling body not on a plane-contact
+ * joint), which the dense path alone reports (docs/large.md, "Fleets"). */
+static int wheel_loads_asked(const sc_scene *s) {
+  if (!(s->channels & SC_OUT_CONTACT_FORCES)) return 0;
+  for (int i = 0; i < s->nc; i++) {
+    int plane = 0;
+    for (int j = 0; j < s->nj && s->cons[i].def.kind == AP_CON_ROLLING; j++)
+      plane |= s->joints[j].def.child == s->cons[i].def.body &&
+               s->joints[j].def.kind == AP_JOINT_PLANE_CONTACT;
+    if (s->cons[i].def.kind == AP_CON_ROLLING && !plane) return 1;
+  }
+  return 0;
+}
+
 int sc_build(sc_ctx *c, sc_scene *s, ap_model **out) {
   ap_builder *b = NULL;
   *out = NULL;
   if (ap_builder_create(s->name, &b) != AP_OK) return sc_nomem(c);
   int rc = add_bodies(c, s, b);
   if (rc == AP_OK) rc = add_rest(c, s, b);
-  /* auto: the DAE mode and the linearization need the dense path's g and A */
+  /* auto: the DAE mode and the linearization need the dense path's g and A, wheel loads its
+   * subtree wrenches */
   int path = s->path;
   if (path == AP_PATH_AUTO && (s->run.sim.mode == AP_MODE_DAE || sc_map_get(s->root,
                                                                            "linearize")))
     path = AP_PATH_DENSE;
+  if (path == AP_PATH_AUTO && wheel_loads_asked(s)) path = AP_PATH_DENSE;
+  if (rc == AP_OK && path == AP_PATH_TREE && wheel_loads_asked(s))
+    rc = sc_err(c, sc_map_get(s->root, "output"), "output.channels: contact_forces of wheel "
+                "contacts (their loads) are reported on the dense path only (path: dense or "
+                "auto)");
   if (rc == AP_OK) rc = ap_builder_set_path(b, (ap_path)path);
   int crc = rc == AP_OK ? ap_builder_compile(b, out) : AP_OK;
   if (crc == AP_ERR_NOMEM) rc = sc_nomem(c);

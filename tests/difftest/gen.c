@@ -253,7 +253,7 @@ static void body_constraints(uint64_t *s, dt_model *m, int i) {
       snprintf(c->text, DT_TXT, "{kind: knife_edge, body: b%d}", i);   /* redundant with roll */
   } else if (b->kind == DT_FREE && b->shape == DT_SH_SPHERE && chance(s, 0.5)) {
     if ((c = add_con(m, i, -1))) snprintf(c->text, DT_TXT, "{kind: rolling, body: b%d}", i);
-    m->expect_tree = 0;   /* a wheel contact */
+    /* a wheel contact: on one body, the tree path takes it */
   } else if (has_speed(b) && chance(s, b->kind == DT_PLANAR ? 0.4 : 0.1) &&
              (c = add_con(m, i, -1))) {
     double a = ur(s, -3, 3);
@@ -349,7 +349,6 @@ static void vehicle(uint64_t *s, dt_model *m) {
   if (chance(s, 0.3) && (k = add_con(m, m->nb - 1, -1)))
     snprintf(k->text, DT_TXT, "{kind: prescribed_speed, joint: b%d, speed: rate, value: %.4g}",
              m->nb - 1, ur(s, -5, 5));
-  m->expect_tree = 0;
 }
 
 /* A loop closure at the bodies' initial positions (closure.c). */

@@ -1,0 +1,137 @@
+/* Fleets on the tree path (docs/large.md): vehicles with wheel contacts on revolute joints of
+ * a chassis and trailers with knife edges, each vehicle one tree. Against the dense path
+ * through ap_sim, minimal and projected mode at rtol 1e-6 and 1e-9 (tree_compare.h: the end
+ * states within 20 rtol): 2 and 5 differential-drive robots, some pulling trailers; free disks
+ * rolling as wheel contacts (a free joint: the contact rows' phi drifts and is projected after
+ * every step, so the tree path's projection runs). Also: the automatic choice takes a fleet of
+ * 16 speeds or more; ap_body_project_q on both paths gives the same q; the energy agrees at
+ * the tree path picks the dense path's partition; the example scene fleet_16.yaml on both
+ * paths; refused on a forced tree path: a wheel contact with friction, wheel loads asked for
+ * (path auto takes the dense path then). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "appell/appell.h"
+#include "check.h"
+#include "tree_compare.h"
+#include "treemodels.h"
+
+static void fleet(int N, int every, double t1) {
+  ap_model *md = tm_fleet(N, every, AP_PATH_DENSE), *mt = tm_fleet(N, every, AP_PATH_TREE);
+  AP_CHECK_EQ_INT(ap_model_path(md), AP_PATH_DENSE);
+  AP_CHECK_EQ_INT(ap_model_path(mt), AP_PATH_TREE);
+  int n = ap_model_n(md), k = ap_model_k(md);
+  double *x = calloc((size_t)(n + k), sizeof(double));
+  tm_fleet_state(md, N, every, x, x + n);
+  char label[32];
+  snprintf(label, sizeof label, "fleet %d", N);
+  compare_runs(label, md, mt, x, x + n, t1);
+  /* the tree path picks the dense path's partition (pivoted QR on each robot's block) */
+  ap_data *dd = NULL, *dt = NULL;
+  AP_CHECK_EQ_INT(ap_data_create(md, &dd), AP_OK);
+  AP_CHECK_EQ_INT(ap_data_create(mt, &dt), AP_OK);
+  for (ap_data *d = dd; d; d = d == dd ? dt : NULL) {
+    memcpy(d->q, x, sizeof(double) * (size_t)n);
+    memcpy(d->v, x + n, sizeof(double) * (size_t)k);
+    d->t = 0.0;
+    AP_CHECK_EQ_INT(ap_partition(d == dd ? md : mt, d), AP_OK);
+  }
+  AP_CHECK_EQ_INT(dt->rank, dd->rank);
+  int same = 1;
+  for (int c = dd->rank; c < k; c++) same &= dt->perm[c] == dd->perm[c];
+  AP_CHECK(same);
+  ap_data_free(dd), ap_data_free(dt);
+  free(x);
+  ap_model_free(md), ap_model_free(mt);
+}
+
+/* Disks tilted 20-40 degrees, spinning and turning; q closed on the contacts, v completed. */
+static void free_disks_state(const ap_model *m, int N, double *q, double *v) {
+  ap_data *d = NULL;
+  int k = ap_model_k(m), *given = calloc((size_t)k, sizeof(int));
+  AP_CHECK_EQ_INT(ap_data_create(m, &d), AP_OK);
+  const double ex[3] = {1, 0, 0};
+  for (int i = 0; i < N; i++) {
+    double *qi = q + 7 * i, *vi = v + 6 * i, R[9], tilt = (20.0 + 20.0 * i / N) * 3.14159265358979323846 / 180;
+    qi[0] = 1.5 * i, qi[1] = 0.0, qi[2] = 0.3 * cos(tilt) + 1e-7;   /* a little off: closed below */
+    ap_quat_from_axis_angle(ex, tilt, qi + 3);
+    ap_quat_to_matrix(qi + 3, R);
+    for (int r = 0; r < 3; r++) vi[3 + r] = (-8.0 + i) * R[6 + r] + (r == 2 ? 1.5 : 0.0);
+    given[6 * i + 3] = given[6 * i + 4] = given[6 * i + 5] = 1;
+  }
+  double change = 0.0;
+  AP_CHECK_EQ_INT(ap_body_project_q(m, d, q, &change), AP_OK);
+  AP_CHECK(change > 0.0);
+  d->t = 0;
+  AP_CHECK_EQ_INT(ap_body_complete_speeds(m, d, q, given, v), AP_OK);
+  ap_data_free(d);
+  free(given);
+}
+
+static void rolling_free(int N, double t1) {
+  ap_model *md = tm_free_disks(N, AP_PATH_DENSE), *mt = tm_free_disks(N, AP_PATH_TREE);
+  AP_CHECK_EQ_INT(ap_model_path(mt), AP_PATH_TREE);
+  int n = ap_model_n(md), k = ap_model_k(md);
+  double *x = calloc((size_t)(2 * n + k), sizeof(double)), *q2 = x + n + k;
+  free_disks_state(md, N, x, x + n);
+  compare_runs("free disks", md, mt, x, x + n, t1);
+  /* one projection of q off the contacts, both paths: the same q */
+  ap_data *dd = NULL, *dt = NULL;
+  AP_CHECK_EQ_INT(ap_data_create(md, &dd), AP_OK);
+  AP_CHECK_EQ_INT(ap_data_create(mt, &dt), AP_OK);
+  for (int i = 0; i < N; i++) x[7 * i + 2] += 1e-5 * (i + 1), x[7 * i + 4] += 1e-5;
+  memcpy(q2, x, sizeof(double) * (size_t)n);
+  double cd = 0.0, ct = 0.0, phi = 1.0;
+  AP_CHECK_EQ_INT(ap_body_project_q(md, dd, x, &cd), AP_OK);
+  AP_CHECK_EQ_INT(ap_body_project_q(mt, dt, q2, &ct), AP_OK);
+  AP_CHECK(cd > 1e-6);
+  AP_CHECK_NEAR(ct, cd, 1e-9 * cd);
+  AP_CHECK_LE(rel_diff(n, x, q2), 1e-13);
+  memcpy(dt->q, q2, sizeof(double) * (size_t)n);
+  AP_CHECK_EQ_INT(ap_body_loop_residual(mt, dt, &phi), AP_OK);
+  AP_CHECK_LE(phi, 1e-12 * 0.3);
+  printf("projection: |dq| dense-tree %.2e, change %.3e, phi after %.2e\n",
+         rel_diff(n, x, q2), ct, phi);
+  ap_data_free(dd), ap_data_free(dt);
+  free(x);
+  ap_model_free(md), ap_model_free(mt);
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) return fprintf(stderr, "usage: test_tree_fleet SOURCE_ROOT\n"), 2;
+  /* the example fleet (16 robots on motors, parts/robot.yaml) and a single robot */
+  scene_both(argv[1], "fleet_16", "simulation.t_end=0.5");
+  scene_both(argv[1], "diff_drive_motors", "simulation.t_end=2");
+  fleet(2, 2, 2.0);
+  /* refused, with the reason: a wheel contact with friction (contact modes) */
+  char file[1024], msg[512] = "";
+  const char *set[2] = {"simulation.path=tree", "output.channels=[coordinates]"};
+  ap_scene *s = NULL;
+  snprintf(file, sizeof file, "%s/examples/scenes/diff_drive_brake.yaml", argv[1]);
+  AP_CHECK(ap_scene_load(file, set, 2, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(strstr(msg, "friction") != NULL && strstr(msg, "tree path") != NULL);
+  printf("forced tree path with friction: %s\n", msg);
+  ap_scene_free(s);
+  /* wheel loads (contact_forces of wheel contacts): auto takes the dense path, tree refuses */
+  snprintf(file, sizeof file, "%s/examples/scenes/fleet_16.yaml", argv[1]);
+  const char *cf[2] = {"output.channels=[coordinates, contact_forces]", "simulation.path=tree"};
+  s = NULL;
+  AP_CHECK_EQ_INT(ap_scene_load(file, cf, 1, &s, msg, sizeof msg), AP_OK);
+  AP_CHECK(s && ap_model_path(ap_scene_model(s)) == AP_PATH_DENSE);
+  ap_scene_free(s);
+  s = NULL;
+  AP_CHECK(ap_scene_load(file, cf, 2, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(strstr(msg, "dense path only") != NULL);
+  printf("forced tree path with wheel loads: %s\n", msg);
+  ap_scene_free(s);
+  fleet(5, 3, 2.0);
+  rolling_free(3, 1.0);
+  /* the automatic choice: a fleet of 16 speeds or more takes the tree path */
+  ap_model *m = tm_fleet(4, 0, AP_PATH_AUTO);
+  AP_CHECK(ap_model_k(m) >= AP_TREE_AUTO_K);
+  AP_CHECK_EQ_INT(ap_model_path(m), AP_PATH_TREE);
+  ap_model_free(m);
+  return ap_check_finish("test_tree_fleet");
+}
