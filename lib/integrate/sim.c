@@ -329,6 +329,7 @@ static int advance_failed(ap_sim *s, int rc) {
   memcpy(s->fail_state + 1, d->q, sizeof(double) * (size_t)s->n);
   memcpy(s->fail_state + 1 + s->n, d->v, sizeof(double) * (size_t)s->k);
   s->has_fail = 1;
+  rc = ap_drv_loop_rank_failed(s, rc);   /* a failure at a bifurcation of the loops */
   char msg[sizeof s->msg];
   memcpy(msg, s->msg, sizeof msg);
   ap_drv_evaluate_current(s);

@@ -155,6 +155,10 @@ int ap_drv_stage_contacts(ap_sim *s, double *t);
 int ap_drv_loop_rank_init(ap_sim *s);
 int ap_drv_stage_loop_rank(ap_sim *s, double *t);
 void ap_drv_loop_rank_free(ap_sim *s);
+/* 1 when the data holds the monitor's position stage at exactly (t, y), in the mode's basis. */
+int ap_drv_loop_rank_held(const ap_sim *s, double t, const double *y);
+/* A failed step close to a rank drop of A is reported as the drop (AP_ERR_RANK); else rc. */
+int ap_drv_loop_rank_failed(ap_sim *s, int rc);
 void ap_drv_contacts_free(ap_sim *s);
 
 /* Inputs and controllers (sim_input.c): free them with the simulation; the time the next

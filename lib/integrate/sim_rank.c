@@ -38,6 +38,8 @@ struct ap_drv_lrank {
   int r;              /* rank of A when chosen */
   int rmax;           /* the rank at creation: rows redundant only on the manifold stay so */
   double q_ref;       /* |f| of the best minor at creation */
+  long held;          /* the data's stage count after the stage's own position stage */
+  double held_t;
   int *rows, *cols;   /* (r) the watched minor */
   int *brows, *bcols; /* (r) a best minor (judging a crossing) */
   int *perm, *rperm;  /* (k), (b) scratch of the selection */
@@ -53,13 +55,14 @@ static double minor_ratio(ap_drv_lrank *lr, const double *A, int b, int r, const
                           const int *cols) {
   double *M = lr->M, f = 1.0, scale = 0.0;
   for (int i = 0; i < r; i++) {
-    double norm = 0.0;
+    double sq = 0.0;
     for (int j = 0; j < r; j++) {
-      M[i + j * r] = A[rows[i] + (size_t)cols[j] * b];
-      norm = hypot(norm, M[i + j * r]);
+      double a = A[rows[i] + (size_t)cols[j] * b];
+      M[i + j * r] = a, sq += a * a;
     }
-    scale = fmax(scale, norm);
+    scale = fmax(scale, sq);
   }
+  scale = sqrt(scale);
   if (!(scale > 0)) return 0.0;
   for (int i = 0; i < r * r; i++) M[i] /= scale;
   for (int c = 0; c < r; c++) {
@@ -231,13 +234,32 @@ static int judge_crossing(ap_sim *s, double ta, double fa, double tb, double fb,
   return lost_rank(s, tb, rm < lr->r ? 0.0 : qm, fmax(qa, qb));
 }
 
+static long count(const ap_data *d) {
+  return d->cnt.position + d->cnt.velocity + d->cnt.acceleration + d->cnt.partitions;
+}
+
+/* The position stage at the accepted state (t, y) in the mode's basis: the mode's own stage
+ * takes it (ap_drv_loop_rank_held) instead of making it again. */
+static int position_here(ap_sim *s, double t, const double *y) {
+  ap_drv_load_state(s, t, y);
+  int rc = ap_fwd_position(s->m, s->d);
+  s->lr->held = rc == AP_OK ? count(s->d) : -1, s->lr->held_t = t;
+  return rc;
+}
+
+int ap_drv_loop_rank_held(const ap_sim *s, double t, const double *y) {
+  const ap_data *d = s->d;
+  return s->lr && s->lr->held == count(d) && s->lr->held_t == t && d->t == t &&
+         memcmp(d->q, y, sizeof(double) * (size_t)s->n) == 0;
+}
+
 /* The stage: after each accepted step, before the mode's own stages (their restarts would end
  * the dense output that a crossing is located on). */
 int ap_drv_stage_loop_rank(ap_sim *s, double *tp) {
   ap_drv_lrank *lr = s->lr;
   double t = *tp;
   const double *y = s->dae ? s->ytry : s->y;
-  int b = s->m->b, r = lr->r, rc = ap_drv_evaluated_at(s, t, y) ? AP_OK : position_at(s, t, y);
+  int b = s->m->b, r = lr->r, rc = ap_drv_evaluated_at(s, t, y) ? AP_OK : position_here(s, t, y);
   if (rc != AP_OK || r == 0) return rc < 0 ? rc : AP_OK;   /* the mode's stages report it */
   double f = minor_ratio(lr, s->d->A, b, r, lr->rows, lr->cols);
   if (f == 0.0 || (f > 0) != (lr->f_prev > 0)) {
@@ -293,6 +315,29 @@ int ap_drv_loop_rank_init(ap_sim *s) {
   lr->f_sel = lr->f_prev = minor_ratio(lr, s->d->A, b, lr->r, lr->rows, lr->cols);
   lr->t_prev = s->t, lr->rmax = lr->r, lr->q_ref = fabs(lr->f_sel);
   return AP_OK;
+}
+
+/* A failed step (status rc, s->msg): when A's best minor at the last accepted state is below LR_RESELECT of its value at creation, the steppers gave up close to a
+ * rank drop (IDA's corrector fails there before the monitor sees the drop: campaign seed
+ * 1008416 at t = 0.22380, where the minor is 5e-4 of its first value), and the failure is
+ * reported as the drop, with the stepper's message after it. Else rc unchanged. */
+int ap_drv_loop_rank_failed(ap_sim *s, int rc) {
+  ap_drv_lrank *lr = s->lr;
+  if (!lr || lr->r == 0 || (rc != AP_ERR_SOLVER && rc != AP_ERR_SINGULAR && rc != AP_ERR_NAN))
+    return rc;
+  double t = s->t, f = 0.0;   /* the last accepted state */
+  int r = 0;
+  memcpy(lr->yd, s->y, sizeof(double) * (size_t)s->n);
+  if (best_at(s, t, lr->yd, &f, &r) != AP_OK || (r >= lr->r && !(f < LR_RESELECT * lr->q_ref)))
+    return rc;
+  char rows[256], was[sizeof s->msg];
+  memcpy(was, s->msg, sizeof was);
+  minor_ratio(lr, s->d->A, s->m->b, lr->r, lr->rows, lr->cols);
+  name_rows(s->m, lr, rows, sizeof rows);
+  return ap_drv_fail(s, AP_ERR_RANK, "system '%s': constraint rows %s lose rank at t = %.17g "
+                     "(a bifurcation of the loop): A's best minor of rank %d is %.3g of its "
+                     "first size there, and the next step failed (%.200s)", s->m->name, rows, t,
+                     lr->r, r < lr->r ? 0.0 : f / lr->q_ref, was);
 }
 
 void ap_drv_loop_rank_free(ap_sim *s) {
