@@ -4,22 +4,23 @@
  * which one the model takes (docs/testing.md, tests/scenes/difftest/axle_loop_bifurcation.yaml).
  *
  * Only models with implicit holonomic rows (loops, wheel contacts: m->nhol > 0) are watched, on
- * the dense path. The monitor keeps r independent rows R and r columns C of A (a square minor
- * M = A[R, C] of full rank, r = rank of A), chosen by pivoted QR, and at each accepted step its
- * signed Hadamard ratio f = det M / prod |M_i| (in [-1, 1]; |f| = 1 for orthogonal rows). A
- * minor vanishes on a path either because A loses rank or because another choice of columns
- * is better; so:
+ * the dense path and without contact modes. The monitor keeps r independent rows and r columns
+ * of A (a square minor M of full rank, r = rank of A, by pivoted QR) and at each accepted step
+ * f = det M / s^r, s the largest row norm of M (signed, in [-1, 1], continuous in q and t):
  *   - f changes sign within a step: its root t* is found on the stepper's dense output
- *     (regula falsi) and A judged there: when the best minor of A at t* has |f| below
- *     sqrt(rank_rtol), A lost a rank and the run stops, naming the rows of M's left null
- *     vector; otherwise the minor alone was singular and a new one is chosen;
+ *     (Illinois regula falsi) and A judged there: A lost a rank when its best minor at t* is of
+ *     lower rank, or below LR_DROP of the best at the step's ends: the run stops, naming the
+ *     rows of M's left null vector; otherwise M alone was singular and a new minor is chosen;
  *   - |f| fell below LR_RESELECT of its value when chosen: a new minor is chosen, and the run
- *     stops when even the best one is below sqrt(rank_rtol) (the step landed on the point).
- * A minimal-mode partition switch (growth past switch_growth) does not see the drop: the
- * vanishing row makes every dependent speed's coefficient small alike, so the growth of its
- * frozen basis stays bounded through the crossing (campaign seed 1005585). Cost: one r x r
- * elimination per accepted step (and a position stage when the step's last evaluation was not
- * at its end); nothing for models without loops. */
+ *     stops when the rank fell or the best minor is below sqrt(rank_rtol) of the first one
+ *     (the motion approaches the drop without crossing it).
+ * A minimal-mode partition switch (growth past switch_growth) does not see a vanishing row:
+ * every dependent speed's coefficient in it shrinks alike, so the growth of the frozen basis
+ * stays bounded through the crossing (campaign seed 1005585). A step that fails next to a drop
+ * is reported as the drop (ap_drv_loop_rank_failed), and an initial state where the rank
+ * changes a moment along the motion is refused at creation (rank_along). Cost: one r x r
+ * elimination per accepted step; the position stage it may make is taken over by the mode's
+ * stage (ap_drv_loop_rank_held); nothing for models without loops. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -285,6 +286,55 @@ int ap_drv_stage_loop_rank(ap_sim *s, double *tp) {
   return AP_OK;
 }
 
+/* At creation: the rank of A a moment along the motion, at (t0 + tau, q0 + tau N v0) with tau
+ * 1e-6 of the time scale max(1 s, |t0|), must be the rank at t0. A rank that changes at the
+ * initial state is a singular configuration where the modes part at once (campaign seed
+ * 1003091: a slider driven from offset 0 makes a loop's rows vanish at t = 0 only; minimal
+ * mode stopped at its first step, the other modes ran): refused at creation, alike in every
+ * mode. Off the manifold by tau^2, rows redundant only on it stay below rank_rtol. */
+/* The rank of the current A with pivoted QR's relative test and the absolute floor of
+ * ap_core_refuse_vanishing_rows: at most the number of rows above rank_rtol times m->lscale. */
+static int floored_rank(ap_sim *s, int r) {
+  const ap_model *m = s->m;
+  int live = 0;
+  for (int i = 0; i < m->b; i++) {
+    double sq = 0.0;
+    for (int c = 0; c < m->k; c++) sq += s->d->A[i + (size_t)c * m->b] * s->d->A[i + (size_t)c * m->b];
+    live += sqrt(sq) > s->def.rank_rtol * m->lscale;
+  }
+  return r < live ? r : live;
+}
+
+static int rank_along(ap_sim *s, int r0) {
+  ap_drv_lrank *lr = s->lr;
+  const ap_data *d = s->d;
+  int n = s->n, k = s->k, r1 = 0;
+  double tau = 1e-6 * fmax(1.0, fabs(s->t)), *q1 = lr->yd;
+  for (int i = 0; i < n; i++) {
+    double dq = 0.0;
+    for (int c = 0; c < k; c++) dq += d->N[i + (size_t)c * n] * s->v[c];
+    q1[i] = s->y[i] + tau * dq;
+  }
+  int rc = position_at(s, s->t + tau, q1);
+  if (rc == AP_OK) rc = choose(s, &r1, lr->brows, lr->bcols);
+  if (rc != AP_OK || floored_rank(s, r1) == r0) return rc < 0 ? rc : AP_OK;
+  r1 = floored_rank(s, r1);
+  char rows[256] = "";
+  size_t used = 0;
+  for (int i = 0; i < r1 && used + 40 < sizeof rows; i++) {
+    int seen = 0;
+    for (int j = 0; j < r0; j++) seen |= lr->rows[j] == lr->brows[i];
+    int len = seen ? 0 : snprintf(rows + used, sizeof rows - used, "%s'%s'", used ? ", " : "",
+                                  s->m->constraint_names[lr->brows[i]]);
+    if (len > 0) used += (size_t)len;
+  }
+  return ap_drv_fail(s, AP_ERR_RANK, "system '%s': the rank of A changes at the initial state: "
+                     "%d at t0 = %.17g, %d at t0 + %.3g s along the motion (constraint rows %s): "
+                     "a singular configuration of the loops, where the motion is not unique; "
+                     "start it elsewhere", s->m->name, r0, s->t, r1, tau,
+                     r1 > r0 ? rows : "(those of the lower rank)");
+}
+
 /* At creation, at the consistent initial state (s->t, s->y): the first minor. Nothing for
  * models without implicit holonomic rows, on the tree path (it forms no A) or with contact
  * modes (their switches change A's rows). */
@@ -314,7 +364,9 @@ int ap_drv_loop_rank_init(ap_sim *s) {
   if (rc != AP_OK) return rc;
   lr->f_sel = lr->f_prev = minor_ratio(lr, s->d->A, b, lr->r, lr->rows, lr->cols);
   lr->t_prev = s->t, lr->rmax = lr->r, lr->q_ref = fabs(lr->f_sel);
-  return AP_OK;
+  rc = rank_along(s, floored_rank(s, lr->r));
+  int rp = rc == AP_OK ? position_at(s, s->t, s->y) : AP_OK;   /* the data back at t0 */
+  return rc != AP_OK ? rc : rp < 0 ? rp : AP_OK;
 }
 
 /* A failed step (status rc, s->msg): when A's best minor at the last accepted state is below LR_RESELECT of its value at creation, the steppers gave up close to a
