@@ -21,6 +21,8 @@
 #include "clitest.h"
 #include "core/arena.h"
 #include "core/core.h"
+#include "core/structured.h"
+#include "model/tree_model.h"
 
 static void table_checks(void) {
   ap_arena a;
@@ -150,6 +152,60 @@ static void overrun(const char *file, const char *path, const char *array, int s
   ap_scene_free(s);
 }
 
+/* The tree path's workspace (lib/model/tree_build.c: the shadow's scratch, the geometry, the
+ * row and force vectors, lib/linalg's tree work; ints) and the complex-step data's evaluator
+ * scratch (lib/core/data_cs.c: the body model's sections in complex elements): one element
+ * written past an array (ws->x, the last double before the tree work; the joints' section)
+ * makes the next stage fail naming it in the guard build. */
+static void overrun_ws_cs(void) {
+  ap_scene *s = load("modes_chain.yaml", "tree");
+  if (s) {
+    const ap_model *m = ap_scene_model(s);
+    ap_data *d = data_at_start(s);
+    ap_st *st = d ? ((ap_scratch *)d->internal)->st : NULL;
+    AP_CHECK(st != NULL);
+    if (st) {
+      ap_tree_ws *ws = st->ws;
+      ws->x[ws->P->T.k] = 0.5;   /* one past ws->x (k doubles) */
+      int rc = ap_fwd_position(m, d);
+      if (AP_GUARDS) {
+        AP_CHECK_EQ_INT(rc, AP_ERR_INTERNAL);
+        AP_CHECK(strstr(d->msg, "'ws->x'") && strstr(d->msg, "tree workspace doubles"));
+        printf("modes_chain.yaml, tree workspace, one past ws->x: %s\n", d->msg);
+      } else {
+        printf("tree workspace, one past ws->x: guards off, stage status %d\n", rc);
+      }
+    }
+    ap_data_free(d);
+    ap_scene_free(s);
+  }
+  s = load("modes_chain.yaml", "dense");
+  if (!s) return;
+  const ap_model *m = ap_scene_model(s);
+  ap_data_cs *dc = NULL;
+  AP_CHECK_EQ_INT(ap_data_create_cs(m, &dc), AP_OK);
+  ap_data *d = data_at_start(s);
+  if (dc && d) {
+    for (int i = 0; i < d->n; i++) dc->q[i] = d->q[i];
+    for (int i = 0; i < d->k; i++) dc->v[i] = d->v[i];
+    AP_CHECK_EQ_INT(ap_fwd_position_cs(m, dc), AP_OK);   /* clean: every guard intact */
+    const ap_arena *L = m->ev.layout;
+    ((ap_scratch_cs *)dc->internal)->ev[L->e[1].offset + L->e[1].count] = 0.5;
+    int rc = ap_fwd_position_cs(m, dc);
+    if (AP_GUARDS) {
+      AP_CHECK_EQ_INT(rc, AP_ERR_INTERNAL);
+      AP_CHECK(strstr(dc->msg, L->e[1].name) != NULL && strstr(dc->msg, "'position'") != NULL);
+      printf("modes_chain.yaml, complex-step data, one past %s: %s\n", L->e[1].name, dc->msg);
+    } else {
+      printf("complex-step scratch, one past %s: guards off, stage status %d\n", L->e[1].name,
+             rc);
+    }
+  }
+  ap_data_free_cs(dc);
+  ap_data_free(d);
+  ap_scene_free(s);
+}
+
 /* Every data layout of the regression scenes passes ap_data_create's check, and in the guard
  * build a whole run leaves every guard intact (the run would fail with AP_ERR_INTERNAL). */
 static void clean_layouts(void) {
@@ -173,6 +229,7 @@ int main(void) {
   overrun("modes_chain.yaml", "tree", "d->q", 1);
   overrun("modes_free_balls.yaml", "dense", "d->perm", 0);
   overrun("modes_chain.yaml", "dense", "joints", 1);
+  overrun_ws_cs();
   printf("guard build: %s\n", AP_GUARDS ? "yes" : "no");
   return ap_check_finish("guards");
 }

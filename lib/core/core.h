@@ -187,8 +187,9 @@ int ap_core_project_here(const ap_model *m, ap_data *d, double *v, double *chang
 int ap_core_judge_redundant(const ap_model *m, ap_data *d);
 
 /* A constraint row that no speed moves (|A_r| below rank_rtol times m->lscale) while its a0 is
- * not round-off: AP_ERR_INCONSISTENT with the row and the numbers in d->msg; AP_OK otherwise
- * and on the tree path. A and a0 must be current (after ap_partition); partition.c. */
+ * not round-off: AP_ERR_INCONSISTENT with the row and the numbers in d->msg; AP_OK otherwise.
+ * A and a0 must be current (after ap_partition; on the tree path the rows' norms come from its
+ * operator A x + a0, one product per speed); partition.c. */
 int ap_core_refuse_vanishing_rows(const ap_model *m, ap_data *d);
 
 /* x <- B G^-1 B^T g x: the g-orthogonal projection onto the null space of A, with the factor

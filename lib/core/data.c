@@ -115,6 +115,15 @@ static void data_carve(ap_data *d, int tree, ap_data_block *blk) {
   }
 }
 
+/* The evaluator's sections (dense path) in this build's scalar: the model's table counts
+ * elements, and the complex-step scratch holds as many complex ones at the same offsets. */
+static int ev_layout(const ap_model *m, ap_arena *out) {
+  if (!m->ev.layout) return 0;
+  *out = *m->ev.layout;
+  out->elsize = sizeof(ap_sc);
+  return 1;
+}
+
 /* Allocate d, its block pair and their tables; carve the fields; check the layout. */
 static int data_alloc(const ap_model *m, int tree, ap_data **out, ap_data_block **blk_out) {
   ap_data *d = calloc(1, sizeof *d);
@@ -135,9 +144,8 @@ static int data_alloc(const ap_model *m, int tree, ap_data **out, ap_data_block 
   ap_arena_fill_guards(&blk->dl, blk->dbl);
   ap_arena_fill_guards(&blk->il, blk->ints);
   data_carve(d, tree, blk);
-#ifndef AP_SC_COMPLEX
-  if (!tree && m->ev.layout) ap_arena_fill_guards(m->ev.layout, blk->s.ev);
-#endif
+  ap_arena evl;
+  if (!tree && ev_layout(m, &evl)) ap_arena_fill_guards(&evl, blk->s.ev);
   blk->s.model = m;
   d->internal = blk;
   d->n = m->n, d->k = m->k, d->b = m->b;
@@ -155,13 +163,17 @@ int AP_SC(ap_core_guards)(const ap_model *m, ap_data *d, const char *stage, int 
   ap_data_block *blk = d->internal;
   char what[400];
   if (blk->hit_stage) stage = blk->hit_stage;
-  const ap_arena *ev = NULL;   /* the evaluator's sections (double build, dense path) */
+  ap_arena evl;   /* the evaluator's sections (dense path; both builds) */
 #ifndef AP_SC_COMPLEX
-  if (!blk->s.st) ev = m->ev.layout;
+  const ap_st *st = blk->s.st;   /* the tree path's workspace */
+  int ev = !st && ev_layout(m, &evl);
+  int ws = st && st->ops->guard_msg && st->ops->guard_msg(st->ws, stage, what, sizeof what) != 0;
+#else
+  int ev = ev_layout(m, &evl), ws = 0;   /* no tree path in the complex-step build */
 #endif
-  if (ap_arena_guard_msg(&blk->dl, blk->dbl, stage, what, sizeof what) != 0 ||
+  if (ws || ap_arena_guard_msg(&blk->dl, blk->dbl, stage, what, sizeof what) != 0 ||
       ap_arena_guard_msg(&blk->il, blk->ints, stage, what, sizeof what) != 0 ||
-      (ev && ap_arena_guard_msg(ev, blk->s.ev, stage, what, sizeof what) != 0)) {
+      (ev && ap_arena_guard_msg(&evl, blk->s.ev, stage, what, sizeof what) != 0)) {
     blk->hit_stage = stage;
     AP_SC(ap_core_msg)(d, "model '%s': %s", m->name, what);
     return AP_ERR_INTERNAL;

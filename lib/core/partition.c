@@ -187,15 +187,31 @@ int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
  * A_r v of round-off size). Otherwise the row is contradictory: a drive demands a speed of the
  * row that no free speed can give, and the relative rank tests, which keep a lone row by its
  * own pivot, gave minimum-norm speeds |a0| / |A_r| of 1e15 rad/s (campaign seed 1004576,
- * tests/scenes/difftest/seed_1004576.yaml). Dense path only (the tree path forms no A);
- * A and a0 must be current (after ap_partition). */
+ * tests/scenes/difftest/seed_1004576.yaml). On the tree path, which forms no A, the rows' norms
+ * come from its operator A x + a0 (one product per speed: at creation and on a refusal only).
+ * A and a0 must be current (after ap_partition, or the tree path's position stage). */
+static void row_norms(const ap_model *m, ap_data *d, double *norms) {
+  ap_st *st = ap_core_st(d);
+  for (int r = 0; r < m->b; r++) norms[r] = 0.0;
+  for (int c = 0; c < m->k; c++) {
+    if (!st) {
+      for (int r = 0; r < m->b; r++) norms[r] = hypot(norms[r], d->A[r + (size_t)c * m->b]);
+      continue;
+    }
+    for (int i = 0; i < m->k; i++) st->tk1[i] = i == c;
+    st->ops->amul(st->ws, d, st->tk1, st->tb, NULL);   /* A e_c + a0 */
+    for (int r = 0; r < m->b; r++) norms[r] = hypot(norms[r], st->tb[r] - d->a0[r]);
+  }
+}
+
 int ap_core_refuse_vanishing_rows(const ap_model *m, ap_data *d) {
-  if (ap_core_st(d) || m->b == 0) return AP_OK;
+  if (m->b == 0) return AP_OK;
   double floor_a = d->rank_rtol * m->lscale;
   double floor_a0 = AP_CONSISTENCY_RTOL * (AP_A0_FLOOR_M_PER_S + max_abs(d->a0, (size_t)m->b));
+  double *norms = ap_core_st(d) ? ap_core_st(d)->tm : SCRATCH(d)->work;
+  row_norms(m, d, norms);
   for (int r = 0; r < m->b; r++) {
-    double norm = 0.0;
-    for (int c = 0; c < m->k; c++) norm = hypot(norm, d->A[r + (size_t)c * m->b]);
+    double norm = norms[r];
     if (norm > floor_a || !(fabs(d->a0[r]) > floor_a0)) continue;
     ap_core_msg(d, "system '%s': constraint row '%s' is contradictory at t = %.17g: its row of "
                 "A has norm %.3g, below rank_rtol %.3g times the model's length scale %.3g m "

@@ -140,6 +140,8 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc != AP_OK) return rc;
   st->chosen = 1;
   rc = judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
+  /* a row that no speed moves: named as on the dense path (partition.c) */
+  if (rc == AP_ERR_INCONSISTENT) ap_core_refuse_vanishing_rows(m, d);
   if (rc == AP_OK && d->redundant > 0)
     ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
                 "at t = %.17g; residual %.3g", m->name, d->redundant, m->b, d->t, d->resid_a0);

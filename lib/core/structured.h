@@ -43,6 +43,9 @@ typedef struct ap_ops {
   void (*reactions)(void *ws, const double *r, double *lambda);
   /* the model's evaluator scratch inside ws (the data's ev scratch on this path) */
   double *(*ev_scratch)(void *ws);
+  /* guard build: 0 when the workspace's guard words are intact, else -1 with a message naming
+   * the array and the stage; NULL: no guards */
+  int (*guard_msg)(const void *ws, const char *stage, char *msg, size_t len);
 } ap_ops;
 
 /* The core's part of a structured data: the model, the operators' workspace, the factors of

@@ -144,8 +144,10 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
    * prescribed speed against a loop that locks its joint: tests/scenes/difftest/seed_400.yaml,
    * v' differed by 0.17 between minimal and projected mode). */
   rc = s->d->redundant_manifold ? ap_drv_judge_state(s, t0, s->y) : AP_OK;
+  if (rc == AP_OK) rc = ap_drv_loop_rank_init(s);   /* then its stage joins the pipeline */
   if (rc == AP_OK) rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
+  ap_drv_pipeline_build(s);
   if (s->def.mode == AP_MODE_DAE) return ap_drv_setup_dae(s);
   return ap_drv_make_stepper(s, t0);
 }
@@ -195,6 +197,7 @@ void ap_sim_free(ap_sim *s) {
   ap_step_free(s->st);
   ap_dae_free(s->dae);
   ap_drv_events_free(s);
+  ap_drv_loop_rank_free(s);
   ap_drv_ctrl_free(s);
   ap_drv_contacts_free(s);
   ap_data_free(s->d);
@@ -326,6 +329,7 @@ static int advance_failed(ap_sim *s, int rc) {
   memcpy(s->fail_state + 1, d->q, sizeof(double) * (size_t)s->n);
   memcpy(s->fail_state + 1 + s->n, d->v, sizeof(double) * (size_t)s->k);
   s->has_fail = 1;
+  rc = ap_drv_loop_rank_failed(s, rc);   /* a failure at a bifurcation of the loops */
   char msg[sizeof s->msg];
   memcpy(msg, s->msg, sizeof msg);
   ap_drv_evaluate_current(s);

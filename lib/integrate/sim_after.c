@@ -2,7 +2,7 @@
  * (docs/architecture.md "After a step"). The stages of a simulation are chosen once, by mode,
  * when it is created (ap_drv_pipeline_build) and again when an event is added:
  *
- *   minimal     events, coordinates, partition, redundant rows, event state
+ *   minimal     events, [loop rank], coordinates, partition, redundant rows, event state
  *   projected   events, coordinates, projection, redundant rows, event state
  *   plain       events, coordinates, residual, redundant rows, event state
  *   DAE         events, DAE checks, DAE rows, event state
@@ -137,11 +137,13 @@ static const ap_drv_stage stage_rows = {"DAE rows", stage_dae_rows};
 static const ap_drv_stage stage_event_state = {"event state", ap_drv_stage_event_state};
 static const ap_drv_stage stage_controller = {"controller", ap_drv_stage_controller};
 static const ap_drv_stage stage_contacts = {"contact modes", ap_drv_stage_contacts};
+static const ap_drv_stage stage_loop_rank = {"loop rank", ap_drv_stage_loop_rank};
 
 void ap_drv_pipeline_build(ap_sim *s) {
   int n = 0;
   if (s->ev) s->stages[n++] = &stage_events;   /* made by the first ap_sim_add_event */
   if (s->cm) s->stages[n++] = &stage_contacts;   /* contact modes (contact_modes.c) */
+  if (s->lr) s->stages[n++] = &stage_loop_rank;  /* models with loops (sim_rank.c) */
   switch (s->def.mode) {
     case AP_MODE_DAE:
       s->stages[n++] = &stage_dae;

@@ -14,6 +14,7 @@
 
 typedef struct ap_sim_events ap_sim_events;   /* event.c */
 typedef struct ap_sim_ctrl ap_sim_ctrl;       /* sim_input.c */
+typedef struct ap_drv_lrank ap_drv_lrank;     /* sim_rank.c */
 
 /* One stage of the work after an accepted step (sim_after.c). *t is the time of the step's
  * state (s->y for the steppers, s->ytry for IDA); the events stage may move it back to an
@@ -75,6 +76,7 @@ struct ap_sim {
                                stepper stops at it); INFINITY when none */
   ap_sim_ctrl *ctrl;        /* inputs and controller (sim_input.c); NULL until declared */
   struct ap_drv_contacts *cm; /* contact modes (contact_modes.c); NULL without them */
+  ap_drv_lrank *lr;         /* the loop-rank monitor (sim_rank.c); NULL without loops */
 };
 
 /* printf into s->msg; returns status. */
@@ -152,6 +154,16 @@ int ap_drv_make_stepper(ap_sim *s, double t0);
 int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v0);
 int ap_drv_contacts_events(ap_sim *s);
 int ap_drv_stage_contacts(ap_sim *s, double *t);
+/* The loop-rank monitor (sim_rank.c): chosen at the consistent initial state (nothing without
+ * implicit holonomic rows or on the tree path); its stage stops the run where A loses a rank
+ * along the motion (a bifurcation of the loops), in every mode. */
+int ap_drv_loop_rank_init(ap_sim *s);
+int ap_drv_stage_loop_rank(ap_sim *s, double *t);
+void ap_drv_loop_rank_free(ap_sim *s);
+/* 1 when the data holds the monitor's position stage at exactly (t, y), in the mode's basis. */
+int ap_drv_loop_rank_held(const ap_sim *s, double t, const double *y);
+/* A failed step close to a rank drop of A is reported as the drop (AP_ERR_RANK); else rc. */
+int ap_drv_loop_rank_failed(ap_sim *s, int rc);
 void ap_drv_contacts_free(ap_sim *s);
 /* DAE mode with contact modes (contact_dae.c): the residual's Coulomb forces of the sliding
  * contacts (ap_dae_couple, user = the ap_sim), and IDA made again at a switch (the kept rows

@@ -209,7 +209,7 @@ int ap_drv_stage_partition(ap_sim *s, double *tp) {
   double t = *tp;
   ap_data *d = s->d;
   int n = s->n, fresh = ap_drv_evaluated_at(s, t, s->y), rc;
-  if (!fresh) {
+  if (!fresh && !ap_drv_loop_rank_held(s, t, s->y)) {
     ap_drv_load_state(s, t, s->y);
     rc = ap_fwd_position(s->m, d);
     if (rc < 0) return ap_drv_fail(s, rc, "%s", d->msg);
@@ -391,9 +391,12 @@ int ap_drv_stage_projection(ap_sim *s, double *tp) {
   double t = *tp;
   ap_data *d = s->d;
   if (s->m->b == 0) return AP_OK;
-  ap_drv_load_state(s, t, s->y);
   double change = 0.0, *v = s->y + s->n;
-  int rc = ap_fwd_position(s->m, d);
+  int rc = AP_OK;
+  if (!ap_drv_loop_rank_held(s, t, s->y)) {
+    ap_drv_load_state(s, t, s->y);
+    rc = ap_fwd_position(s->m, d);
+  }
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
   if (s->meth->backend == &ap_step_cvode) {   /* CVODE projected inside the step (ap_drv_proj) */
     s->stats.max_residual = fmax(s->stats.max_residual, ap_constraint_residual(d, v));

@@ -150,10 +150,10 @@ static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
   size_t nhd = ap_tree_hol_ws_size(P, &nhi), nci = 0;
   size_t ncd = P->comp ? ap_la_comp_work_size(&P->T, &nci) : 0;
   ap_arena *L = Ld;
-  ap_arena_init(L, "tree workspace doubles", sizeof(double), 0);
+  ap_arena_init(L, "tree workspace doubles", sizeof(double), AP_ARENA_GUARDS);
   TREE_WS_DOUBLES(WS_ADD)
   L = Li;
-  ap_arena_init(L, "tree workspace ints", sizeof(int), 0);
+  ap_arena_init(L, "tree workspace ints", sizeof(int), AP_ARENA_GUARDS);
   TREE_WS_INTS(WS_ADD)
 }
 
@@ -254,6 +254,16 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
 #undef WS_CARVE
   ap_la_tree_work_init(&P->T, P->lmax, work_dbl, work_int, &ws->W);
   if (P->comp) ap_la_comp_work_init(&P->T, comp_dbl, comp_int, &ws->CW);
+  ap_arena_fill_guards(&Ld, dbl);
+  ap_arena_fill_guards(&Li, ints);
+}
+
+/* The first entries of the two blocks are ws->S and ws->avoid (TREE_WS_DOUBLES, _INTS). */
+int ap_tree_ws_guard_msg(const ap_tree_ws *ws, const char *stage, char *msg, size_t len) {
+  ap_arena Ld, Li;
+  ws_layout(ws->P, &Ld, &Li);
+  if (ap_arena_guard_msg(&Ld, ws->S, stage, msg, len) != 0) return -1;
+  return ap_arena_guard_msg(&Li, ws->avoid, stage, msg, len);
 }
 
 /* ---- the compile-time choice ------------------------------------------------------------ */

@@ -466,9 +466,12 @@ static void ops_reactions(void *wsp, const double *r, double *lambda) {
 }
 
 static double *ops_ev_scratch(void *wsp) { return ((ap_tree_ws *)wsp)->S; }
+static int ops_guard_msg(const void *ws, const char *stage, char *msg, size_t len) {
+  return ap_tree_ws_guard_msg(ws, stage, msg, len);
+}
 
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
   ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
-              ops_amul, ops_nmul, ops_psolve, ops_reactions, ops_ev_scratch};
+              ops_amul, ops_nmul, ops_psolve, ops_reactions, ops_ev_scratch, ops_guard_msg};
   *ops = o;
 }

@@ -70,6 +70,9 @@ int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why
 void ap_tree_plan_free(ap_tplan *P);
 /* Carve a workspace from nd doubles and ni ints (P->nd, P->ni); zeroes them. */
 void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws);
+/* Guard build: the workspace's guard words (after each array of its two blocks) intact: 0, else
+ * -1 with a message naming the array and the stage (core/arena.h). */
+int ap_tree_ws_guard_msg(const ap_tree_ws *ws, const char *stage, char *msg, size_t len);
 
 /* Stages (tree_eval.c). Position: kinematics, rows, a0, the factorization (select = 1: choose
  * the partition: d->perm, rank, l, redundant), b0 and the basis blocks. Velocity: h, Q, gamma
