@@ -14,6 +14,11 @@
  *              Jacobian allocates at every evaluation)
  *   sweep      ap_batch_create and a plan of two runs (ap_batch_run_plan_events): a run that
  *              cannot allocate is a row with status AP_ERR_NOMEM and a message
+ *   first      a sweep of one run, counted from ap_batch_run_plan_events, in processes that
+ *              hold no SUNDIALS context and no ARKODE table yet (the other phases' children
+ *              inherit those their parent made when it counted): the contexts reserved before
+ *              the runs (a failure there: AP_ERR_NOMEM and a message, no run started) and the
+ *              first load of a Butcher table
  * A phase's allocations are counted once (N); then for i = 1 .. N a child process (fork)
  * runs the phase with allocation i failing and reports how it ended:
  *   nomem   a call returned AP_ERR_NOMEM with a message (the required outcome)
@@ -24,7 +29,8 @@
  * The test fails on any "other", "exit", "nomem" without a message, and on any crash but those
  * at the few sites inside SUNDIALS 6.4.1 that Appell cannot reach (known_site: reported with
  * their stacks and tolerated, docs/design.md "Allocation failures"); every vector SUNDIALS
- * clones comes from a pool allocated, and checked, when the integrator is created. Under the sanitizers a
+ * clones comes from a pool allocated, and checked, when the integrator is created, and SUNDIALS
+ * contexts are reused, never freed (lib/integrate/sunctx.c). Under the sanitizers a
  * child ends through exit(), so LeakSanitizer checks each error path: a leak of a block that
  * libyaml or SUNDIALS allocated for itself is tolerated and counted, any other fails. */
 #define _GNU_SOURCE
@@ -80,18 +86,21 @@ typedef struct phase {
   ap_mode mode;
   const char *method;        /* NULL: the load phase */
   double interval;           /* output interval (s); 4 outputs */
+  int fresh;                 /* 1: counted and run in processes that hold no SUNDIALS context
+                                and no ARKODE table yet (the first sweep of a process) */
 } phase;
 
 /* CVODE's dense difference-quotient Jacobian allocates three times per evaluation: the BDF
  * phase runs 4 x 1 ms (about 240 allocations) instead of 4 x 50 ms (11000). */
 static const phase PHASES[] = {
-    {"load", AP_MODE_MINIMAL, NULL, 0.0},
-    {"minimal", AP_MODE_MINIMAL, "dopri5", 0.05},
-    {"projected", AP_MODE_PROJECTED, "dopri5", 0.05},
-    {"plain", AP_MODE_PLAIN, "dopri5", 0.05},
-    {"dae", AP_MODE_DAE, "dopri5", 0.05},
-    {"bdf", AP_MODE_MINIMAL, "bdf", 0.001},
-    {"sweep", AP_MODE_MINIMAL, "sweep", 0.0},
+    {"load", AP_MODE_MINIMAL, NULL, 0.0, 0},
+    {"first", AP_MODE_MINIMAL, "sweep", 0.0, 1},   /* before any phase that simulates */
+    {"minimal", AP_MODE_MINIMAL, "dopri5", 0.05, 0},
+    {"projected", AP_MODE_PROJECTED, "dopri5", 0.05, 0},
+    {"plain", AP_MODE_PLAIN, "dopri5", 0.05, 0},
+    {"dae", AP_MODE_DAE, "dopri5", 0.05, 0},
+    {"bdf", AP_MODE_MINIMAL, "bdf", 0.001, 0},
+    {"sweep", AP_MODE_MINIMAL, "sweep", 0.0, 0},
 };
 enum { NPHASE = sizeof PHASES / sizeof PHASES[0] };
 
@@ -140,40 +149,57 @@ static void run_sim(const phase *p, ap_scene *sc, const double *q0, const double
   ap_sim_free(s);
 }
 
-/* The sweep phase: a batch of the scene and a plan of two runs (ap_batch_run_plan_events, one
- * worker thread). A failed allocation inside a run must leave that run a row with status
- * AP_ERR_NOMEM and a message, the batch going on. */
-static void run_sweep(outcome *o) {
+/* A batch of the scene and a plan over the disk's mass (grid "bodies.disk.mass=A:B:N"). */
+typedef struct sweep_case {
+  ap_batch *b;
+  ap_plan *p;
+} sweep_case;
+
+static int sweep_setup(sweep_case *w, const char *grid, outcome *o) {
   static const char *const sets[] = {"simulation.t_end=0.1"};
   ap_batch_def def = ap_batch_def_default();
-  ap_batch *b = NULL;
-  ap_plan *p = NULL;
+  o->call = "ap_batch_create";
+  o->rc = ap_batch_create(SCENE, sizeof SCENE - 1, "alloc.yaml", sets, 1, &def, &w->b, o->msg,
+                          sizeof o->msg);
+  if (o->rc == AP_OK && (o->call = "ap_plan_create", o->rc = ap_plan_create(&w->p)) != AP_OK)
+    snprintf(o->msg, sizeof o->msg, "out of memory (ap_plan_create has no message)");
+  if (o->rc == AP_OK)
+    o->call = "ap_plan_add_grid", o->rc = ap_plan_add_grid(w->p, grid, o->msg, sizeof o->msg);
+  if (o->rc == AP_OK && ap_batch_ncols(w->b) > 64) o->rc = AP_ERR_INTERNAL;
+  return o->rc;
+}
+
+/* The plan's runs (at most 2; ap_batch_run_plan_events, one worker thread). A failed
+ * allocation inside a run must leave that run a row with status AP_ERR_NOMEM and a message,
+ * the batch going on; one before the runs, AP_ERR_NOMEM with a message in the first. */
+static void sweep_go(sweep_case *w, outcome *o) {
+  long count = ap_plan_count(w->p);
   double vals[2 * 64];
   int status[2] = {0, 0};
   char *msgs[2] = {NULL, NULL}, *evs[2] = {NULL, NULL};
-  o->call = "ap_batch_create";
-  o->rc = ap_batch_create(SCENE, sizeof SCENE - 1, "alloc.yaml", sets, 1, &def, &b, o->msg,
-                          sizeof o->msg);
-  if (o->rc == AP_OK && (o->call = "ap_plan_create", o->rc = ap_plan_create(&p)) != AP_OK)
-    snprintf(o->msg, sizeof o->msg, "out of memory (ap_plan_create has no message)");
-  if (o->rc == AP_OK)
-    o->call = "ap_plan_add_grid",
-    o->rc = ap_plan_add_grid(p, "bodies.disk.mass=1:2:2", o->msg, sizeof o->msg);
-  if (o->rc == AP_OK && ap_batch_ncols(b) > 64) o->rc = AP_ERR_INTERNAL;
-  if (o->rc == AP_OK) {
-    o->call = "ap_batch_run_plan_events";
-    o->rc = ap_batch_run_plan_events(b, p, 0, 2, vals, status, msgs, evs);
-    if (o->rc == AP_ERR_NOMEM) snprintf(o->msg, sizeof o->msg, "%s", msgs[0] ? msgs[0] : "");
-    for (int i = 0; i < 2 && o->rc == AP_OK; i++)
-      if (status[i] != AP_OK) {
-        o->call = "a run of the batch", o->rc = status[i];
-        snprintf(o->msg, sizeof o->msg, "%s", msgs[i] ? msgs[i] : "");
-      }
-  }
+  o->call = "ap_batch_run_plan_events";
+  o->rc = count > 2 ? AP_ERR_INTERNAL
+                    : ap_batch_run_plan_events(w->b, w->p, 0, count, vals, status, msgs, evs);
+  if (o->rc == AP_ERR_NOMEM) snprintf(o->msg, sizeof o->msg, "%s", msgs[0] ? msgs[0] : "");
+  for (int i = 0; i < count && o->rc == AP_OK; i++)
+    if (status[i] != AP_OK) {
+      o->call = "a run of the batch", o->rc = status[i];
+      snprintf(o->msg, sizeof o->msg, "%s", msgs[i] ? msgs[i] : "");
+    }
   ap_batch_messages_free(2, msgs);
   ap_batch_messages_free(2, evs);
-  ap_plan_free(p);
-  ap_batch_free(b);
+}
+
+static void sweep_free(sweep_case *w) {
+  ap_plan_free(w->p);
+  ap_batch_free(w->b);
+}
+
+/* The sweep phase: batch, plan of two runs and the runs, all counted. */
+static void run_sweep(outcome *o) {
+  sweep_case w = {NULL, NULL};
+  if (sweep_setup(&w, "bodies.disk.mass=1:2:2", o) == AP_OK) sweep_go(&w, o);
+  sweep_free(&w);
 }
 
 /* Runs phase p with allocation fail (1-based; -1: none) failing; returns the count. */
@@ -182,6 +208,11 @@ static long run_phase(const phase *p, long fail, outcome *o) {
   double q0[16], v0[16];
   memset(o, 0, sizeof *o);
   int sweep = p->method && strcmp(p->method, "sweep") == 0;
+  sweep_case w = {NULL, NULL};
+  if (p->fresh && sweep_setup(&w, "bodies.disk.mass=1:1:1", o) != AP_OK) {   /* not counted */
+    sweep_free(&w);
+    return -1;
+  }
   if (p->method && !sweep) {   /* load outside the count */
     if (load(&sc, o) != AP_OK ||
         ap_scene_initial_state(sc, q0, v0, NULL, 0, o->msg, sizeof o->msg) != AP_OK) {
@@ -194,12 +225,37 @@ static long run_phase(const phase *p, long fail, outcome *o) {
   long before = n_alloc;
   ap_alloc_on_fail = at_failure;
   ap_alloc_fail_at(fail > 0 ? fail - 1 : -1);
-  if (sweep) run_sweep(o);
+  if (p->fresh) sweep_go(&w, o);
+  else if (sweep) run_sweep(o);
   else if (p->method) run_sim(p, sc, q0, v0, o);
   else run_load(o);
   ap_alloc_fail_at(-1);
   long n = n_alloc - before;
   ap_scene_free(sc);
+  sweep_free(&w);
+  return n;
+}
+
+/* run_phase without failures in a child, for a fresh phase: this process keeps no SUNDIALS
+ * context or ARKODE table from it, so the children of its cases start without them. */
+static long count_fresh(const phase *p, outcome *o) {
+  int fd[2];
+  long n = -1;
+  if (pipe(fd) != 0) return -1;
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid == 0) {
+    close(fd[0]);
+    n = run_phase(p, -1, o);
+    (void)!write(fd[1], &n, sizeof n);
+    (void)!write(fd[1], o, sizeof *o);
+    _exit(0);
+  }
+  close(fd[1]);
+  if (pid < 0 || read(fd[0], &n, sizeof n) != sizeof n || read(fd[0], o, sizeof *o) != sizeof *o)
+    n = -1;
+  close(fd[0]);
+  if (pid > 0) waitpid(pid, NULL, 0);
   return n;
 }
 
@@ -384,13 +440,15 @@ static int in_sundials(const char *sig) {
 }
 
 /* 1 when a SUNDIALS crash is at one of the sites Appell cannot reach (SUNDIALS 6.4.1 uses the
- * result of a failed allocation inside one call): the context's logger, ARKODE's Butcher table
- * loader, erkStep_Init's stage array at the first step, CVODE's clone of the Jacobian matrix.
+ * result of a failed allocation inside one call): the context's logger (SUNLogger_Create),
+ * ARKODE's Butcher table loader, erkStep_Init's stage array (arkAllocVec writing into it).
  * Every vector SUNDIALS clones comes from a pool allocated at creation
  * (lib/integrate/nvpool.c) and CVODE's matrix clone is made at creation, so a crash in
- * N_VClone, N_VCloneEmpty, N_VDestroy or SUNMatClone is a defect. The Butcher tables are
- * loaded once per process and copied after (stepper_arkode.c): the children inherit the
- * parent's, so only the SUNContext's logger and erkStep_Init's stage array remain. */
+ * N_VClone, N_VCloneEmpty, N_VDestroy or SUNMatClone is a defect. Contexts are created once and
+ * reused, never freed (lib/integrate/sunctx.c), and Butcher tables loaded once per process
+ * (stepper_arkode.c): their sites are reached by the first integrators of a process only (the
+ * phase "first"). erkStep_Init runs when the stepper is created (stepper_arkode.c,
+ * ark_first_setup), before the run has any state. */
 static int known_site(const char *sig) {
   static const char *const site_[] = {"crash in SUNLogger_", "crash in ARKodeButcherTable_",
                                       "crash in arkAllocVec < erkStep_Init", NULL};
@@ -452,7 +510,7 @@ int main(int argc, char **argv) {
     const phase *p = &PHASES[ph];
     if (only_phase && strcmp(only_phase, p->name) != 0) continue;
     outcome o;
-    long n = run_phase(p, -1, &o);
+    long n = p->fresh ? count_fresh(p, &o) : run_phase(p, -1, &o);
     if (n < 0 || o.rc != AP_OK) {
       printf("%s: the run without failures failed: %s -> %d: %s\n", p->name, o.call, o.rc,
              o.msg);

@@ -499,8 +499,12 @@ static int run_sweep(sweep_state *s, cli_out *out) {
               s->ck_path[0] ? "; the finished runs are in " : "", s->ck_path,
               s->ck_path[0] ? " (--resume continues)" : "");
       code = EXIT_SIGNAL(sig ? sig : SIGINT);
-    } else if (rc != AP_OK) {
-      code = (fprintf(stderr, "appell sweep: %s\n", ap_strerror(rc)), cli_exit_code(rc));
+    } else if (rc != AP_OK) {   /* when nothing ran (row 0 not run), its message says why */
+      int up_front = n > 0 && s->status[0] == AP_BATCH_NOT_RUN && s->messages[0];
+      fprintf(stderr, "appell sweep: %s\n", up_front ? s->messages[0] : ap_strerror(rc));
+      code = cli_exit_code(rc);
+      ap_batch_messages_free(n, s->messages);
+      ap_batch_messages_free(n, s->events);
     } else {
       code = keep_batch(s, n);
     }

@@ -140,7 +140,8 @@ AP_API int ap_batch_check_plan(const ap_batch *b, const ap_plan *p, char *msg, s
  * every run was attempted, AP_BATCH_CANCELLED, AP_ERR_NOMEM when a worker thread could not
  * allocate its own buffers (the runs it took have status AP_ERR_NOMEM and an "out of memory"
  * message; a run that ran out of memory itself is only its row's status), or AP_ERR_ARG /
- * AP_ERR_NOMEM before any run. */
+ * AP_ERR_NOMEM before any run (AP_ERR_NOMEM: the SUNDIALS contexts of the worker threads,
+ * made before the first run, could not be; every row AP_BATCH_NOT_RUN, messages[0] says so). */
 AP_API int ap_batch_run(ap_batch *b, long count, int nper, const char *const *sets,
                         double *values, int *status, char **messages);
 /* Runs first .. first + count - 1 of a plan (its overrides generated in the workers). */

@@ -9,8 +9,11 @@
  * When no thread can be created the calling thread runs everything itself. A worker that
  * cannot allocate its buffers still takes runs, and marks each AP_ERR_NOMEM with the message
  * "out of memory ..." (never AP_BATCH_NOT_RUN, which means cancelled); ap_bat_pool then returns
- * AP_ERR_NOMEM. Progress is timed on the monotonic clock (the condition variable waits on
- * CLOCK_MONOTONIC too), so a change of the wall clock neither stalls nor floods it. */
+ * AP_ERR_NOMEM. Before the first run one idle SUNDIALS context per worker is made
+ * (integrate/sunctx.c), so that no run creates one; when that fails nothing runs (every row
+ * AP_BATCH_NOT_RUN, messages[0] says why) and ap_bat_pool returns AP_ERR_NOMEM.
+ * Progress is timed on the monotonic clock (the condition variable waits on CLOCK_MONOTONIC
+ * too), so a change of the wall clock neither stalls nor floods it. */
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -20,6 +23,7 @@
 #include <unistd.h>
 
 #include "batch/batch_int.h"
+#include "integrate/sunctx.h"
 
 #define POOL_MAX_THREADS 256
 #define POOL_MSG 1024
@@ -160,9 +164,15 @@ int ap_bat_pool(ap_batch *b, const ap_bat_source *src, long count, double *value
     if (events) events[i] = NULL;
     for (int j = 0; j < b->ncols; j++) values[(size_t)i * (size_t)b->ncols + (size_t)j] = NAN;
   }
+  int nt = thread_count(b, count), started = 0;
+  if (nt > 0 && ap_ctx_reserve(nt) != AP_OK) {   /* before any run: nothing is lost */
+    if (messages)
+      messages[0] = strdup("out of memory: the SUNDIALS contexts of the batch's workers "
+                           "could not be created; no run was started");
+    return AP_ERR_NOMEM;
+  }
   if (pool_init(&p) != AP_OK) return AP_ERR_NOMEM;
   pthread_t tid[POOL_MAX_THREADS];
-  int nt = thread_count(b, count), started = 0;
   p.active = nt;
   while (started < nt && pthread_create(&tid[started], NULL, worker, &p) == 0) started++;
   pthread_mutex_lock(&p.mu);

@@ -83,6 +83,7 @@
 
 #include "integrate/dae_int.h"
 #include "integrate/nvpool.h"
+#include "integrate/sunctx.h"
 #include "linalg/linalg.h"
 
 /* ---- creation ------------------------------------------------------------------------------ */
@@ -264,7 +265,7 @@ int ap_dae_create(const ap_model *m, ap_data *d, double t0, const double *y0,
   for (int i = 0; i < k; i++) s->vtyp = fmax(s->vtyp, fabs(y0[n + i]));
   if (!(s->qtyp > 0)) s->qtyp = 1.0;
   if (!(s->vtyp > 0)) s->vtyp = 1.0;
-  int ok = SUNContext_Create(NULL, &s->ctx) == 0;
+  int ok = ap_ctx_take(&s->ctx) == AP_OK;   /* sunctx.c */
   if (ok) ok = ap_nvp_create(s->ny, AP_DAE_POOL, s->ctx, &s->pool) == AP_OK;
   if (ok) {
     s->yy = ap_nvp_take(s->pool), s->yp = ap_nvp_take(s->pool), s->id = ap_nvp_take(s->pool);
@@ -517,7 +518,7 @@ void ap_dae_free(ap_dae *s) {
   if (s->dk) N_VDestroy(s->dk);
   if (s->rr) N_VDestroy(s->rr);
   ap_nvp_free(s->pool);
-  if (s->ctx) SUNContext_Free(&s->ctx);
+  ap_ctx_give(s->ctx);
   free(s->Phi_q);
   free(s->rows);
   free(s->qr);

@@ -23,6 +23,7 @@
 #include "appell/status.h"
 #include "integrate/nvpool.h"
 #include "integrate/stepper.h"
+#include "integrate/sunctx.h"
 
 #define AP_STEP_RTOL 1e-6
 #define AP_STEP_ATOL 1e-9
@@ -210,7 +211,7 @@ int ap_step_alloc(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, do
   SUNContext ctx = NULL;
   ap_nvpool *pool = NULL;
   s->yacc = malloc(sizeof(double) * (size_t)n);
-  if (s->yacc && SUNContext_Create(NULL, &ctx) == 0) {
+  if (s->yacc && ap_ctx_take(&ctx) == AP_OK) {
     s->ctx = ctx;
     if (ap_nvp_create(n, AP_STEP_POOL, ctx, &pool) == AP_OK) {
       s->pool = pool;
@@ -234,10 +235,7 @@ void ap_step_release(ap_stepper *s) {
   if (s->y) N_VDestroy((N_Vector)s->y);
   if (s->tmp) N_VDestroy((N_Vector)s->tmp);
   ap_nvp_free(s->pool);
-  if (s->ctx) {
-    SUNContext ctx = s->ctx;
-    SUNContext_Free(&ctx);
-  }
+  ap_ctx_give(s->ctx);   /* kept for the next stepper (sunctx.c) */
   free(s->yacc);
   free(s);
 }

@@ -3,7 +3,8 @@
  * y' = f(t, y) of size n; it knows nothing about mechanics. The drivers in sim.c own the
  * mechanics (partition switching, projection) and call ap_step_reset after changing y.
  *
- * Each stepper owns its SUNContext. No SUNDIALS type appears in this header.
+ * Each stepper owns a SUNContext while it lives (taken from and given back to sunctx.c).
+ * No SUNDIALS type appears in this header.
  * The right-hand side returns 0 = ok, > 0 = recoverable (retry smaller), < 0 = stop. */
 #ifndef AP_STEPPER_H
 #define AP_STEPPER_H
@@ -154,7 +155,7 @@ struct ap_stepper {
   ap_rhs_fn f;
   void *user;
   ap_step_opts o;        /* options with defaults filled in */
-  void *ctx;             /* SUNContext, one per stepper */
+  void *ctx;             /* SUNContext, one per stepper (sunctx.c) */
   void *mem;             /* ERKStep or CVODE memory */
   void *y;               /* N_Vector (n): the state SUNDIALS advances */
   void *tmp;             /* N_Vector (n): dense output */

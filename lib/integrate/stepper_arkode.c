@@ -159,6 +159,22 @@ static void ark_destroy(ap_stepper *s) {
   ap_step_release(s);
 }
 
+/* ERKStep's first-step setup, run at creation. SUNDIALS 6.4.1 allocates the stage array in
+ * erkStep_Init at the first ERKStepEvolve and writes into it unchecked (a failed allocation
+ * crashes there, with the run half done). With the stop time at t0, ERKStepEvolve's
+ * arkInitialSetup runs erkStep_Init (the stage array, the stage vectors from the pool, the
+ * arrays of the fused vector operations) and then refuses that stop time (ARK_ILL_INPUT)
+ * before it evaluates anything or changes the state; the first real step runs the setup
+ * again, finding everything allocated. ark_one sets the stop time before every step. Returns
+ * ARK_SUCCESS or the flag of the failure (ARK_MEM_FAIL: out of memory). */
+static int ark_first_setup(ap_stepper *s) {
+  realtype tret = s->t;
+  int flag = ERKStepSetStopTime(s->mem, s->t);
+  if (flag == ARK_SUCCESS) flag = ERKStepEvolve(s->mem, s->t + 1.0, s->tmp, &tret, ARK_ONE_STEP);
+  if (flag == ARK_ILL_INPUT) flag = ARK_SUCCESS, s->sun_msg[0] = '\0';   /* the expected refusal */
+  return flag;
+}
+
 static int ark_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user, double t0,
                       const double *y0, const ap_step_opts *o, ap_stepper **out, char *msg,
                       size_t msg_len) {
@@ -168,6 +184,7 @@ static int ark_create(const ap_step_method *meth, int n, ap_rhs_fn f, void *user
   s->mem = ERKStepCreate(ark_rhs, t0, s->y, s->ctx);
   int flag = s->mem ? ERKStepSetErrHandlerFn(s->mem, ark_err, s) : ARK_MEM_FAIL;
   if (flag == ARK_SUCCESS) flag = ark_configure(s);
+  if (flag == ARK_SUCCESS) flag = ark_first_setup(s);
   if (flag != ARK_SUCCESS) {
     char *name = ERKStepGetReturnFlagName(flag);
     /* ERKStepSetTable returns ARK_MEM_NULL when its copy of the table cannot be allocated */

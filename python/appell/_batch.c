@@ -151,7 +151,9 @@ static PyObject *run(ap_batch *b, const ap_plan *p, long first, long count, py_p
     Py_END_ALLOW_THREADS
     if (pp->type) PyErr_Restore(pp->type, pp->value, pp->tb);
     else if (rc == AP_BATCH_CANCELLED) PyErr_SetString(PyExc_KeyboardInterrupt, "sweep cancelled");
-    else if (rc != AP_OK) apx_raise(rc, "the sweep could not start");
+    else if (rc != AP_OK)   /* when nothing ran (row 0 not run), its message says why */
+      apx_raise(rc, count > 0 && ((int *)PyArray_DATA(status))[0] == AP_BATCH_NOT_RUN && msgs[0]
+                        ? msgs[0] : "the sweep could not start");
     else {
       PyObject *params = param_table(p, first, count);
       char id[17] = "";
