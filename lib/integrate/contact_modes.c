@@ -279,7 +279,6 @@ static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const 
  * under a planar chassis with a negative load stops the run (tips). */
 static int initial_cone(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
-  const ap_bmodel *M = ap_bm(s->m);
   double *q = malloc(sizeof(double) * (size_t)(s->n + s->k)), *v = q ? q + s->n : NULL;
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
@@ -287,16 +286,8 @@ static int initial_cone(ap_sim *s) {
   int rc = forces_at(s, s->t, q, v), changed = 0;
   for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
-    int mode = ap_cfr_mode(M, scratch(s->d), c);
-    if (mode == AP_CM_AIRBORNE) continue;
-    if (mode != AP_CM_ROLLING) {          /* sliding from the start: only a tipping wheel */
-      double ft[2], fn = contact_forces(s, s->d->lambda, c, ft);
-      if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(M, c)) {
-        rc = tips(s, c, s->t, fn);
-        break;
-      }
-      continue;
-    }
+    /* Sliding from the start too: a negative normal force lifts it (the free robot braking
+     * with locked wheels at mu_kinetic 0.6 had its caster pulled down by -2.1 N). */
     int to = by_forces(s, c, s->t);
     if (to < 0) {
       rc = to;
