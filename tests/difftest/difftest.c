@@ -11,6 +11,7 @@
  * models, agreeing, refused (by every mode alike), stopped (the reference too), disagreeing,
  * simulations, and the largest difference found as a fraction of its bound. */
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,16 +24,26 @@ enum { TEXT_LEN = 32768 };
 
 typedef struct tally {
   long models, count[4], runs;
-  double worst;
+  double worst, worst_by[DT_NCHECK];
   char worst_what[200];
 } tally;
 
 static void add(tally *t, const dt_result *r, const char *name) {
   t->models++, t->count[r->verdict]++, t->runs += r->runs;
+  for (int i = 0; i < DT_NCHECK && r->verdict != DT_DISAGREE; i++)
+    t->worst_by[i] = fmax(t->worst_by[i], r->worst_by[i]);
   if (r->worst > t->worst && r->verdict != DT_DISAGREE) {
     t->worst = r->worst;
     snprintf(t->worst_what, sizeof t->worst_what, "%s: %s", name, r->worst_what);
   }
+}
+
+/* The largest difference / bound of the agreeing models, per kind of check. */
+static void print_worst_by(const tally *t) {
+  printf("difftest: largest difference / bound by check:");
+  for (int i = 0; i < DT_NCHECK; i++)
+    printf("%s %s %.3g", i ? "," : "", dt_check_names[i], t->worst_by[i]);
+  printf("\n");
 }
 
 static int fails(const dt_model *m, const dt_opts *o, char *text) {
@@ -111,6 +122,8 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
       dt_check((dt_write(m, NULL, text, TEXT_LEN), text), &o, &r);
       printf("  shrunk to %d bodies:\n%s", dt_live_bodies(m), r.what);
       if (dir) save(dir, m, &r, text);
+    } else if (r.verdict == DT_DISAGREE && dir) {
+      save(dir, m, &r, text);   /* --no-shrink: the model as generated */
     }
     if (quiet && (i + 1) % 500 == 0)
       printf("difftest: %ld models, %ld disagree, %.0f s\n", i + 1, t.count[DT_DISAGREE],
@@ -120,6 +133,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
          "%ld simulations, %.1f s; largest difference %.3g of its bound (%s)\n", t.models, seed,
          t.count[0], t.count[1], t.count[2], t.count[3], t.runs,
          (double)(clock() - c0) / CLOCKS_PER_SEC, t.worst, t.worst_what);
+  print_worst_by(&t);
   free(text), free(m);
   return t.count[DT_DISAGREE] > 0;
 }
@@ -175,6 +189,7 @@ static int scenes(int argc, char **argv) {
   }
   printf("difftest: %ld scenes: %ld agree, %ld refused, %ld stopped, %ld disagree; %ld "
          "simulations\n", t.models, t.count[0], t.count[1], t.count[2], t.count[3], t.runs);
+  print_worst_by(&t);
   return bad;
 }
 
