@@ -4,7 +4,8 @@
 #define AP_DIFFTEST_COMPARE_H
 
 enum { DT_AGREE = 0, DT_REFUSED = 1, DT_STOPPED = 2, DT_DISAGREE = 3 };
-enum { DT_NCHECK = 5 };   /* kinds of check: initial v, initial v', trajectory, energy, residual */
+enum { DT_NCHECK = 6 };   /* kinds of check: initial v, initial v', trajectory, energy,
+                             residual, switch time */
 extern const char *const dt_check_names[DT_NCHECK];
 
 typedef struct dt_opts {

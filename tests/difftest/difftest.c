@@ -4,6 +4,8 @@
  * halved while it still disagrees) and written as a regression scene.
  *
  *   difftest [--models N] [--seed S] [--save DIR] [--quiet]   random models S, S+1, ...
+ *            [--no-shrink] [--print]   (report as found; --save then writes them unshrunk)
+ *                                      (print each model's scene, run nothing)
  *   difftest SCENE|DIR ...                                     scenes (every *.yaml of a DIR)
  *
  * APPELL_DIFFTEST_MODELS, when set, replaces N (fewer models under the sanitizers). Exit
@@ -95,6 +97,7 @@ static void save(const char *dir, const dt_model *m, const dt_result *r, char *t
   else printf("  saved %s\n", path);
 }
 
+static int print_only;  /* --print: write each model's scene to stdout, run nothing */
 static int no_shrink;   /* --no-shrink: report disagreements as found (recheck a campaign's seeds) */
 
 static int random_models(long models, unsigned long long seed, const char *dir, int quiet) {
@@ -107,6 +110,10 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
     dt_result r;
     dt_generate(seed + (unsigned long long)i, m);
     dt_write(m, NULL, text, TEXT_LEN);
+    if (print_only) {
+      printf("--- seed %llu\n%s", (unsigned long long)m->seed, text);
+      continue;
+    }
     o.expect_tree = m->expect_tree;
     dt_check(text, &o, &r);
     char name[32];
@@ -201,12 +208,13 @@ int main(int argc, char **argv) {
   for (; a < argc && !strncmp(argv[a], "--", 2); a++) {
     if (!strcmp(argv[a], "--quiet")) quiet = 1;
     else if (!strcmp(argv[a], "--no-shrink")) no_shrink = 1;
+    else if (!strcmp(argv[a], "--print")) print_only = 1;
     else if (a + 1 < argc && !strcmp(argv[a], "--models")) models = atol(argv[++a]);
     else if (a + 1 < argc && !strcmp(argv[a], "--seed")) seed = strtoull(argv[++a], NULL, 10);
     else if (a + 1 < argc && !strcmp(argv[a], "--save")) dir = argv[++a];
     else {
       fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] "
-              "[--no-shrink] | "
+              "[--no-shrink] [--print] | "
               "difftest SCENE|DIR ...\n");
       return 2;
     }
