@@ -5,6 +5,7 @@
  *
  *   difftest [--models N] [--seed S] [--save DIR] [--quiet]   random models S, S+1, ...
  *            [--no-shrink] [--print]   (report as found; --save then writes them unshrunk)
+ *            [--contacts]              (some rolling contacts get contact modes)
  *                                      (print each model's scene, run nothing)
  *   difftest SCENE|DIR ...                                     scenes (every *.yaml of a DIR)
  *
@@ -209,12 +210,13 @@ int main(int argc, char **argv) {
     if (!strcmp(argv[a], "--quiet")) quiet = 1;
     else if (!strcmp(argv[a], "--no-shrink")) no_shrink = 1;
     else if (!strcmp(argv[a], "--print")) print_only = 1;
+    else if (!strcmp(argv[a], "--contacts")) dt_gen_contacts = 1;
     else if (a + 1 < argc && !strcmp(argv[a], "--models")) models = atol(argv[++a]);
     else if (a + 1 < argc && !strcmp(argv[a], "--seed")) seed = strtoull(argv[++a], NULL, 10);
     else if (a + 1 < argc && !strcmp(argv[a], "--save")) dir = argv[++a];
     else {
       fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] "
-              "[--no-shrink] [--print] | "
+              "[--no-shrink] [--print] [--contacts] | "
               "difftest SCENE|DIR ...\n");
       return 2;
     }

@@ -363,6 +363,8 @@ static int has_rolling(const dt_model *m) {
   return 0;
 }
 
+int dt_gen_contacts;
+
 void dt_generate(uint64_t seed, dt_model *m) {
   memset(m, 0, sizeof *m);
   uint64_t st = seed * 0x9E3779B97F4A7C15ull + 0x2545F4914F6CDD1Dull, *s = &st;
@@ -386,7 +388,7 @@ void dt_generate(uint64_t seed, dt_model *m) {
     else snprintf(m->ground, sizeof m->ground, "{kind: translating, velocity: [%.4g, "
                   "\"%.3g*sin(t)\"]}", ur(s, -.5, .5), ur(s, -.5, .5));
   }
-  dt_add_contact_modes(seed, m);   /* a stream of its own: gen_contact.c */
+  if (dt_gen_contacts) dt_add_contact_modes(seed, m);   /* a stream of its own: gen_contact.c */
   if (chance(s, 0.25)) dt_add_closure(s, m);
 }
 
