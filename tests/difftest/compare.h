@@ -4,6 +4,9 @@
 #define AP_DIFFTEST_COMPARE_H
 
 enum { DT_AGREE = 0, DT_REFUSED = 1, DT_STOPPED = 2, DT_DISAGREE = 3 };
+enum { DT_NCHECK = 6 };   /* kinds of check: initial v, initial v', trajectory, energy,
+                             residual, switch time */
+extern const char *const dt_check_names[DT_NCHECK];
 
 typedef struct dt_opts {
   int nmethods;
@@ -20,6 +23,7 @@ typedef struct dt_result {
   int refused_runs;        /* documented refusals of one mode (plain with manifold rows, ...) */
   double worst;            /* largest difference / bound over all checks that ran */
   char worst_what[160];    /* which check that was */
+  double worst_by[DT_NCHECK]; /* the same per kind of check (dt_check_names) */
   char what[2048];         /* the disagreements, or why the model was refused or stopped */
 } dt_result;
 

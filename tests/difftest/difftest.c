@@ -4,6 +4,9 @@
  * halved while it still disagrees) and written as a regression scene.
  *
  *   difftest [--models N] [--seed S] [--save DIR] [--quiet]   random models S, S+1, ...
+ *            [--no-shrink] [--print]   (report as found; --save then writes them unshrunk)
+ *            [--contacts]              (some rolling contacts get contact modes)
+ *                                      (print each model's scene, run nothing)
  *   difftest SCENE|DIR ...                                     scenes (every *.yaml of a DIR)
  *
  * APPELL_DIFFTEST_MODELS, when set, replaces N (fewer models under the sanitizers). Exit
@@ -11,6 +14,7 @@
  * models, agreeing, refused (by every mode alike), stopped (the reference too), disagreeing,
  * simulations, and the largest difference found as a fraction of its bound. */
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,16 +27,26 @@ enum { TEXT_LEN = 32768 };
 
 typedef struct tally {
   long models, count[4], runs;
-  double worst;
+  double worst, worst_by[DT_NCHECK];
   char worst_what[200];
 } tally;
 
 static void add(tally *t, const dt_result *r, const char *name) {
   t->models++, t->count[r->verdict]++, t->runs += r->runs;
+  for (int i = 0; i < DT_NCHECK && r->verdict != DT_DISAGREE; i++)
+    t->worst_by[i] = fmax(t->worst_by[i], r->worst_by[i]);
   if (r->worst > t->worst && r->verdict != DT_DISAGREE) {
     t->worst = r->worst;
     snprintf(t->worst_what, sizeof t->worst_what, "%s: %s", name, r->worst_what);
   }
+}
+
+/* The largest difference / bound of the agreeing models, per kind of check. */
+static void print_worst_by(const tally *t) {
+  printf("difftest: largest difference / bound by check:");
+  for (int i = 0; i < DT_NCHECK; i++)
+    printf("%s %s %.3g", i ? "," : "", dt_check_names[i], t->worst_by[i]);
+  printf("\n");
 }
 
 static int fails(const dt_model *m, const dt_opts *o, char *text) {
@@ -84,6 +98,7 @@ static void save(const char *dir, const dt_model *m, const dt_result *r, char *t
   else printf("  saved %s\n", path);
 }
 
+static int print_only;  /* --print: write each model's scene to stdout, run nothing */
 static int no_shrink;   /* --no-shrink: report disagreements as found (recheck a campaign's seeds) */
 
 static int random_models(long models, unsigned long long seed, const char *dir, int quiet) {
@@ -96,6 +111,10 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
     dt_result r;
     dt_generate(seed + (unsigned long long)i, m);
     dt_write(m, NULL, text, TEXT_LEN);
+    if (print_only) {
+      printf("--- seed %llu\n%s", (unsigned long long)m->seed, text);
+      continue;
+    }
     o.expect_tree = m->expect_tree;
     dt_check(text, &o, &r);
     char name[32];
@@ -111,6 +130,8 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
       dt_check((dt_write(m, NULL, text, TEXT_LEN), text), &o, &r);
       printf("  shrunk to %d bodies:\n%s", dt_live_bodies(m), r.what);
       if (dir) save(dir, m, &r, text);
+    } else if (r.verdict == DT_DISAGREE && dir) {
+      save(dir, m, &r, text);   /* --no-shrink: the model as generated */
     }
     if (quiet && (i + 1) % 500 == 0)
       printf("difftest: %ld models, %ld disagree, %.0f s\n", i + 1, t.count[DT_DISAGREE],
@@ -120,6 +141,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
          "%ld simulations, %.1f s; largest difference %.3g of its bound (%s)\n", t.models, seed,
          t.count[0], t.count[1], t.count[2], t.count[3], t.runs,
          (double)(clock() - c0) / CLOCKS_PER_SEC, t.worst, t.worst_what);
+  print_worst_by(&t);
   free(text), free(m);
   return t.count[DT_DISAGREE] > 0;
 }
@@ -175,6 +197,7 @@ static int scenes(int argc, char **argv) {
   }
   printf("difftest: %ld scenes: %ld agree, %ld refused, %ld stopped, %ld disagree; %ld "
          "simulations\n", t.models, t.count[0], t.count[1], t.count[2], t.count[3], t.runs);
+  print_worst_by(&t);
   return bad;
 }
 
@@ -186,12 +209,14 @@ int main(int argc, char **argv) {
   for (; a < argc && !strncmp(argv[a], "--", 2); a++) {
     if (!strcmp(argv[a], "--quiet")) quiet = 1;
     else if (!strcmp(argv[a], "--no-shrink")) no_shrink = 1;
+    else if (!strcmp(argv[a], "--print")) print_only = 1;
+    else if (!strcmp(argv[a], "--contacts")) dt_gen_contacts = 1;
     else if (a + 1 < argc && !strcmp(argv[a], "--models")) models = atol(argv[++a]);
     else if (a + 1 < argc && !strcmp(argv[a], "--seed")) seed = strtoull(argv[++a], NULL, 10);
     else if (a + 1 < argc && !strcmp(argv[a], "--save")) dir = argv[++a];
     else {
       fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] "
-              "[--no-shrink] | "
+              "[--no-shrink] [--print] [--contacts] | "
               "difftest SCENE|DIR ...\n");
       return 2;
     }

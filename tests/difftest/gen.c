@@ -353,12 +353,16 @@ static void vehicle(uint64_t *s, dt_model *m) {
 
 /* A loop closure at the bodies' initial positions (closure.c). */
 void dt_add_closure(uint64_t *s, dt_model *m);
+/* Friction, lift-off and restitution on some rolling contacts (gen_contact.c). */
+void dt_add_contact_modes(uint64_t seed, dt_model *m);
 
 static int has_rolling(const dt_model *m) {
   for (int c = 0; c < m->nc; c++)
     if (strstr(m->c[c].text, "rolling") || strstr(m->c[c].text, "knife_edge")) return 1;
   return 0;
 }
+
+int dt_gen_contacts;
 
 void dt_generate(uint64_t seed, dt_model *m) {
   memset(m, 0, sizeof *m);
@@ -383,6 +387,7 @@ void dt_generate(uint64_t seed, dt_model *m) {
     else snprintf(m->ground, sizeof m->ground, "{kind: translating, velocity: [%.4g, "
                   "\"%.3g*sin(t)\"]}", ur(s, -.5, .5), ur(s, -.5, .5));
   }
+  if (dt_gen_contacts) dt_add_contact_modes(seed, m);   /* a stream of its own: gen_contact.c */
   if (chance(s, 0.25)) dt_add_closure(s, m);
 }
 

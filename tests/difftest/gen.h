@@ -45,6 +45,9 @@ typedef struct dt_model {
 /* A random valid model from seed (loop closures are placed with the library's kinematics, so
  * this loads scenes through the public API). */
 void dt_generate(uint64_t seed, dt_model *m);
+/* 1: dt_generate gives some rolling contacts contact modes (gen_contact.c; difftest
+ * --contacts); default 0 */
+extern int dt_gen_contacts;
 /* The scene YAML of m into buf (NUL-terminated); header (may be NULL) becomes a comment on top. */
 void dt_write(const dt_model *m, const char *header, char *buf, size_t len);
 /* Drop body i with its subtree and every constraint and effect naming a dropped body. */
