@@ -334,6 +334,7 @@ static void summary(const run_state *rs, const run_opts *o) {
           st.max_residual, rs->drift, rs->drift / fmax(fabs(rs->E0), 1e-300),
           ap_scene_conserves_energy(rs->sc) ? "energy is conserved in this scene"
                                             : "energy is not conserved in this scene");
+  if (ap_sim_warning(rs->sim)[0]) fprintf(stderr, "  warning: %s\n", ap_sim_warning(rs->sim));
 }
 
 static int start(run_state *rs, const run_opts *o) {
