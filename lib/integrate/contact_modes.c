@@ -108,6 +108,13 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (rc < 0) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   for (int ci = 0; ci < M->nc; ci++)
     if (M->cons[ci].fric >= 0) s->cm->ci[s->cm->nc++] = ci;
+  for (int i = 0; i < s->cm->nc && s->def.mode == AP_MODE_DAE; i++)
+    if (ap_bm_wheel_by_load(M, &M->cons[s->cm->ci[i]]))
+      return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "contact '%s': friction under a planar chassis "
+                         "needs the wheel's true load, which DAE mode does not solve for (IDA's "
+                         "multiplier of its row is 0 there: the robot would skid without "
+                         "friction); use minimal or projected mode, or a free chassis",
+                         M->cons[s->cm->ci[i]].name);
   return AP_OK;
 }
 

@@ -159,7 +159,8 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc == AP_OK) rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   ap_drv_pipeline_build(s);
-  if (s->cm && s->meth->backend == &ap_step_cvode) cvode_contacts_warning(s);
+  if (s->cm && s->def.mode != AP_MODE_DAE && s->meth->backend == &ap_step_cvode)
+    cvode_contacts_warning(s);
   if (s->def.mode == AP_MODE_DAE) return ap_drv_setup_dae(s);
   return ap_drv_make_stepper(s, t0);
 }
