@@ -188,9 +188,10 @@ void bs_disk_read(const double *q, const double *v, double *th, double *thd, dou
 
 /* ---- a free ball on the ground ------------------------------------------------------------ */
 
-/* The body bd (uniform, of mass) on a free joint with the contact c and gravity g. */
+/* The body bd (uniform, of mass) on a free joint with the contact c, gravity g and, when extra
+ * is not NULL, that effect after the gravity. */
 static ap_model *free_body(ap_body_def *bd, double mass, const ap_constraint_def *c,
-                           const double *g) {
+                           const double *g, const ap_effect_def *extra) {
   ap_builder *b = builder(bd->name);
   if (!b) return NULL;
   int good = ok(b, ap_body_def_uniform(bd, mass), "body inertia") &&
@@ -204,15 +205,22 @@ static ap_model *free_body(ap_body_def *bd, double mass, const ap_constraint_def
   ap_effect_def e = ap_effect_def_default();
   memcpy(e.gravity, g, sizeof e.gravity);
   good = good && ok(b, ap_builder_add_effect(b, &e, NULL), "gravity");
+  if (extra) good = good && ok(b, ap_builder_add_effect(b, extra, NULL), "extra effect");
   if (!good) return ap_builder_free(b), NULL;
   return bs_compile(b);
 }
 
 ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
                        const ap_constraint_def *c, const double *g) {
+  return bs_free_ball_effect(shape, radius, mass, c, g, NULL);
+}
+
+ap_model *bs_free_ball_effect(ap_shape_kind shape, double radius, double mass,
+                              const ap_constraint_def *c, const double *g,
+                              const ap_effect_def *extra) {
   ap_body_def bd = ap_body_def_default();
   bd.name = "ball", bd.shape.kind = shape, bd.shape.radius = radius;
-  return free_body(&bd, mass, c, g);
+  return free_body(&bd, mass, c, g, extra);
 }
 
 ap_model *bs_leaning_rod(const char *name, double mu, bs_rod *geo) {
@@ -228,7 +236,7 @@ ap_model *bs_leaning_rod(const char *name, double mu, bs_rod *geo) {
   bd.shape.semi_axes[0] = bd.shape.semi_axes[1] = a, bd.shape.semi_axes[2] = c;
   ap_constraint_def cd = ap_constraint_def_default();
   cd.name = name, cd.mu = mu;
-  return free_body(&bd, 1.0, &cd, g);
+  return free_body(&bd, 1.0, &cd, g, NULL);
 }
 
 int bs_ball_refused(ap_joint_kind joint, double radius, double mass, const ap_constraint_def *c,

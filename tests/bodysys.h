@@ -45,6 +45,10 @@ ap_sim *bs_start(const ap_model *m, ap_mode mode, const char *method, double rto
  * when it does not build. */
 ap_model *bs_free_ball(ap_shape_kind shape, double radius, double mass,
                        const ap_constraint_def *c, const double *g);
+/* bs_free_ball with the effect extra (a user effect, say) added after the gravity. */
+ap_model *bs_free_ball_effect(ap_shape_kind shape, double radius, double mass,
+                              const ap_constraint_def *c, const double *g,
+                              const ap_effect_def *extra);
 
 /* The leaning rod of the Painleve tests: a thin uniform ellipsoid (body "rod", semi-axes a =
  * 0.01, 0.01, c = 0.5 m, 1 kg) on a free joint with the contact name (mu) and gravity 9.81 m/s^2

@@ -36,28 +36,12 @@ static int spin_up(double t, const double *q, const double *v, double *Q, void *
 /* The disk on a free joint, rolling (friction mu, or none for mu < 0), gravity, the torque. */
 static ap_model *disk(double mu) {
   bs_disk p = bs_disk_default();
-  ap_builder *b = NULL;
-  if (ap_builder_create("speeding disk", &b) != AP_OK) return NULL;
-  ap_body_def bd = ap_body_def_default();
-  bd.name = "disk", bd.shape.kind = AP_SHAPE_DISK, bd.shape.radius = p.r;
-  int rc = ap_body_def_uniform(&bd, p.m);
-  if (rc == AP_OK) rc = ap_builder_add_body(b, &bd, NULL);
-  ap_joint_def j = ap_joint_def_default();
-  j.kind = AP_JOINT_FREE, j.child = 0;
-  if (rc == AP_OK) rc = ap_builder_add_joint(b, &j, NULL);
+  const double g[3] = {0, 0, -G};
   ap_constraint_def c = ap_constraint_def_default();
-  c.name = "roll", c.body = 0, c.mu = mu;
-  if (rc == AP_OK) rc = ap_builder_add_constraint(b, &c, NULL);
+  c.name = "roll", c.mu = mu;
   ap_effect_def e = ap_effect_def_default();
-  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
   e.kind = AP_EFFECT_USER, e.generalized = spin_up, e.name = "spin_up";
-  if (rc == AP_OK) rc = ap_builder_add_effect(b, &e, NULL);
-  if (rc != AP_OK) {
-    printf("  builder: %s\n", ap_builder_message(b));
-    ap_builder_free(b);
-    return NULL;
-  }
-  return bs_compile(b);
+  return bs_free_ball_effect(AP_SHAPE_DISK, p.r, p.m, &c, g, &e);
 }
 
 static ap_sim *start(const ap_model *m, ap_mode mode) {
