@@ -8,8 +8,9 @@
  * the test scenes (dense and tree path) passes ap_data_create's check.
  * Guard build (meson -Dguards=true, AP_GUARDS; the sanitizer build of scripts/test): a write
  * one past d->N, past d->q of a tree-path data, past d->perm (the int block) and past the
- * joints' section of a body model's scratch makes the next stage return AP_ERR_INTERNAL with
- * a message naming the array and the stage. */
+ * joints' section of a body model's scratch, and past each inner array of lib/linalg's tree
+ * work areas, makes the next stage return AP_ERR_INTERNAL with a message naming the array and
+ * the stage. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -206,6 +207,54 @@ static void overrun_ws_cs(void) {
   ap_scene_free(s);
 }
 
+/* lib/linalg's work areas inside the tree workspace (ap_la_tree_work, and ap_la_comp_work in
+ * component mode) are laid out array by array with guards between their inner arrays: in the
+ * guard build, one element written past any inner array of a fresh data makes the next
+ * position stage fail naming that array ("ap_la_tree_work.F") and the stage. Without guards
+ * nothing is written (past the last inner array lies the next block). */
+static void overrun_tree_work(const char *file) {
+  ap_scene *s = load(file, "tree");
+  if (!s) return;
+  const ap_model *m = ap_scene_model(s);
+  int narr = 0, caught = 0;
+  for (int a = 0;; a++) {
+    ap_data *d = data_at_start(s);
+    ap_st *st = d ? ((ap_scratch *)d->internal)->st : NULL;
+    AP_CHECK(st != NULL);
+    if (!st) {
+      ap_data_free(d);
+      break;
+    }
+    ap_tree_ws *ws = st->ws;
+    ap_la_work_array la[2 * AP_LA_WORK_ARRAYS_MAX];
+    int n = ws->P->comp ? ap_la_comp_work_arrays(&ws->P->T, &ws->CW, la) : 0;
+    n += ap_la_tree_work_arrays(&ws->P->T, ws->P->lmax, &ws->W, la + n);
+    narr = n;
+    if (a >= n || !AP_GUARDS) {
+      ap_data_free(d);
+      break;
+    }
+    if (la[a].dptr) (*la[a].dptr)[la[a].count] = 0.5;   /* one past the inner array */
+    else (*la[a].iptr)[la[a].count] = -7;
+    int rc = ap_fwd_position(m, d);
+    char want[96];
+    snprintf(want, sizeof want, "'%s'", la[a].name);
+    int named = rc == AP_ERR_INTERNAL && strstr(d->msg, want) && strstr(d->msg, "'position'");
+    AP_CHECK(named);
+    caught += named;
+    if (a == 0 || !named) printf("%s, one past %s: %s\n", file, la[a].name, d->msg);
+    ap_data_free(d);
+  }
+  if (AP_GUARDS) {
+    printf("%s, tree path: one past each of lib/linalg's %d inner work arrays: %d caught and "
+           "named\n", file, narr, caught);
+    AP_CHECK(narr >= 27 && caught == narr);
+  } else {
+    printf("%s, lib/linalg's %d inner work arrays: guards off\n", file, narr);
+  }
+  ap_scene_free(s);
+}
+
 /* Every data layout of the regression scenes passes ap_data_create's check, and in the guard
  * build a whole run leaves every guard intact (the run would fail with AP_ERR_INTERNAL). */
 static void clean_layouts(void) {
@@ -230,6 +279,7 @@ int main(void) {
   overrun("modes_free_balls.yaml", "dense", "d->perm", 0);
   overrun("modes_chain.yaml", "dense", "joints", 1);
   overrun_ws_cs();
+  overrun_tree_work("modes_chain.yaml");
   printf("guard build: %s\n", AP_GUARDS ? "yes" : "no");
   return ap_check_finish("guards");
 }

@@ -84,6 +84,10 @@ struct ap_model {
                                of the gradients of the holonomic rows phi (a contact height or
                                loop gap moves with the angles by lever arms of this size):
                                a row of Phi_q below rank_rtol lscale vanishes identically */
+  double *vscale;           /* (k) the scale of each speed's unit of motion: lscale for a linear
+                               speed (m/s), 1 for an angular one (rad/s); NULL (math-level
+                               systems): 1 for every speed. ap_partition's nearby state moves
+                               q by 1e-6 N (vscale . xi), xi a spread of unit entries */
   char name[64];
   char **coord_names;       /* (n) */
   char **speed_names;       /* (k) */
@@ -149,15 +153,27 @@ static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {
 #define AP_CONSISTENCY_RTOL 1e-8
 
 /* The scale the consistency residuals of redundant rows are judged against: the size of the
- * terms of the constraint equations, |a0|max + |A|max |v|max for the free terms a0 (units of a0,
- * a speed), |gamma|max + |A|max |v'|max for gamma (units of an acceleration; v' of the last
- * acceleration stage), each plus an absolute floor in the same units (AP_A0_FLOOR_M_PER_S,
- * AP_GAMMA_FLOOR_M_PER_S2): with v = 0 and a0 = 0 the residual is the round-off of zero
- * (8e-221 was seen) and must not count. The relative terms scale with the model's units, so a
- * model in millimetres is judged as the one in metres wherever a0 or v is not zero; the floors
- * are 1 unit of the model's own lengths per second (per second squared). */
-#define AP_A0_FLOOR_M_PER_S 1.0
-#define AP_GAMMA_FLOOR_M_PER_S2 1.0
+ * terms of the constraint equations, row by row, t_r = |a0_r| + sum_c |A_rc v_c| for the free
+ * terms a0 (A v + a0 = 0: the units of row r, m/s or rad/s), t_r = |gamma_r| + sum_c |A_rc v'_c|
+ * for gamma (A v' = gamma; v' of the last acceleration stage), each plus a floor f_r =
+ * AP_ROW_FLOOR_PER_S sum_c |A_rc| vscale_c (resp. AP_ROW_FLOOR_PER_S2, per s^2): the row's terms
+ * at a speed of one model length scale (or one radian) per second. The floor keeps the
+ * round-off of a0 and gamma, which comes from terms the core does not see (4e-16 in
+ * car_ackermann.yaml at rest, where t_r is that round-off itself; 1.5e-15 against terms of 6e-6
+ * in a campaign model), from counting; it is the one part with a unit of time (s). Each term
+ * pairs an entry of A with the speed it multiplies, so t_r and f_r scale with the model's units
+ * of length and mass as row r does: a model in millimetres or kilometres, or in grams, is judged
+ * as the one in metres and kilograms; in milliseconds the floor is 1000 times larger. ap_partition (and ap_core_judge_redundant)
+ * judge each dropped row j, the combination c of the kept rows it equals, against its own
+ * terms: |x_j - c . x_kept| > tol (t_j + sum_i |c_i| t_i) is inconsistent. The stages' checks at
+ * every evaluation judge the residual of all rows at once against the largest row's terms,
+ * ap_core_row_scale (max_r t_r, plus AP_TERMS_TINY): rows of different units (a knife edge in
+ * m/s beside a prescribed rate in rad/s) are then judged against the larger ones.
+ * AP_TERMS_TINY is the reciprocal of AP_HUGE: with A = 0, v = 0 and a0 = 0 the residual is the
+ * round-off of zero (8e-221 was seen) and must not count. */
+#define AP_TERMS_TINY 1e-150
+#define AP_ROW_FLOOR_PER_S 1.0
+#define AP_ROW_FLOOR_PER_S2 1.0
 double ap_core_row_scale(const ap_model *m, const ap_data *d, int of_gamma);
 double ap_core_row_scale_cs(const ap_model *m, const ap_data_cs *d, int of_gamma);
 

@@ -75,10 +75,17 @@ static double max_abs(const ap_sc *x, size_t len) {
 }
 
 double AP_SC(ap_core_row_scale)(const ap_model *m, const ap_data *d, int of_gamma) {
-  size_t b = (size_t)m->b, k = (size_t)m->k;
-  return (of_gamma ? AP_GAMMA_FLOOR_M_PER_S2 : AP_A0_FLOOR_M_PER_S) +
-         max_abs(of_gamma ? d->gamma : d->a0, b) +
-         max_abs(d->A, b * k) * max_abs(of_gamma ? d->vdot : d->v, k);
+  const ap_sc *x = of_gamma ? d->gamma : d->a0, *y = of_gamma ? d->vdot : d->v;
+  double mx = 0.0, fl = of_gamma ? AP_ROW_FLOOR_PER_S2 : AP_ROW_FLOOR_PER_S;
+  for (int r = 0; r < m->b; r++) {   /* t_r + f_r (core.h) */
+    double t = SC_MAG(x[r]);
+    for (int c = 0; c < m->k; c++) {
+      ap_sc a = d->A[r + (size_t)c * m->b];
+      t += SC_MAG(a * y[c]) + fl * SC_MAG(a) * (m->vscale ? m->vscale[c] : 1.0);
+    }
+    mx = fmax(mx, t);
+  }
+  return AP_TERMS_TINY + mx;
 }
 
 /* ---- position stage ---------------------------------------------------------------------- */
@@ -203,8 +210,8 @@ static int fwd_position(const ap_model *m, ap_data *d) {
 #endif
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  /* the scale is at least the floor: below it no scale is needed (and none is computed) */
-  if (d->resid_a0 > AP_CONSISTENCY_RTOL * AP_A0_FLOOR_M_PER_S &&
+  /* the scale is at least max|a0|: below that no scale is needed (and none is computed) */
+  if (d->resid_a0 > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->a0, (size_t)m->b)) &&
       d->resid_a0 > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 0)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
@@ -281,7 +288,7 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  if (d->resid_gamma > AP_CONSISTENCY_RTOL * AP_GAMMA_FLOOR_M_PER_S2 &&
+  if (d->resid_gamma > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->gamma, (size_t)m->b)) &&
       d->resid_gamma > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 1)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);

@@ -160,6 +160,7 @@ void ap_model_free(ap_model *m) {
   free_names(m->coord_names, m->n);
   free_names(m->speed_names, m->k);
   free_names(m->constraint_names, m->b);
+  free(m->vscale);
   free(m);
 }
 

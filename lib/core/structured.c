@@ -122,15 +122,28 @@ static void solve_G(const ap_sblocks *bl, ap_st *st, double *x) {
 
 /* ---- stages --------------------------------------------------------------------------------- */
 
-/* The residual of x (a0 or gamma) outside the rows' range against |x|max plus the floor in
- * x's units (core/core.h: AP_A0_FLOOR_M_PER_S, AP_GAMMA_FLOOR_M_PER_S2; A is not formed on
- * the tree path, so the |A||v| term of ap_core_row_scale is left out). */
-static int judge(const ap_model *m, ap_data *d, double resid, const double *x, int n,
-                 double floor, const char *what) {
-  double scale = floor + max_abs(x, n);
+/* The residual of x (a0 or gamma) outside the rows' range against the largest row's terms plus
+ * the largest floor (core/core.h: t_r = |x_r| + sum_c |A_rc y_c|, (x, y) = (a0, v) or (gamma,
+ * v'); f_r from sum_c |A_rc| vscale_c): at most max|x| is checked first; beyond it the terms
+ * and floors come from the operator A y + a0 with its magnitudes (ops->amul: the sum of each
+ * row's terms' magnitudes, |a0_r| included, which is taken out or swapped for |gamma_r|), two
+ * sweeps, only then. */
+static int judge(const ap_model *m, ap_data *d, ap_st *st, int of_gamma) {
+  const double *x = of_gamma ? d->gamma : d->a0;
+  double resid = of_gamma ? d->resid_gamma : d->resid_a0, scale = AP_TERMS_TINY + max_abs(x, m->b);
+  if (!(resid > consistency_rtol * scale)) return AP_OK;
+  double fl = of_gamma ? AP_ROW_FLOOR_PER_S2 : AP_ROW_FLOOR_PER_S, floor = 0.0, terms = 0.0;
+  for (int c = 0; c < m->k; c++) st->tk2[c] = m->vscale ? m->vscale[c] : 1.0;
+  st->ops->amul(st->ws, d, st->tk2, st->tb, st->tm);   /* the floors f_r: sum |A_rc| vscale_c */
+  for (int r = 0; r < m->b; r++) floor = fmax(floor, fl * (st->tm[r] - fabs(d->a0[r])));
+  st->ops->amul(st->ws, d, of_gamma ? d->vdot : d->v, st->tb, st->tm);   /* the terms t_r */
+  for (int r = 0; r < m->b; r++)
+    terms = fmax(terms, st->tm[r] + (of_gamma ? fabs(x[r]) - fabs(d->a0[r]) : 0));
+  scale = fmax(scale, AP_TERMS_TINY + terms + floor);   /* max t_r + max f_r */
   if (!(resid > consistency_rtol * scale)) return AP_OK;
   ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and inconsistent at "
-              "t = %.17g (%s residual %.3g)", m->name, m->b - d->rank, m->b, d->t, what, resid);
+              "t = %.17g (%s residual %.3g, more than %.3g of the terms of the rows)", m->name,
+              m->b - d->rank, m->b, d->t, of_gamma ? "gamma" : "a0", resid, consistency_rtol);
   return AP_ERR_INCONSISTENT;
 }
 
@@ -139,7 +152,7 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   int rc = st->ops->position(m, d, st->ws, 1);
   if (rc != AP_OK) return rc;
   st->chosen = 1;
-  rc = judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");
+  rc = judge(m, d, st, 0);
   /* a row that no speed moves: named as on the dense path (partition.c) */
   if (rc == AP_ERR_INCONSISTENT) ap_core_refuse_vanishing_rows(m, d);
   if (rc == AP_OK && d->redundant > 0)
@@ -156,7 +169,7 @@ int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;
   if (rc != AP_OK || ((const ap_scratch *)d->internal)->judge_at_accepted) return rc;
-  return judge(m, d, d->resid_a0, d->a0, m->b, AP_A0_FLOOR_M_PER_S, "a0");   /* else judged at accepted states */
+  return judge(m, d, st, 0);   /* else judged at accepted states */
 }
 
 void ap_st_speeds(const ap_model *m, ap_data *d, ap_st *st) {
@@ -175,7 +188,7 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
   if (rc == AP_OK && !((const ap_scratch *)d->internal)->judge_at_accepted)   /* as dense */
-    rc = judge(m, d, d->resid_gamma, d->gamma, m->b, AP_GAMMA_FLOOR_M_PER_S2, "gamma");
+    rc = judge(m, d, st, 1);
   return rc;
 }
 

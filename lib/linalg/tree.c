@@ -90,17 +90,36 @@ size_t ap_la_tree_work_size(const ap_la_tree *T, int lmax, size_t *nint) {
   return 0 TREE_WORK_DOUBLES(TW_SUM);
 }
 
+int ap_la_tree_work_arrays(const ap_la_tree *T, int lmax, ap_la_tree_work *W,
+                           ap_la_work_array *out) {
+  TREE_WORK_SIZES;
+  int n = 0;
+#define TW_LIST_I(f_, c_) out[n++] = (ap_la_work_array){"ap_la_tree_work." #f_, (c_), NULL, &W->f_};
+#define TW_LIST_D(f_, c_) out[n++] = (ap_la_work_array){"ap_la_tree_work." #f_, (c_), &W->f_, NULL};
+  TREE_WORK_INTS(TW_LIST_I)
+  TREE_WORK_DOUBLES(TW_LIST_D)
+#undef TW_LIST_I
+#undef TW_LIST_D
+  return n;
+}
+
+void ap_la_work_carve(const ap_la_work_array *a, int n, double *dbl, int *ints) {
+  for (int j = 0; j < n; j++) {
+    if (a[j].dptr) *a[j].dptr = dbl, dbl += a[j].count;
+    else *a[j].iptr = ints, ints += a[j].count;
+  }
+}
+
 void ap_la_tree_work_init(const ap_la_tree *T, int lmax, double *dbl, int *ints,
                           ap_la_tree_work *W) {
-  TREE_WORK_SIZES;
+  ap_la_work_array a[AP_LA_WORK_ARRAYS_MAX];
   memset(W, 0, sizeof *W);
-  W->lmax = (int)lc;
-#define TW_CARVE_I(f_, c_) W->f_ = ints, ints += (c_);
-#define TW_CARVE_D(f_, c_) W->f_ = dbl, dbl += (c_);
-  TREE_WORK_INTS(TW_CARVE_I)
-  TREE_WORK_DOUBLES(TW_CARVE_D)
-#undef TW_CARVE_I
-#undef TW_CARVE_D
+  ap_la_work_carve(a, ap_la_tree_work_arrays(T, lmax, W, a), dbl, ints);
+  ap_la_tree_work_setup(T, lmax, W);
+}
+
+void ap_la_tree_work_setup(const ap_la_tree *T, int lmax, ap_la_tree_work *W) {
+  W->lmax = lmax > 0 ? lmax : 1;
   /* static maps: the body of each column, the column of each speed, speeds by tree */
   for (int i = 0; i < T->nb; i++)
     for (int c = T->fofs[i]; c < T->fofs[i + 1]; c++) W->pbody[c] = i, W->kpos[T->fidx[c]] = c;

@@ -5,7 +5,8 @@
  * Raw arrays only: the caller (the body layer) describes the forest once (ap_la_tree: parents,
  * free speeds, constraint rows, components) and writes the position-dependent geometry
  * (ap_la_tree_geom) at every position stage. Nothing here allocates; the workspace is sized by
- * ap_la_tree_work_size and carved by ap_la_tree_work_init.
+ * ap_la_tree_work_size and carved by ap_la_tree_work_init, or laid out by the caller from
+ * ap_la_tree_work_arrays.
  *
  * Conventions. Bodies are numbered parents first (parent[i] < i, -1 = the ground). A twist is
  * (w; v): angular velocity and the velocity of the body origin o_i, world axes; a wrench or a
@@ -81,8 +82,28 @@ typedef struct ap_la_tree_work {
 
 /* Doubles and ints of workspace (lmax: most free speeds of one tree, at most maxnf * bodies). */
 size_t ap_la_tree_work_size(const ap_la_tree *T, int lmax, size_t *nint);
+/* Carve W from dbl and ints (one array after the other, no gaps) and set it up. */
 void ap_la_tree_work_init(const ap_la_tree *T, int lmax, double *dbl, int *ints,
                           ap_la_tree_work *W);
+
+/* The layout of a workspace (ap_la_tree_work, ap_la_comp_work) for a caller that carves it
+ * itself, e.g. from a layout table with guard words between the arrays (lib/model/tree_build.c,
+ * core/arena.h): each array's name ("ap_la_tree_work.F"), its element count and the field it
+ * is carved into (dptr for doubles, iptr for ints; the other NULL), ints first, then doubles,
+ * in block order. The caller points every field at its count of zeroed elements, then calls the
+ * setup function (the static maps). */
+typedef struct ap_la_work_array {
+  const char *name;
+  size_t count;
+  double **dptr;
+  int **iptr;
+} ap_la_work_array;
+#define AP_LA_WORK_ARRAYS_MAX 32   /* arrays of one workspace, at most */
+int ap_la_tree_work_arrays(const ap_la_tree *T, int lmax, ap_la_tree_work *W,
+                           ap_la_work_array *out);
+void ap_la_tree_work_setup(const ap_la_tree *T, int lmax, ap_la_tree_work *W);
+/* Point the n arrays' fields one after the other into dbl and ints (no gaps). */
+void ap_la_work_carve(const ap_la_work_array *a, int n, double *dbl, int *ints);
 
 /* Factor every body's rows, bottom-up. select = 1: choose the local partitions (pivoted QR,
  * rank by |R_jj| > rtol * scale of the body's rows) and the blocks of e'; avoid (k, by
@@ -139,6 +160,8 @@ typedef struct ap_la_comp_work {
 
 size_t ap_la_comp_work_size(const ap_la_tree *T, size_t *nint);
 void ap_la_comp_work_init(const ap_la_tree *T, double *dbl, int *ints, ap_la_comp_work *C);
+int ap_la_comp_work_arrays(const ap_la_tree *T, ap_la_comp_work *C, ap_la_work_array *out);
+void ap_la_comp_work_setup(const ap_la_tree *T, ap_la_comp_work *C);
 /* As ap_la_tree_factor with b0 = the particular v of a0 (A b0 + a0 = 0) and resid = how far
  * the dropped rows are from consistent; the blocks B_t, G_t in W as ap_la_tree_basis leaves
  * them (W->lmax must hold every tree's speeds). AP_ERR_SINGULAR (*bad = the tree's root):

@@ -49,17 +49,26 @@ size_t ap_la_comp_work_size(const ap_la_tree *T, size_t *nint) {
   return 0 COMP_DOUBLES(CW_SUM);
 }
 
-void ap_la_comp_work_init(const ap_la_tree *T, double *dbl, int *ints, ap_la_comp_work *C) {
+int ap_la_comp_work_arrays(const ap_la_tree *T, ap_la_comp_work *C, ap_la_work_array *out) {
   COMP_SIZES;
+  int n = 0;
+#define CW_LIST_I(f_, c_) out[n++] = (ap_la_work_array){"ap_la_comp_work." #f_, (c_), NULL, &C->f_};
+#define CW_LIST_D(f_, c_) out[n++] = (ap_la_work_array){"ap_la_comp_work." #f_, (c_), &C->f_, NULL};
+  COMP_INTS(CW_LIST_I)
+  COMP_DOUBLES(CW_LIST_D)
+#undef CW_LIST_I
+#undef CW_LIST_D
+  return n;
+}
+
+void ap_la_comp_work_init(const ap_la_tree *T, double *dbl, int *ints, ap_la_comp_work *C) {
+  ap_la_work_array a[AP_LA_WORK_ARRAYS_MAX];
   memset(C, 0, sizeof *C);
-#define CW_CARVE(f_, c_) C->f_ = p, p += (c_);
-  int *p = ints;
-  COMP_INTS(CW_CARVE)
-  double *pd = dbl;
-#undef CW_CARVE
-#define CW_CARVE(f_, c_) C->f_ = pd, pd += (c_);
-  COMP_DOUBLES(CW_CARVE)
-#undef CW_CARVE
+  ap_la_work_carve(a, ap_la_comp_work_arrays(T, C, a), dbl, ints);
+  ap_la_comp_work_setup(T, C);
+}
+
+void ap_la_comp_work_setup(const ap_la_tree *T, ap_la_comp_work *C) {
   size_t ao = 0;
   for (int t = 0, r = 0; t < T->ntree; t++) {   /* rows and speeds of each tree, local order */
     int kt = 0;

@@ -328,8 +328,12 @@ static int name_coords(const ap_bmodel *M, ap_model *m) {
     }
     for (int i = 0; i < J->nv; i++) {
       if (J->vidx[i] < 0) continue;
-      m->speed_names[J->vidx[i]] = dup_name(bn, ".", ap_joint_speed_name(J->kind, i));
+      const char *sn = ap_joint_speed_name(J->kind, i);
+      m->speed_names[J->vidx[i]] = dup_name(bn, ".", sn);
       if (!m->speed_names[J->vidx[i]]) return AP_ERR_NOMEM;
+      int linear = sn[0] == 'v' || !strcmp(sn, "pos_dot") || !strcmp(sn, "x_dot") ||
+                   !strcmp(sn, "y_dot");   /* vx vy vz, pos_dot, x_dot y_dot: m/s */
+      m->vscale[J->vidx[i]] = linear ? M->lscale : 1.0;
     }
   }
   return AP_OK;
@@ -355,8 +359,10 @@ static int make_model(ap_builder *b, ap_bmodel *M, ap_model **out) {
   m->coord_names = calloc((size_t)M->n + 1, sizeof(char *));
   m->speed_names = calloc((size_t)M->k + 1, sizeof(char *));
   m->constraint_names = calloc((size_t)M->b + 1, sizeof(char *));
+  m->vscale = calloc((size_t)M->k + 1, sizeof(double));
   m->ev.impl = M, m->ev.destroy = ap_bm_destroy;   /* from here the model owns M */
-  int rc = m->coord_names && m->speed_names && m->constraint_names ? AP_OK : AP_ERR_NOMEM;
+  int rc = m->coord_names && m->speed_names && m->constraint_names && m->vscale ? AP_OK
+                                                                                : AP_ERR_NOMEM;
   if (rc == AP_OK) rc = name_coords(M, m);
   if (rc == AP_OK) rc = name_rows(M, m);
   if (rc != AP_OK) {

@@ -426,12 +426,15 @@ static int min_norm_speeds(const ap_model *m, ap_data *d, const double *A, const
     AP_BM_MSG(d, "model '%s': out of memory completing the speeds", m->name);
     return AP_ERR_NOMEM;
   }
-  double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 1.0;
+  /* scale: the largest term of the rows and their floor, one model length scale (or radian)
+   * per second on every speed (core/core.h), so that the check follows the model's units */
+  double *rhs = AfT + (size_t)nf * b, *x = rhs + b, *work = x + nf, resid = 0.0, scale = 0.0;
   for (int s = 0; s < b; s++) {
     rhs[s] = -a0[s];
     for (int c = 0, f = 0; c < k; c++) {
       double a = A[s + (size_t)c * b];
-      scale = fmax(scale, fabs(a * v[c]));
+      double sc = m->vscale ? m->vscale[c] : 1.0;
+      scale = fmax(scale, fabs(a * v[c]) + AP_ROW_FLOOR_PER_S * fabs(a) * sc);
       if (given[c]) rhs[s] -= a * v[c];
       else AfT[f++ + (size_t)s * nf] = a;
     }

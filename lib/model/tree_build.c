@@ -136,25 +136,42 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
 
 /* The workspace's doubles and ints, one table each X(field, count) in block order
  * (core/arena.h): the sizes (capacities) and the carving (ap_tree_ws_init) both come from it.
- * The last entries are lib/linalg's tree work, which carves itself (ap_la_tree_work_init). */
+ * The last entries are lib/linalg's work areas, array by array (ap_la_comp_work_arrays, then
+ * ap_la_tree_work_arrays: names "ap_la_tree_work.F", ...), so that in the guard build a guard
+ * lies between every two of their inner arrays too. */
 #define TREE_WS_DOUBLES(X)                                                                 \
   X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
   X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
-  X(ws->rb, b) X(ws->hp, nhd) X(comp_dbl, ncd) X(work_dbl, ndw)
-#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi) X(comp_int, nci) X(work_int, niw)
+  X(ws->rb, b) X(ws->hp, nhd)
+#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi)
+
+/* lib/linalg's arrays (into la, fields of ws->W and ws->CW), at most 2 AP_LA_WORK_ARRAYS_MAX. */
+static int ws_la_arrays(const ap_tplan *P, ap_tree_ws *ws, ap_la_work_array *la) {
+  int n = P->comp ? ap_la_comp_work_arrays(&P->T, &ws->CW, la) : 0;
+  return n + ap_la_tree_work_arrays(&P->T, P->lmax, &ws->W, la + n);
+}
 
 #define WS_ADD(f_, c_) ap_arena_add(L, #f_, (c_));
-static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
-  size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, niw = 0;
-  size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw), nhi = 0;
-  size_t nhd = ap_tree_hol_ws_size(P, &nhi), nci = 0;
-  size_t ncd = P->comp ? ap_la_comp_work_size(&P->T, &nci) : 0;
+static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li, ap_la_work_array *la,
+                      int nla) {
+  size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, nhi = 0;
+  size_t nhd = ap_tree_hol_ws_size(P, &nhi);
   ap_arena *L = Ld;
   ap_arena_init(L, "tree workspace doubles", sizeof(double), AP_ARENA_GUARDS);
   TREE_WS_DOUBLES(WS_ADD)
   L = Li;
   ap_arena_init(L, "tree workspace ints", sizeof(int), AP_ARENA_GUARDS);
   TREE_WS_INTS(WS_ADD)
+  for (int j = 0; j < nla; j++) ap_arena_add(la[j].dptr ? Ld : Li, la[j].name, la[j].count);
+}
+
+/* The layout of a workspace of plan P (ws: the one whose fields la points into, or NULL). */
+static int ws_tables(const ap_tplan *P, ap_tree_ws *ws, ap_arena *Ld, ap_arena *Li,
+                     ap_la_work_array *la) {
+  ap_tree_ws dummy;
+  int nla = ws_la_arrays(P, ws ? ws : &dummy, la);
+  ws_layout(P, Ld, Li, la, nla);
+  return nla;
 }
 
 /* Capacities (module note) and the workspace sizes. */
@@ -183,8 +200,12 @@ static void capacities(const ap_bmodel *M, ap_tplan *P) {
   if (P->comp) P->lmax = kmax > 1 ? kmax : 1;
   T->cap = 2 * M->b + 16, T->maxrow = M->b + 1;
   ap_arena Ld, Li;
-  ws_layout(P, &Ld, &Li);
+  ap_la_work_array la[2 * AP_LA_WORK_ARRAYS_MAX];
+  ws_tables(P, NULL, &Ld, &Li, la);
   P->nd = Ld.total, P->ni = Li.total;
+  char why[256];
+  if (ap_arena_check(&Ld, why, sizeof why) != 0 || ap_arena_check(&Li, why, sizeof why) != 0)
+    P->nd = 0;   /* a table over AP_ARENA_MAX arrays: ap_tree_plan_create refuses the plan */
 }
 
 int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why_len) {
@@ -225,6 +246,11 @@ int ap_tree_plan_create(const ap_model *m, ap_tplan **out, char *why, size_t why
     return rc;
   }
   capacities(M, P);
+  if (P->nd == 0) {
+    if (why && why_len) snprintf(why, why_len, "internal error: the tree workspace's layout");
+    ap_tree_plan_free(P);
+    return AP_ERR_INTERNAL;
+  }
   *out = P;
   return AP_OK;
 }
@@ -239,21 +265,26 @@ void ap_tree_plan_free(ap_tplan *P) {
 
 void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) {
   ap_arena Ld, Li;
-  ws_layout(P, &Ld, &Li);
+  ap_la_work_array la[2 * AP_LA_WORK_ARRAYS_MAX];
+  memset(&ws->W, 0, sizeof ws->W);
+  memset(&ws->CW, 0, sizeof ws->CW);
+  int nla = ws_tables(P, ws, &Ld, &Li, la);
   memset(dbl, 0, sizeof(double) * P->nd);
   memset(ints, 0, sizeof(int) * P->ni);
   ws->P = P;
-  double *work_dbl = NULL, *comp_dbl = NULL;
-  int *work_int = NULL, *comp_int = NULL, i = 0;
+  int i = 0, j = 0;
 #define WS_CARVE(f_, c_) f_ = dbl + Ld.e[i++].offset;
   TREE_WS_DOUBLES(WS_CARVE)
 #undef WS_CARVE
-#define WS_CARVE(f_, c_) f_ = ints + Li.e[i++].offset;
-  i = 0;
+#define WS_CARVE(f_, c_) f_ = ints + Li.e[j++].offset;
   TREE_WS_INTS(WS_CARVE)
 #undef WS_CARVE
-  ap_la_tree_work_init(&P->T, P->lmax, work_dbl, work_int, &ws->W);
-  if (P->comp) ap_la_comp_work_init(&P->T, comp_dbl, comp_int, &ws->CW);
+  for (int a = 0; a < nla; a++) {   /* lib/linalg's arrays, in the order ws_layout added them */
+    if (la[a].dptr) *la[a].dptr = dbl + Ld.e[i++].offset;
+    else *la[a].iptr = ints + Li.e[j++].offset;
+  }
+  ap_la_tree_work_setup(&P->T, P->lmax, &ws->W);
+  if (P->comp) ap_la_comp_work_setup(&P->T, &ws->CW);
   ap_arena_fill_guards(&Ld, dbl);
   ap_arena_fill_guards(&Li, ints);
 }
@@ -261,7 +292,8 @@ void ap_tree_ws_init(const ap_tplan *P, double *dbl, int *ints, ap_tree_ws *ws) 
 /* The first entries of the two blocks are ws->S and ws->avoid (TREE_WS_DOUBLES, _INTS). */
 int ap_tree_ws_guard_msg(const ap_tree_ws *ws, const char *stage, char *msg, size_t len) {
   ap_arena Ld, Li;
-  ws_layout(ws->P, &Ld, &Li);
+  ap_la_work_array la[2 * AP_LA_WORK_ARRAYS_MAX];
+  ws_tables(ws->P, NULL, &Ld, &Li, la);
   if (ap_arena_guard_msg(&Ld, ws->S, stage, msg, len) != 0) return -1;
   return ap_arena_guard_msg(&Li, ws->avoid, stage, msg, len);
 }
