@@ -128,14 +128,23 @@ static void solve_G(const ap_sblocks *bl, ap_st *st, double *x) {
  * and floors come from the operator A y + a0 with its magnitudes (ops->amul: the sum of each
  * row's terms' magnitudes, |a0_r| included, which is taken out or swapped for |gamma_r|), two
  * sweeps, only then. */
+static double floor_geom(const ap_model *m, ap_data *d, ap_st *st) {
+  double g = 0.0;
+  for (int c = 0; c < m->k; c++) st->tk2[c] = m->vscale ? m->vscale[c] : 1.0;
+  st->ops->amul(st->ws, d, st->tk2, st->tb, st->tm);   /* sum_c |A_rc| vscale_c, + |a0_r| */
+  for (int r = 0; r < m->b; r++) g = fmax(g, st->tm[r] - fabs(d->a0[r]));
+  return g;
+}
+
 static int judge(const ap_model *m, ap_data *d, ap_st *st, int of_gamma) {
   const double *x = of_gamma ? d->gamma : d->a0;
-  double resid = of_gamma ? d->resid_gamma : d->resid_a0, scale = AP_TERMS_TINY + max_abs(x, m->b);
+  double fl = of_gamma ? AP_ROW_FLOOR_PER_S2 : AP_ROW_FLOOR_PER_S, terms = 0.0;
+  double resid = of_gamma ? d->resid_gamma : d->resid_a0;
+  /* below max|x| plus half the floor of the last partition (A's magnitudes move little
+   * between partitions): consistent, no sweep */
+  double scale = AP_TERMS_TINY + max_abs(x, m->b) + 0.5 * fl * st->floor_geom;
   if (!(resid > consistency_rtol * scale)) return AP_OK;
-  double fl = of_gamma ? AP_ROW_FLOOR_PER_S2 : AP_ROW_FLOOR_PER_S, floor = 0.0, terms = 0.0;
-  for (int c = 0; c < m->k; c++) st->tk2[c] = m->vscale ? m->vscale[c] : 1.0;
-  st->ops->amul(st->ws, d, st->tk2, st->tb, st->tm);   /* the floors f_r: sum |A_rc| vscale_c */
-  for (int r = 0; r < m->b; r++) floor = fmax(floor, fl * (st->tm[r] - fabs(d->a0[r])));
+  double floor = fl * floor_geom(m, d, st);
   st->ops->amul(st->ws, d, of_gamma ? d->vdot : d->v, st->tb, st->tm);   /* the terms t_r */
   for (int r = 0; r < m->b; r++)
     terms = fmax(terms, st->tm[r] + (of_gamma ? fabs(x[r]) - fabs(d->a0[r]) : 0));
@@ -152,6 +161,7 @@ int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   int rc = st->ops->position(m, d, st->ws, 1);
   if (rc != AP_OK) return rc;
   st->chosen = 1;
+  st->floor_geom = floor_geom(m, d, st);
   rc = judge(m, d, st, 0);
   /* a row that no speed moves: named as on the dense path (partition.c) */
   if (rc == AP_ERR_INCONSISTENT) ap_core_refuse_vanishing_rows(m, d);

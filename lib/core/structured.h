@@ -59,6 +59,8 @@ typedef struct ap_st {
   double *tl, *te;            /* (k), (k) */
   double *tm;                 /* (b) */
   int chosen;                 /* a partition was chosen (ap_st_partition) */
+  double floor_geom;          /* max_r sum_c |A_rc| vscale_c at the last partition: the rows'
+                                 floors of the consistency judge (core.h), 0 before */
 } ap_st;
 
 int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out);
