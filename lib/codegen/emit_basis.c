@@ -38,13 +38,27 @@ static void guard(cg_gen *G, const char *cond, cg_v x) {
   cg_printf(G, "  if (!(%s)) return 1;\n", c);
 }
 
-/* A traced select: c ? a : b, c the text of an int. */
-static cg_v select(cg_gen *G, const char *c, cg_v a, cg_v b) {
-  char x[48], y[48];
-  cg_text(&a, x, sizeof x), cg_text(&b, y, sizeof y);
-  cg_v r = {CG_TEMP, 0.0, G->ntemp++, 0, 0};
-  cg_printf(G, "  const double t%d = %s ? %s : %s;\n", r.id, c, x, y);
-  return r;
+/* A run-time branch of the library's (an early return, a tau of 0) in straight-line code: the
+ * n values x get mutable copies ("double t = x;"), which the block "if (nz) { ... }" assigns
+ * (block_end); outside, x are the copies. */
+static void block_begin(cg_gen *G, const char *nz, int n, cg_v *x, int *ids) {
+  char t[48];
+  for (int i = 0; i < n; i++) {
+    ids[i] = G->ntemp++;
+    cg_text(&x[i], t, sizeof t);
+    cg_printf(G, "  double t%d = %s;\n", ids[i], t);
+  }
+  cg_printf(G, "  if (%s) {\n", nz);
+}
+
+static void block_end(cg_gen *G, int n, const cg_v *res, const int *ids, cg_v *x) {
+  char t[48];
+  for (int i = 0; i < n; i++) {
+    cg_text(&res[i], t, sizeof t);
+    cg_printf(G, "  t%d = %s;\n", ids[i], t);
+    x[i] = (cg_v){CG_TEMP, 0.0, ids[i], 0, 0};
+  }
+  cg_printf(G, "  }\n");
 }
 
 /* house (x: n traced entries): the plain-sum branch, or, when x_1.. are exactly zero (a row
@@ -66,29 +80,49 @@ static cg_v house(cg_gen *G, int n, cg_v *x, char *nz) {
   for (int i = 1; i < n; i++)
     cg_text(&x[i], t, sizeof t), cg_printf(G, "%s%s == 0.0", i > 1 ? " && " : "", t);
   cg_printf(G, ")) return 1;\n");
+  cg_v *res = malloc(((size_t)n + 1) * sizeof *res);
+  int *ids = malloc(((size_t)n + 1) * sizeof *ids);
+  if (!res || !ids) {
+    free(res), free(ids), G->fail = 1;
+    return cg_const(0.0);
+  }
+  memcpy(res, x, (size_t)n * sizeof *x), res[n] = cg_const(0.0);   /* x, then tau */
+  block_begin(G, nz, n + 1, res, ids);
   cg_v beta = cg_call(G, "sqrt", aa);
   cg_text(&alpha, a, sizeof a), cg_text(&beta, t, sizeof t);
   cg_v sb = {CG_TEMP, 0.0, G->ntemp++, 0, 0};
   cg_printf(G, "  const double t%d = %s >= 0.0 ? -%s : %s;\n", sb.id, a, t, t);
-  cg_v tau = select(G, nz, cg_div(G, SUB(sb, alpha), sb), cg_const(0.0)), d = SUB(alpha, sb);
+  cg_v tau = cg_div(G, SUB(sb, alpha), sb), d = SUB(alpha, sb), out[1];
   cg_text(&d, t, sizeof t);
-  cg_printf(G, "  if (%s && !(fabs(%s) >= 0x1p-1000)) return 1;\n", nz, t);
+  cg_printf(G, "  if (!(fabs(%s) >= 0x1p-1000)) return 1;\n", t);
   cg_v rs = cg_div(G, cg_const(1.0), d);
-  for (int i = 1; i < n; i++) x[i] = select(G, nz, MUL(x[i], rs), x[i]);
-  x[0] = select(G, nz, sb, alpha);
-  return tau;
+  cg_v *nx = malloc(((size_t)n + 1) * sizeof *nx);
+  if (!nx) {
+    free(res), free(ids), G->fail = 1;
+    return cg_const(0.0);
+  }
+  for (int i = 1; i < n; i++) nx[i] = MUL(x[i], rs);
+  nx[0] = sb, nx[n] = tau;
+  block_end(G, n + 1, nx, ids, res);
+  memcpy(x, res, (size_t)n * sizeof *x), out[0] = res[n];
+  free(res), free(ids), free(nx);
+  return out[0];
 }
 
 /* house_apply; nz: the run-time "tau is not 0" (c unchanged otherwise, as the library's early
  * return), "" when tau is a constant. */
 static void house_apply(cg_gen *G, int n, const cg_v *v, cg_v tau, const char *nz, cg_v *c) {
   if (tau.kind == CG_CONST && tau.c == 0.0) return;
-  cg_v s = c[0];
+  int ids[64];
+  cg_v old[64];
+  if (nz[0]) memcpy(old, c, (size_t)n * sizeof *c), block_begin(G, nz, n, old, ids);
+  cg_v s = c[0], res[64];
   for (int i = 1; i < n; i++) s = ADD(s, MUL(v[i], c[i]));
   s = MUL(s, tau);
-  c[0] = nz[0] ? select(G, nz, SUB(c[0], s), c[0]) : SUB(c[0], s);
-  for (int i = 1; i < n; i++)
-    c[i] = nz[0] ? select(G, nz, SUB(c[i], MUL(s, v[i])), c[i]) : SUB(c[i], MUL(s, v[i]));
+  res[0] = SUB(c[0], s);
+  for (int i = 1; i < n; i++) res[i] = SUB(c[i], MUL(s, v[i]));
+  if (nz[0]) block_end(G, n, res, ids, c);
+  else memcpy(c, res, (size_t)n * sizeof *c);
 }
 
 /* c (r) = R^-1 c, by reciprocals (rinv) or, when rinv is NULL, divisions. */
