@@ -94,6 +94,8 @@ int cg_free_speeds(const ap_bmodel *M);
  * cg_basis_supported, the partitioned basis and particular solution at the model's sizes
  * (apc_basis, apc_particular; emit_basis.c). */
 int cg_basis_supported(const ap_bmodel *M);
+/* The rank the generated basis is made for: min(b, k) (rows of full rank). */
+int cg_basis_rank(int b, int k);
 void cg_emit_basis(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
 
 /* The whole translation unit for a model (emit_vel.c): NULL when out of memory. */

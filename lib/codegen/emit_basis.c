@@ -2,10 +2,10 @@
  * (ap_la_partition_basis without a condition estimate, ap_la_partition_particular) on traced
  * values at the model's fixed sizes, and the stages' one finiteness check each.
  *
- * Basis: the QR of the dependent columns Ad = A[:, perm[0..r-1]] (b x r, r = b: the generated
- * path takes full-rank rows only), then C = R^-1 Q^T [A_i a0], B = P [-C ; I], b0 = P [-c0 ; 0],
- * with the growth max |C_ij| and the residual of the redundant rows (none at r = b). The
- * partition perm is a run-time input: columns are gathered through it, so a partition change
+ * Basis: the QR of the dependent columns Ad = A[:, perm[0..r-1]] (b x r, r = min(b, k): the
+ * generated path takes rows of full rank only), then C = R^-1 Q^T [A_i a0], B = P [-C ; I],
+ * b0 = P [-c0 ; 0], with the growth max |C_ij| and the residual of the redundant rows (rows r..
+ * of Q^T [A_i a0]). The partition perm is a run-time input: columns are gathered through it, so a partition change
  * along a run needs no new code. It mirrors max_col_norm, house, house_apply, qr_native,
  * diag_ok and qr_solve_native (linalg/householder.inc) operation by operation, taking the
  * branch those take on ordinary numbers (sums of squares inside the normal range, pivots away
@@ -153,7 +153,7 @@ static cg_v gather(cg_gen *G, const char *arr, int col, int i) {
 }
 
 static void emit_basis(cg_gen *G, int b, int k, cg_v *F, cg_v *C) {
-  int r = b, l = k - b, nc = l + 1;
+  int r = cg_basis_rank(b, k), l = k - r, nc = l + 1;
   cg_printf(G, "int apc_basis(const int *perm, const double *A, const double *a0, double *F, "
             "double *tau, double *B, double *b0, double *growth, double *resid) {\n"
             "  const double *a = a0;\n");
@@ -219,7 +219,7 @@ static void emit_basis(cg_gen *G, int b, int k, cg_v *F, cg_v *C) {
 }
 
 static void emit_particular(cg_gen *G, int b, int k, cg_v *F, cg_v *c) {
-  int r = b;
+  int r = cg_basis_rank(b, k);
   cg_printf(G, "int apc_particular(const int *perm, const double *F, const double *tau, "
             "const double *gamma, double *w, double *resid) {\n"
             "  const double *c = gamma, *u = tau;\n");
@@ -241,7 +241,9 @@ static void emit_particular(cg_gen *G, int b, int k, cg_v *F, cg_v *c) {
   cg_printf(G, "  return 0;\n}\n\n");
 }
 
-int cg_basis_supported(const ap_bmodel *M) { return M->b > 0 && M->b <= M->k && M->b <= 64; }
+int cg_basis_rank(int b, int k) { return b < k ? b : k; }
+
+int cg_basis_supported(const ap_bmodel *M) { return M->b > 0 && M->b <= 64; }
 
 /* One sum of magnitudes over the listed arrays' entries (those with a NULL or non-constant
  * structure entry). */
