@@ -5,8 +5,8 @@
  *   - one ap_forward at the initial state and at three perturbed states (q, v moved by up to
  *     5%): v', q', g, h, A, a0, B, b0, w, G (its Cholesky factor), Phi, e'' (the generated
  *     code performs the interpreted code's operations in the same order, so the two agree to
- *     the last bit up to the sign of a zero); the last state with condition estimates, which send the
- *     acceleration stage back to the core's own (the compiled stage's fallback);
+ *     the last bit up to the sign of a zero); the last state with condition estimates, which
+ *     send the acceleration stage back to the core's own (the compiled stage's fallback);
  *   - a whole run of up to 0.5 s with the scene's settings: the final q and v and the number of
  *     steps.
  * A model the generator does not take stays interpreted with a notice naming why (counted; none

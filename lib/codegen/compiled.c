@@ -79,8 +79,8 @@ static int fast_finite(const ap_model *m, ap_data *d, int stage) {
 }
 
 /* The generated basis where the library's ap_la_partition_basis would run its native kernels
- * on rows of full rank (r = min(b, k)); otherwise, and on any number the generated code does not take,
- * the library's routine runs. */
+ * on rows of full rank (r = min(b, k)); otherwise, and on any number the generated code does
+ * not take, the library's routine runs. */
 static int basis_taken(const ap_model *m, const ap_data *d) {
   int lim = ap_la_small_limit();
   return d->rank == cg_basis_rank(m->b, m->k) && m->k <= lim && m->b <= lim;

@@ -5,16 +5,18 @@
  * Basis: the QR of the dependent columns Ad = A[:, perm[0..r-1]] (b x r, r = min(b, k): the
  * generated path takes rows of full rank only), then C = R^-1 Q^T [A_i a0], B = P [-C ; I],
  * b0 = P [-c0 ; 0], with the growth max |C_ij| and the residual of the redundant rows (rows r..
- * of Q^T [A_i a0]). The partition perm is a run-time input: columns are gathered through it, so a partition change
- * along a run needs no new code. It mirrors max_col_norm, house, house_apply, qr_native,
- * diag_ok and qr_solve_native (linalg/householder.inc) operation by operation, taking the
- * branch those take on ordinary numbers (sums of squares inside the normal range, pivots away
- * from underflow); anywhere the library would take another branch (scaled norms, divisions in
- * place of reciprocals, a singular R11) the generated function returns 1 and the library's
- * routine runs on the same input and decides (and reports). So the results are the library's
- * to the last bit.
+ * of Q^T [A_i a0]). The partition perm is a run-time input: columns are gathered through it,
+ * so a partition change along a run needs no new code. It mirrors max_col_norm, house,
+ * house_apply, qr_native, diag_ok and qr_solve_native (linalg/householder.inc) operation by
+ * operation, taking the branch those take on ordinary numbers (sums of squares inside the
+ * normal range, pivots away from underflow) and the one of a column that is exactly zero below
+ * the diagonal (tau = 0: the reflector is skipped, a run-time branch in the generated code too);
+ * anywhere the library would take another branch (scaled norms, divisions in place of
+ * reciprocals, a singular R11) the generated function returns 1 and the library's routine runs
+ * on the same input and decides (and reports). So the results are the library's to the last
+ * bit, the sign of zeros included.
  * Particular: c = Q^T gamma, c = R^-1 c (divisions), w = P [c ; 0]; a Householder scalar tau
- * of 0 at run time (only the library's scaled branch makes one) returns 1 as well.
+ * of 0 at run time skips its reflector, as the library does.
  * Checks: the sum of |x| over every output of a stage that is not a constant (g's structural
  * entries, A, a0; h, Q, gamma): a rounded sum of magnitudes is at least each of them, so a sum
  * at most AP_HUGE means every entry is finite and at most AP_HUGE. Otherwise (a NaN, an Inf,
@@ -204,7 +206,8 @@ static void emit_basis(cg_gen *G, int b, int k, cg_v *F, cg_v *C) {
   char t[48];
   for (size_t i = 0; i < (size_t)b * r; i++)
     cg_text(&F[i], t, sizeof t), cg_printf(G, "  F[%zu] = %s;\n", i, t);
-  for (int i = 0; i < r; i++) cg_text(&tau[i], t, sizeof t), cg_printf(G, "  tau[%d] = %s;\n", i, t);
+  for (int i = 0; i < r; i++)
+    cg_text(&tau[i], t, sizeof t), cg_printf(G, "  tau[%d] = %s;\n", i, t);
   for (int j = 0; j < l; j++) {
     for (int i = 0; i < r; i++)
       cg_text(&C[i + (size_t)j * b], t, sizeof t),
@@ -236,7 +239,8 @@ static void emit_particular(cg_gen *G, int b, int k, cg_v *F, cg_v *c) {
   solve_upper(G, r, F, b, NULL, c);
   char t[48];
   for (int i = 0; i < k; i++) cg_printf(G, "  w[%d] = 0.0;\n", i);
-  for (int i = 0; i < r; i++) cg_text(&c[i], t, sizeof t), cg_printf(G, "  w[perm[%d]] = %s;\n", i, t);
+  for (int i = 0; i < r; i++)
+    cg_text(&c[i], t, sizeof t), cg_printf(G, "  w[perm[%d]] = %s;\n", i, t);
   max_abs(G, "resid", b - r, 1, c + r, b);
   cg_printf(G, "  return 0;\n}\n\n");
 }
