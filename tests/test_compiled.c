@@ -3,14 +3,16 @@
  * Every example scene and a few test scenes (a chain of tops on ball joints, loops, friction)
  * are loaded twice, with simulation.compile: never and always. Checked, within 1e-13 relative:
  *   - one ap_forward at the initial state and at three perturbed states (q, v moved by up to
- *     5%): v', q', g, h, A, a0, G (its Cholesky factor), Phi, e'' (the generated code performs
- *     the interpreted code's operations in the same order, so the two agree to the last bit up
- *     to the sign of a zero); the last state with condition estimates, which send the
- *     acceleration stage back to the core's own (the compiled stage's fallback);
+ *     5%): v', q', g, h, A, a0, B, b0, w, G (its Cholesky factor), Phi, e'' (the generated
+ *     code performs the interpreted code's operations in the same order, so the two agree to
+ *     the last bit up to the sign of a zero); the last state with condition estimates, which
+ *     send the acceleration stage back to the core's own (the compiled stage's fallback);
  *   - a whole run of up to 0.5 s with the scene's settings: the final q and v and the number of
  *     steps.
  * A model the generator does not take stays interpreted with a notice naming why (counted; none
  * of these; the tree path is such a model).
+ * Values that are not finite (a NaN coordinate or speed, a speed whose bias overflows) stop
+ * ap_forward with the interpreted path's status and message (the array and entry named).
  * Fallback: with no C compiler on PATH the scene loads interpreted with a one-line notice and
  * runs. Cache: a corrupt cached shared object is rejected and rebuilt; the cache directory is
  * created 0700. The cache is a fresh directory under /tmp (XDG_CACHE_HOME). */
@@ -76,9 +78,12 @@ static double forward_diff(const ap_model *mi, const ap_model *mc, const double 
     worst = fmax(worst, rel_diff(di->h, dc->h, k));
     worst = fmax(worst, rel_diff(di->A, dc->A, b * k));
     worst = fmax(worst, rel_diff(di->a0, dc->a0, b));
-    int l = di->l;   /* the acceleration stage's objects (compiled too) */
+    int l = di->l;   /* the basis and the acceleration stage's objects (compiled too) */
     if (dc->l != l) worst = INFINITY;
-    else if (l > 0)
+    else if (b > 0)
+      worst = fmax(worst, fmax(rel_diff(di->B, dc->B, k * l),
+                               fmax(rel_diff(di->b0, dc->b0, k), rel_diff(di->w, dc->w, k))));
+    if (dc->l == l && l > 0)
       worst = fmax(worst, fmax(rel_diff(di->G, dc->G, l * l),
                                fmax(rel_diff(di->Phi, dc->Phi, l), rel_diff(di->edd, dc->edd, l))));
   } else if (rc[0] == AP_OK) {
@@ -182,6 +187,70 @@ static int find_so(const char *dir, char *so, size_t len) {
   return found;
 }
 
+/* A value that is not finite (a NaN coordinate, a speed of 1e200 whose bias overflows, a NaN
+ * speed) stops ap_forward with the same status and the same message (array, entry, t) in both
+ * paths: the compiled path's one check per stage hands over to the core's per-array checks. */
+static void not_finite(const char *path) {
+  ap_scene *si = load(path, "never"), *sc = load(path, "always");
+  AP_CHECK(si && sc && ap_model_is_compiled(ap_scene_model(sc)));
+  if (!si || !sc) return;
+  const ap_model *ms[2] = {ap_scene_model(si), ap_scene_model(sc)};
+  int n = ap_model_n(ms[0]), k = ap_model_k(ms[0]);
+  for (int c = 0; c < 3; c++) {
+    ap_data *d[2] = {NULL, NULL};
+    int rc[2] = {-1, -2};
+    char msg[1024];
+    for (int s = 0; s < 2; s++) {
+      if (ap_data_create(ms[s], &d[s]) != AP_OK) break;
+      ap_scene_initial_state(si, d[s]->q, d[s]->v, NULL, 0, msg, sizeof msg);
+      rc[s] = ap_partition(ms[s], d[s]);
+      if (c == 0) d[s]->q[n - 1] = NAN;       /* the kinematics */
+      else if (c == 1)                        /* the bias overflows */
+        for (int i = 0; i < k; i++) d[s]->v[i] = 1e200;
+      else d[s]->v[k - 1] = NAN;              /* the bias */
+      d[s]->t = 0.25;
+      if (rc[s] == AP_OK) rc[s] = ap_forward(ms[s], d[s]);
+    }
+    if (d[0] && d[1]) {
+      printf("  not finite (%d): %d \"%s\" | %d \"%s\"\n", c, rc[0], d[0]->msg, rc[1],
+             d[1]->msg);
+      AP_CHECK(rc[0] == rc[1] && strcmp(d[0]->msg, d[1]->msg) == 0);
+      AP_CHECK(c == 0 || (rc[0] == AP_ERR_NAN && strstr(d[0]->msg, "produced")));
+    } else {
+      AP_CHECK(0);
+    }
+    ap_data_free(d[0]), ap_data_free(d[1]);
+  }
+  ap_scene_free(si), ap_scene_free(sc);
+}
+
+/* A user expression that stops being finite mid-run: the same status, time and message. */
+static void nan_run(const char *path) {
+  ap_scene *sc[2] = {load(path, "never"), load(path, "always")};
+  AP_CHECK(sc[0] && sc[1] && ap_model_is_compiled(ap_scene_model(sc[1])));
+  char msg[2][1024] = {"", ""};
+  int rc[2] = {0, 0};
+  double t[2] = {0, 0};
+  for (int s = 0; s < 2 && sc[0] && sc[1]; s++) {
+    const ap_model *m = ap_scene_model(sc[s]);
+    int n = ap_model_n(m);
+    double x[64];
+    ap_scene_run r;
+    ap_scene_get_run(sc[s], &r);
+    ap_sim *sim = NULL;
+    rc[s] = ap_scene_initial_state(sc[s], x, x + n, NULL, 0, msg[s], sizeof msg[s]);
+    if (rc[s] == AP_OK) rc[s] = ap_sim_create(m, &r.sim, r.t0, x, x + n, &sim, msg[s], 1024);
+    if (rc[s] == AP_OK) rc[s] = ap_sim_advance(sim, r.t_end);
+    if (sim) snprintf(msg[s], sizeof msg[s], "%s", ap_sim_message(sim)), t[s] = ap_sim_time(sim);
+    ap_sim_free(sim);
+  }
+  printf("  NaN torque: %d at t = %.17g \"%s\" | %d at t = %.17g \"%s\"\n", rc[0], t[0],
+         msg[0], rc[1], t[1], msg[1]);
+  AP_CHECK(rc[0] != AP_OK && rc[0] == rc[1] && t[0] == t[1] && strcmp(msg[0], msg[1]) == 0);
+  AP_CHECK(strstr(msg[0], "nan") != NULL);
+  ap_scene_free(sc[0]), ap_scene_free(sc[1]);
+}
+
 static void fallback_and_cache(const char *cache) {
   char disk[1200], dir[1500], so[1800], old_path[4096];
   snprintf(disk, sizeof disk, "%s/examples/scenes/rolling_disk.yaml", AP_SRCDIR);
@@ -255,6 +324,12 @@ int main(void) {
   }
   printf("compiled %d models, %d stayed interpreted\n", n_compiled, n_interpreted);
   AP_CHECK(n_compiled >= 30);
+  snprintf(dir, sizeof dir, "%s/examples/scenes/rolling_disk.yaml", AP_SRCDIR);
+  not_finite(dir);
+  snprintf(dir, sizeof dir, "%s/examples/scenes/bicycle.yaml", AP_SRCDIR);
+  not_finite(dir);
+  snprintf(dir, sizeof dir, "%s/tests/scenes/compiled_nan_torque.yaml", AP_SRCDIR);
+  nan_run(dir);
   fallback_and_cache(cache);
   char cmd[1300];   /* our own temporary directory, made by mkdtemp above */
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", cache);

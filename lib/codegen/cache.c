@@ -68,8 +68,13 @@ static int try_open(const char *path, const char *hash, cg_lib *out) {
   out->position = (cg_pos_fn)(uintptr_t)dlsym(h, "apc_position");
   out->velocity = (cg_vel_fn)(uintptr_t)dlsym(h, "apc_velocity");
   out->acceleration = (cg_acc_fn)(uintptr_t)dlsym(h, "apc_acceleration");
+  out->finite_pos = (cg_finite_fn)(uintptr_t)dlsym(h, "apc_finite_pos");
+  out->finite_vel = (cg_finite_fn)(uintptr_t)dlsym(h, "apc_finite_vel");
+  out->basis = (cg_basis_fn)(uintptr_t)dlsym(h, "apc_basis");   /* optional */
+  out->particular = (cg_part_fn)(uintptr_t)dlsym(h, "apc_particular");
   if (!got || strcmp(got, hash) != 0 || !out->position || !out->velocity ||
-      !out->acceleration) {
+      !out->acceleration || !out->finite_pos || !out->finite_vel ||
+      !out->basis != !out->particular) {
     dlclose(h);
     return -1;
   }

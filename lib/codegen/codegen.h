@@ -90,6 +90,14 @@ int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
  * speed fixed by the rows, as on a robot with prescribed wheel speeds). */
 int cg_free_speeds(const ap_bmodel *M);
 
+/* The stages' finiteness checks (apc_finite_pos, apc_finite_vel) and, when
+ * cg_basis_supported, the partitioned basis and particular solution at the model's sizes
+ * (apc_basis, apc_particular; emit_basis.c). */
+int cg_basis_supported(const ap_bmodel *M);
+/* The rank the generated basis is made for: min(b, k) (rows of full rank). */
+int cg_basis_rank(int b, int k);
+void cg_emit_basis(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
+
 /* The whole translation unit for a model (emit_vel.c): NULL when out of memory. */
 char *cg_source(const ap_bmodel *M, char *why, size_t len);
 
@@ -105,11 +113,20 @@ typedef int (*cg_acc_fn)(const double *g, const double *B, const double *Q, cons
                          double *tk2, double *G, double *gB, double *Phi, double *edd,
                          double *vdot, double *qdot);
 
+typedef int (*cg_finite_fn)(const double *a, const double *b, const double *c);
+typedef int (*cg_basis_fn)(const int *perm, const double *A, const double *a0, double *F,
+                           double *tau, double *B, double *b0, double *growth, double *resid);
+typedef int (*cg_part_fn)(const int *perm, const double *F, const double *tau,
+                          const double *gamma, double *w, double *resid);
+
 typedef struct cg_lib {
   void *handle;
   cg_pos_fn position;
   cg_vel_fn velocity;
   cg_acc_fn acceleration;
+  cg_finite_fn finite_pos, finite_vel;   /* 1: every output of the stage finite, <= AP_HUGE */
+  cg_basis_fn basis;                     /* NULL when the model has none (no rows) */
+  cg_part_fn particular;
   double ms_compile;     /* wall time of the compiler run (0 from the cache) */
   int from_cache;
 } cg_lib;

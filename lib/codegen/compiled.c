@@ -55,6 +55,55 @@ static int fast_acceleration(const ap_model *m, ap_data *d) {
   return rc == 0 ? AP_OK : AP_ERR_UNSUPPORTED;
 }
 
+/* The stage's one finiteness check (emit_basis.c). When it fails, the stage runs again
+ * interpreted (zeroed as the core zeroes it), so that the core's per-array checks find the
+ * entry the interpreted path finds: a NaN reaches entries the compiled code never computes
+ * (a product with a structural zero, folded away) in the interpreted code only. */
+static int fast_finite(const ap_model *m, ap_data *d, int stage) {
+  const cg_lib *L = &((const cg_fast *)ap_bm(m)->fast)->lib;
+  double *S = ((ap_scratch *)d->internal)->ev;
+  size_t k = (size_t)m->k, b = (size_t)m->b;
+  if (stage == 0) {
+    if (L->finite_pos(d->g, d->A, d->a0)) return 1;
+    memset(d->g, 0, sizeof(double) * k * k);
+    if (m->n != m->k) memset(d->N, 0, sizeof(double) * (size_t)m->n * k);
+    memset(d->A, 0, sizeof(double) * b * k), memset(d->a0, 0, sizeof(double) * b);
+    (void)ap_bm_position_interp(m, d, S);
+    return 0;
+  }
+  if (L->finite_vel(d->h, d->Q, d->gamma)) return 1;
+  memset(d->h, 0, sizeof(double) * k), memset(d->Q, 0, sizeof(double) * k);
+  memset(d->gamma, 0, sizeof(double) * b);
+  (void)ap_bm_velocity_interp(m, d, S);
+  return 0;
+}
+
+/* The generated basis where the library's ap_la_partition_basis would run its native kernels
+ * on rows of full rank (r = min(b, k)); otherwise, and on any number the generated code does
+ * not take, the library's routine runs. */
+static int basis_taken(const ap_model *m, const ap_data *d) {
+  int lim = ap_la_small_limit();
+  return d->rank == cg_basis_rank(m->b, m->k) && m->k <= lim && m->b <= lim;
+}
+
+static int fast_basis(const ap_model *m, ap_data *d, double *resid) {
+  const cg_lib *L = &((const cg_fast *)ap_bm(m)->fast)->lib;
+  ap_scratch *s = (ap_scratch *)d->internal;
+  if (!basis_taken(m, d) ||
+      L->basis(d->perm, d->A, d->a0, s->F, s->tau, d->B, d->b0, &d->growth, resid) != 0)
+    return AP_ERR_UNSUPPORTED;
+  return AP_OK;
+}
+
+static int fast_particular(const ap_model *m, ap_data *d) {
+  const cg_lib *L = &((const cg_fast *)ap_bm(m)->fast)->lib;
+  ap_scratch *s = (ap_scratch *)d->internal;
+  if (!basis_taken(m, d) || L->particular(d->perm, s->F, s->tau, d->gamma, d->w,
+                                          &d->resid_gamma) != 0)
+    return AP_ERR_UNSUPPORTED;
+  return AP_OK;
+}
+
 static void fast_destroy(ap_bm_fast *f) {
   cg_fast *F = (cg_fast *)f;
   if (F->lib.handle) dlclose(F->lib.handle);
@@ -101,5 +150,10 @@ int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notic
   F->base.destroy = fast_destroy;
   ((ap_bmodel *)ap_bm(m))->fast = &F->base;   /* the model's evaluation strategy */
   ((ap_model *)m)->ev.acceleration = fast_acceleration;
+  ((ap_model *)m)->ev.finite = fast_finite;
+  if (F->lib.basis) {
+    ((ap_model *)m)->ev.basis = fast_basis;
+    ((ap_model *)m)->ev.particular = fast_particular;
+  }
   return 1;
 }

@@ -168,8 +168,7 @@ int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos) {
     for (int i = 0; i < k; i++) vdot[i] = ADD(vdot[i], w[i]);
   }
   gemv(G, n, k, N, v, qdot);
-  store(G, "tk1", tk1, (size_t)k), store(G, "tk2", tk2, (size_t)k);
-  if (b) store(G, "gB", gB, kl);
+  /* tk1, tk2 and gB are the core's temporaries, read by nothing after the stage: not stored */
   store(G, "G", Gm, (size_t)l * l), store(G, "Phi", Phi, (size_t)(b ? l : k));
   store(G, "edd", edd, (size_t)l), store(G, "vdot", vdot, (size_t)k);
   store(G, "qdot", qdot, (size_t)n);

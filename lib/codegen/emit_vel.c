@@ -155,9 +155,10 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
             "const double *h, const double *w, const double *N, const double *v, double *tk1, "
             "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
             "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "
-            "(void)gB, (void)Phi;\n");
+            "(void)gB, (void)Phi, (void)tk1, (void)tk2;\n");
   if (!G.fail) cg_kin_acceleration(&G, M, gpos);
-  cg_printf(&G, "  return 0;\n}\n");
+  cg_printf(&G, "  return 0;\n}\n\n");
+  if (!G.fail) cg_emit_basis(&G, M, gpos);
   free(gpos);
   free(K.base), free(K.sh), free(K.wr), free(K.out), free(K.owr);
   if (G.fail) {

@@ -69,6 +69,17 @@ typedef struct ap_evaluator {
    * build, the same operations as fwd_acceleration's at the model's sizes; AP_ERR_UNSUPPORTED
    * when it does not take this evaluation (then the core's own runs and reports). */
   int (*acceleration)(const ap_model *m, ap_data *d);
+  /* Optional (compiled models), double build: 1 when every output of a stage (0, position: g,
+   * A, a0; 1, velocity: h, Q, gamma) is finite and at most AP_HUGE in magnitude (one pass);
+   * 0: the core runs its per-array checks, which name the array and entry (the hook may have
+   * evaluated the stage again, as the interpreted path does, so they name the same entry). */
+  int (*finite)(const ap_model *m, ap_data *d, int stage);
+  /* Optional (compiled models), double build: ap_la_partition_basis without a condition
+   * estimate (F, tau, B, b0, growth, *resid) and ap_la_partition_particular (w, resid_gamma)
+   * at the model's sizes, with the same results; AP_ERR_UNSUPPORTED when not taken (then the
+   * linalg routine runs and reports). */
+  int (*basis)(const ap_model *m, ap_data *d, double *resid);
+  int (*particular)(const ap_model *m, ap_data *d);
 } ap_evaluator;
 
 struct ap_model {

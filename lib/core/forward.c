@@ -95,9 +95,14 @@ static int basis_partitioned(const ap_model *m, ap_data *d) {
   double resid = 0.0;
   double *rcond = d->estimate_cond ? &d->rcond_R : NULL;   /* not in the hot path */
   if (!rcond) d->rcond_R = 1.0;
-  int rc = AP_SC(ap_la_partition_basis)(m->b, m->k, d->rank, d->perm, d->A, d->a0, s->F,
-                                        s->tau, d->B, d->b0, &d->growth, rcond, &resid,
-                                        s->work, s->iwork);
+  int rc = AP_ERR_UNSUPPORTED;
+#ifndef AP_SC_COMPLEX
+  if (!rcond && m->ev.basis) rc = m->ev.basis(m, d, &resid);   /* a compiled model's */
+#endif
+  if (rc == AP_ERR_UNSUPPORTED)
+    rc = AP_SC(ap_la_partition_basis)(m->b, m->k, d->rank, d->perm, d->A, d->a0, s->F, s->tau,
+                                      d->B, d->b0, &d->growth, rcond, &resid, s->work,
+                                      s->iwork);
   d->cnt.qr++;
   d->resid_a0 = resid;
   if (rc != AP_OK || d->rcond_R < 1e-14) {
@@ -161,6 +166,9 @@ static int position_evaluator(const ap_model *m, ap_data *d) {
   memset(d->a0, 0, sizeof(ap_sc) * (size_t)m->b);
   int rc = m->ev.AP_SC(position)(m, d, SCRATCH(d)->ev);
   if (rc != AP_OK) return rc;
+#ifndef AP_SC_COMPLEX
+  if (m->ev.finite && m->ev.finite(m, d, 0)) return AP_OK;   /* a compiled model's one check */
+#endif
   rc = AP_SC(ap_core_check_finite)(m, d, "metric", d->g, m->k, m->k);
   if (rc == AP_OK) rc = AP_SC(ap_core_check_finite)(m, d, "constraint", d->A, m->b, m->k);
   if (rc == AP_OK) rc = AP_SC(ap_core_check_finite)(m, d, "constraint (a0)", d->a0, m->b, 1);
@@ -269,6 +277,9 @@ static int velocity_evaluator(const ap_model *m, ap_data *d) {
   memset(d->Q, 0, sizeof(ap_sc) * (size_t)k);
   memset(d->gamma, 0, sizeof(ap_sc) * (size_t)m->b);
   int rc = m->ev.AP_SC(velocity)(m, d, SCRATCH(d)->ev);
+#ifndef AP_SC_COMPLEX
+  if (rc == AP_OK && m->ev.finite && m->ev.finite(m, d, 1)) return AP_OK;   /* one check */
+#endif
   if (rc == AP_OK) rc = AP_SC(ap_core_check_finite)(m, d, "bias", d->h, k, 1);
   if (rc == AP_OK) rc = AP_SC(ap_core_check_finite)(m, d, "force", d->Q, k, 1);
   if (rc == AP_OK) rc = AP_SC(ap_core_check_finite)(m, d, "gamma", d->gamma, m->b, 1);
@@ -277,13 +288,14 @@ static int velocity_evaluator(const ap_model *m, ap_data *d) {
 
 static int particular(const ap_model *m, ap_data *d) {
   ap_scratch *s = SCRATCH(d);
-  int rc;
+  int rc = AP_ERR_UNSUPPORTED;
 #ifndef AP_SC_COMPLEX
+  if (d->basis == AP_BASIS_PARTITIONED && m->ev.particular) rc = m->ev.particular(m, d);
   if (d->basis == AP_BASIS_ORTHONORMAL)
     rc = ap_la_orth_particular(m->b, m->k, d->rank, s->F, s->jpvt, s->Qf, d->gamma, d->w,
                                &d->resid_gamma, s->work);
-  else
 #endif
+  if (rc == AP_ERR_UNSUPPORTED)   /* not a compiled model's (lib/codegen) */
     rc = AP_SC(ap_la_partition_particular)(m->b, m->k, d->rank, d->perm, s->F, s->tau,
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)

@@ -14,17 +14,17 @@
 #include "model/con_friction.h"
 #include "model/model.h"
 
-int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S) {
+static int bm_position(const ap_model *m, ap_data *d, ap_sc *S, const ap_bm_fast *F) {
   const ap_bmodel *M = ap_bm(m);
   d->cnt.metric++;
   d->cnt.kinematic += M->n != M->k;
   d->cnt.constraint += M->b > 0;
   d->cnt.rheonomic += M->rheonomic;
 #ifndef AP_SC_COMPLEX
-  const ap_bm_fast *F = M->fast;   /* compiled kinematics and g (lib/codegen) */
   int rc = F ? F->position(F, m, d, S) : ap_kin_position(m, d, d->t, d->q, S);
   if (F && rc == AP_OK && M->nwheel) rc = ap_contact_position(m, d, d->t, S);
 #else
+  (void)F;
   int rc = ap_kin_position(m, d, d->t, d->q, S);
 #endif
   if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
@@ -39,19 +39,24 @@ int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S) {
   return M->b ? ap_con_rows(m, d, d->t, d->q, S, d->A, d->a0) : AP_OK;
 }
 
-int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S) {
+int ap_bm_position(const ap_model *m, ap_data *d, ap_sc *S) {
+  return bm_position(m, d, S, ap_bm(m)->fast);   /* compiled kinematics (lib/codegen) */
+}
+
+static int bm_velocity(const ap_model *m, ap_data *d, ap_sc *S, const ap_bm_fast *F) {
   const ap_bmodel *M = ap_bm(m);
   d->cnt.bias++;
   d->cnt.force += M->ne > 0;
   d->cnt.gamma += M->b > 0;
 #ifndef AP_SC_COMPLEX
-  if (M->fast) {
-    M->fast->velocity(M->fast, d->v, S, d->h);
+  if (F) {
+    F->velocity(F, d->v, S, d->h);
   } else {
     ap_kin_velocity(M, d->v, S);
     ap_kin_bias(M, S, d->h);
   }
 #else
+  (void)F;
   ap_kin_velocity(M, d->v, S);
   ap_kin_bias(M, S, d->h);
 #endif
@@ -62,6 +67,20 @@ int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S) {
 #endif
   return rc;
 }
+
+int ap_bm_velocity(const ap_model *m, ap_data *d, ap_sc *S) {
+  return bm_velocity(m, d, S, ap_bm(m)->fast);
+}
+
+#ifndef AP_SC_COMPLEX
+int ap_bm_position_interp(const ap_model *m, ap_data *d, double *S) {
+  return bm_position(m, d, S, NULL);
+}
+
+int ap_bm_velocity_interp(const ap_model *m, ap_data *d, double *S) {
+  return bm_velocity(m, d, S, NULL);
+}
+#endif
 
 /* ---- implicit holonomic constraints for the DAE mode (GGL) ----------------------------------
  *

@@ -476,6 +476,11 @@ int ap_bm_phi(const ap_model *m, ap_data *d, ap_sc *S, ap_sc *phi, ap_sc *Phi_q)
 
 /* ---- double build only: compile, projection, energies, contact forces -------------------- */
 #ifndef AP_SC_COMPLEX
+/* The position and velocity stages with the interpreted kinematics even when the model is
+ * compiled (lib/codegen re-evaluates a stage whose one check failed, so that the core's checks
+ * name the entry the interpreted path names). */
+int ap_bm_position_interp(const ap_model *m, ap_data *d, double *S);
+int ap_bm_velocity_interp(const ap_model *m, ap_data *d, double *S);
 int ap_bm_project_q(const ap_model *m, ap_data *d, double *q, double *S, double *change);
 /* The same with track = 0: no check of the contact direction between accepted steps, and the
  * tracking is reset (for assembling states by hand). */

@@ -6,6 +6,9 @@
  *   difftest [--models N] [--seed S] [--save DIR] [--quiet]   random models S, S+1, ...
  *            [--no-shrink] [--print]   (report as found; --save then writes them unshrunk)
  *            [--contacts]              (some rolling contacts get contact modes)
+ *            [--compiled]              (each model also compiled, compared with the
+ *                                      interpreted run: compiled.c; exit 77 without a
+ *                                      C compiler)
  *                                      (print each model's scene, run nothing)
  *   difftest SCENE|DIR ...                                     scenes (every *.yaml of a DIR)
  *
@@ -21,6 +24,7 @@
 #include <time.h>
 
 #include "compare.h"
+#include "compiled.h"
 #include "gen.h"
 
 enum { TEXT_LEN = 32768 };
@@ -49,10 +53,23 @@ static void print_worst_by(const tally *t) {
   printf("\n");
 }
 
+static int compiled_too;   /* --compiled */
+static dt_ctally ctally;
+
+/* dt_check, and with --compiled the compiled model against the interpreted one. */
+static void check_model(const char *text, const dt_opts *o, dt_result *r, int count) {
+  dt_check(text, o, r);
+  if (!compiled_too) return;
+  dt_cresult c;
+  dt_check_compiled(text, o, &c);
+  dt_compiled_merge(&c, r);
+  if (count) dt_compiled_add(&ctally, &c);
+}
+
 static int fails(const dt_model *m, const dt_opts *o, char *text) {
   dt_result r;
   dt_write(m, NULL, text, TEXT_LEN);
-  dt_check(text, o, &r);
+  check_model(text, o, &r, 0);
   return r.verdict == DT_DISAGREE;
 }
 
@@ -116,7 +133,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
       continue;
     }
     o.expect_tree = m->expect_tree;
-    dt_check(text, &o, &r);
+    check_model(text, &o, &r, 1);
     char name[32];
     snprintf(name, sizeof name, "seed %llu", seed + (unsigned long long)i);
     add(&t, &r, name);
@@ -127,7 +144,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
     if (r.verdict == DT_DISAGREE && !no_shrink) {
       o.expect_tree = -1;
       shrink(m, &o, text);
-      dt_check((dt_write(m, NULL, text, TEXT_LEN), text), &o, &r);
+      check_model((dt_write(m, NULL, text, TEXT_LEN), text), &o, &r, 0);
       printf("  shrunk to %d bodies:\n%s", dt_live_bodies(m), r.what);
       if (dir) save(dir, m, &r, text);
     } else if (r.verdict == DT_DISAGREE && dir) {
@@ -142,6 +159,7 @@ static int random_models(long models, unsigned long long seed, const char *dir, 
          t.count[0], t.count[1], t.count[2], t.count[3], t.runs,
          (double)(clock() - c0) / CLOCKS_PER_SEC, t.worst, t.worst_what);
   print_worst_by(&t);
+  if (compiled_too) dt_compiled_print(&ctally);
   free(text), free(m);
   return t.count[DT_DISAGREE] > 0;
 }
@@ -162,7 +180,7 @@ static int one_scene(const char *path, tally *t) {
   }
   dt_opts o = dt_opts_default();
   dt_result r;
-  dt_check(text, &o, &r);
+  check_model(text, &o, &r, 1);
   add(t, &r, path);
   printf("%s: %s (%d runs, worst %.2g %s)\n%s", path,
          (const char *[]){"agree", "refused", "stopped", "DISAGREE"}[r.verdict], r.runs, r.worst,
@@ -198,6 +216,7 @@ static int scenes(int argc, char **argv) {
   printf("difftest: %ld scenes: %ld agree, %ld refused, %ld stopped, %ld disagree; %ld "
          "simulations\n", t.models, t.count[0], t.count[1], t.count[2], t.count[3], t.runs);
   print_worst_by(&t);
+  if (compiled_too) dt_compiled_print(&ctally);
   return bad;
 }
 
@@ -211,17 +230,23 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[a], "--no-shrink")) no_shrink = 1;
     else if (!strcmp(argv[a], "--print")) print_only = 1;
     else if (!strcmp(argv[a], "--contacts")) dt_gen_contacts = 1;
+    else if (!strcmp(argv[a], "--compiled")) compiled_too = 1;
     else if (a + 1 < argc && !strcmp(argv[a], "--models")) models = atol(argv[++a]);
     else if (a + 1 < argc && !strcmp(argv[a], "--seed")) seed = strtoull(argv[++a], NULL, 10);
     else if (a + 1 < argc && !strcmp(argv[a], "--save")) dir = argv[++a];
     else {
       fprintf(stderr, "usage: difftest [--models N] [--seed S] [--save DIR] [--quiet] "
-              "[--no-shrink] [--print] [--contacts] | "
+              "[--no-shrink] [--print] [--contacts] [--compiled] | "
               "difftest SCENE|DIR ...\n");
       return 2;
     }
   }
   setvbuf(stdout, NULL, _IOLBF, 0);
+  char why[600];
+  if (compiled_too && !print_only && !dt_compiler_works(why, sizeof why)) {
+    printf("difftest: --compiled skipped: no model can be compiled here (%s)\n", why);
+    return 77;   /* meson's skip code */
+  }
   if (a < argc) return scenes(argc - a, argv + a);
   const char *env = getenv("APPELL_DIFFTEST_MODELS");
   if (env && *env) models = atol(env);
