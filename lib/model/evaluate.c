@@ -524,16 +524,8 @@ static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, in
                        const double *lam, ap_contact_force *out) {
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d);
-  kbody C = ap_kin_body(M, S, c->def.body);
   memset(out, 0, sizeof *out);
-  if (c->wheel >= 0) {
-    kwheel W = ap_contact_geom(M, S, c);
-    for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + W.rc[i];
-  } else {   /* a plane-contact body: the joint's contact vector */
-    kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);
-    for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + J.rc[i];
-    out->point[2] = 0.0;
-  }
+  ap_bm_contact_point(M, S, c, out->point);
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
   out->force[2] = out->normal;

@@ -90,7 +90,7 @@ static int group_contact(const ap_bmodel *M, const lgroup *g, const ap_mcon *c) 
   return c->wheel >= 0 || is_plane_root(M, c->def.body);
 }
 
-static void contact_point(const ap_bmodel *M, double *S, const ap_mcon *c, double *p) {
+void ap_bm_contact_point(const ap_bmodel *M, double *S, const ap_mcon *c, double *p) {
   kbody C = ap_kin_body(M, S, c->def.body);
   if (c->wheel < 0) {   /* a plane-contact body: the joint's contact vector */
     kjoint J = ap_kin_joint(M, S, M->bodies[c->def.body].joint);
@@ -190,7 +190,7 @@ static int contacts_of(const ap_bmodel *M, double *S, const lgroup *g, double *c
   for (int ci = 0; ci < M->nc; ci++) {
     const ap_mcon *w = &M->cons[ci];
     if (!group_contact(M, g, w)) continue;
-    contact_point(M, S, w, p);
+    ap_bm_contact_point(M, S, w, p);
     v3_axpy(1.0, p, c);
     if (zr && n < 64) zr[n] = w->wheel >= 0 ? w->row + w->hrow : -1;
     n++;
@@ -236,7 +236,7 @@ static int redistributed(const ap_model *m, const ap_data *d, const double *vd,
     const ap_mcon *w = &M->cons[ci];
     if (!group_contact(M, g, w)) continue;
     double a, b;
-    contact_point(M, S, w, p);
+    ap_bm_contact_point(M, S, w, p);
     if (!planar && w->wheel >= 0) {   /* the rows .z back out: redistributed */
       double f[3] = {0, 0, -lam[w->row + w->hrow]};
       ap_bm_add_force(f, p, c, Fc, Tc);

@@ -532,6 +532,8 @@ int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int
 /* 1 when rolling contact c is on a plane-contact body that a loop joins to a planar chassis
  * (diff_drive_loops.yaml): its load is then its share of that vehicle's, ap_bm_wheel_load. */
 int ap_bm_plane_in_group(const ap_bmodel *M, const ap_mcon *c);
+/* The contact point p (3, world) of a wheel contact or of a plane-contact body's contact. */
+void ap_bm_contact_point(const ap_bmodel *M, double *S, const ap_mcon *c, double *p);
 /* 1 when wheel contact c's normal force is its load, not its row's multiplier: a wheel under
  * a planar chassis (the joint holds the chassis up; the contact row .z vanishes). */
 int ap_bm_wheel_by_load(const ap_bmodel *M, const ap_mcon *c);
