@@ -254,15 +254,13 @@ static double test_onset(const char *mode, double tol, double ref) {
     find_tyres(&r, &ty);
     AP_CHECK_EQ_INT(ap_sim_advance(r.sim, ts + 1e-8), AP_OK);
     ap_event_record rec;
-    memset(&rec, 0, sizeof rec);
-    int n = ap_sim_event_count(r.sim);
-    if (n > 0) AP_CHECK_EQ_INT(ap_sim_event_get(r.sim, 0, &rec), AP_OK);
+    int n = runner_event(r.sim, 0, &rec);
     char want[64];
     snprintf(want, sizeof want, "%s.slip", WHEELS[first]);
     int sliding = ap_sim_contact_mode(r.sim, ty.c[first]) == AP_CONTACT_SLIDING;
     printf("  %s: without friction the %s ratio reaches mu = %g first, at t* = %.15g; with "
            "friction first event %s at %.15g (|t - t*| / t* = %.2g", mode, WHEELS[first], MU,
-           ts, n ? rec.name : "none", rec.t, fabs(rec.t - ts) / ts);
+           ts, rec.name, rec.t, fabs(rec.t - ts) / ts);
     if (isfinite(ref)) printf("; from minimal mode's t* %.2g", fabs(rec.t - ref) / ref);
     printf(", bound %.2g), sliding after: %d\n", tol, sliding);
     AP_CHECK(n >= 1 && strcmp(rec.name, want) == 0 && sliding);
@@ -342,11 +340,9 @@ static void test_axle(double kf, double t_end) {
   find_tyres(&r, &ty);
   int rc = ap_sim_advance(r.sim, t_end);
   AP_CHECK_EQ_INT(rc, AP_OK);
-  int n = ap_sim_event_count(r.sim);
   ap_event_record e0, e1;
-  memset(&e0, 0, sizeof e0), memset(&e1, 0, sizeof e1);
-  if (n > 0) ap_sim_event_get(r.sim, 0, &e0);
-  if (n > 1) ap_sim_event_get(r.sim, 1, &e1);
+  int n = runner_event(r.sim, 0, &e0);
+  runner_event(r.sim, 1, &e1);
   char w0[64], w1[64];
   snprintf(w0, sizeof w0, "%s.slip", WHEELS[first]);
   snprintf(w1, sizeof w1, "%s.slip", WHEELS[partner]);
@@ -360,7 +356,7 @@ static void test_axle(double kf, double t_end) {
   printf("  kf = %g N/m: the closed form's %s reaches mu first at %.4f s; the run: %s at %.6f s, "
          "%s at %.6f s (%d events by %g s); at %g s the %s axle slides (%d), the other rolls "
          "(%d); path radius v / yaw rate %.4f m (%.4f m while the tyres hold)\n", kf,
-         WHEELS[first], tq, n > 0 ? e0.name : "none", e0.t, n > 1 ? e1.name : "none", e1.t, n,
+         WHEELS[first], tq, e0.name, e0.t, e1.name, e1.t, n,
          t_end, t_end, first < 2 ? "rear" : "front", axle_sliding, other_rolling, v / wz,
          L_WB / tan(STEER));
   AP_CHECK(n >= 2 && strcmp(e0.name, w0) == 0 && strcmp(e1.name, w1) == 0);
