@@ -368,8 +368,10 @@ static void test_axle(double kf, double t_end) {
   qs_out o = qs_turn(tq, kf), o1 = qs_turn(tq + 1e-3, kf);
   double rate = (o1.ratio[first] - o.ratio[first]) / 1e-3;
   double bt = MU * qs_bound(tq, kf, first) / o.N[first] / rate;
-  printf("    first slip %.4f s from the closed form's crossing (bound %.3f s)\n",
-         fabs(e0.t - tq), bt);
+  double R = L_WB / tan(STEER), v_qs = o.omega * R, v_run = e0.v ? e0.v[5] * R : NAN;
+  printf("    first slip %.4f s from the closed form's crossing (bound %.3f s): at %.4f m/s, "
+         "the closed form's %.4f m/s (the rear-axle midpoint's speed)\n", fabs(e0.t - tq), bt,
+         v_run, v_qs);
   AP_CHECK_LE(fabs(e0.t - tq), bt);
   runner_stop(&r);
 }
