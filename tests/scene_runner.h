@@ -43,6 +43,16 @@ static inline int runner_start(runner *r, const char *file, const char *const *s
   return rc;
 }
 
+/* The simulation's event i into *rec (zeroed, name "none", when there is none); returns the
+ * number of events recorded. */
+static inline int runner_event(const ap_sim *s, int i, ap_event_record *rec) {
+  int n = ap_sim_event_count(s);
+  memset(rec, 0, sizeof *rec);
+  rec->name = "none";
+  if (i < n && ap_sim_event_get(s, i, rec) != AP_OK) rec->name = "none";
+  return n;
+}
+
 static inline void runner_stop(runner *r) {
   ap_sim_free(r->sim);
   ap_scene_free(r->sc);

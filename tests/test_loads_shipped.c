@@ -11,9 +11,8 @@
  *   bicycle, bicycle_falling                free, upright at rest (a planar rear frame cannot
  *                                           lean: no bicycle)
  *
- * Not here: diff_drive_loops (wheels on their own plane-contact joints, joined to the chassis
- * by horizontal loop closures): each wheel's load is its own weight and the chassis' stays in
- * its planar joint (docs/vehicles.md "Not yet"). m from the scenes' masses. Tolerance 1e-12 of m g: statics at one state, round-off only. */
+ * diff_drive_loops (wheels on their own plane-contact joints, joined to the chassis by loop
+ * closures) is in test_loads_loops.c. m from the scenes' masses. Tolerance 1e-12 of m g: statics at one state, round-off only. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

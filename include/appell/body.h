@@ -531,7 +531,8 @@ typedef struct ap_contact_force {
                               without it */
   int lift_off;            /* 1 when F_n < 0: the body would lift off (the model keeps it on
                               the plane regardless) */
-  ap_load_kind load;       /* how F_n is known; AP_LOAD_UNIQUE for a plane-contact body */
+  ap_load_kind load;       /* how F_n is known; AP_LOAD_UNIQUE for a plane-contact body (unless
+                              loops join it to a planar chassis: then its vehicle's share) */
   int ncontacts;           /* wheels: the contacts sharing the chassis' load (1 otherwise) */
 } ap_contact_force;
 

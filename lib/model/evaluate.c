@@ -521,15 +521,14 @@ static void finish_force(const ap_mcon *c, const double *lam, ap_contact_force *
   out->lift_off = out->normal < 0;
 }
 
-/* A wheel contact: its share of its chassis' load (loads.c). */
+/* A wheel contact, or a plane-contact body joined to a planar chassis by loops: its share of
+ * its vehicle's load (loads.c). */
 static int wheel_force(const ap_model *m, const ap_data *d, const ap_mcon *c, int ci,
                        const double *lam, ap_contact_force *out) {
   const ap_bmodel *M = ap_bm(m);
   double *S = ap_bm_scratch(d);
-  kwheel W = ap_contact_geom(M, S, c);
-  kbody C = ap_kin_body(M, S, c->def.body);
   memset(out, 0, sizeof *out);
-  for (int i = 0; i < 3; i++) out->point[i] = C.o[i] + W.rc[i];
+  ap_bm_contact_point(M, S, c, out->point);
   out->force[0] = lam[c->row], out->force[1] = lam[c->row + 1];
   int rc = ap_bm_wheel_load(m, d, lam, ci, &out->normal, &out->load, &out->ncontacts);
   out->force[2] = out->normal;
@@ -561,7 +560,8 @@ int ap_body_contact_force(const ap_model *m, const ap_data *d, const double *lam
   const double *lam = lambda ? lambda : d->lambda, *vd = d->vdot;
   double *S = ap_bm_scratch(d), ma[3] = {0, 0, 0}, Fe[3], Fc[3];
   if (c->wheel >= 0 && m->ops) return AP_ERR_UNSUPPORTED;   /* wheel loads: dense path only */
-  if (c->wheel >= 0) return wheel_force(m, d, c, constraint, lam, out);
+  if (c->wheel >= 0 || (!m->ops && ap_bm_plane_in_group(M, c)))
+    return wheel_force(m, d, c, constraint, lam, out);
   int root = c->def.body, k = M->k;
   /* tree path: the twists of v' in this call's own memory (d is shared: read only) */
   const ap_tree_ws *ws = m->ops ? ap_tree_ws_of(d) : NULL;

@@ -528,11 +528,17 @@ int ap_eff_subtree_wrench(const ap_bmodel *M, double *S, double t, const double 
 /* The same with the moment T about the world point o (T may be NULL). */
 int ap_con_subtree_wrench(const ap_bmodel *M, double *S, const double *lambda, int root,
                           int skip, const double *o, double *F, double *T);
-/* The normal load of wheel contact `constraint` (c->wheel >= 0) with multipliers lam, after
+/* The normal load of wheel contact `constraint` (c->wheel >= 0, or a plane-contact body in a
+ * planar chassis' group: ap_bm_plane_in_group) with multipliers lam, after
  * the pipeline at the data's state (v'): its share of what holds its chassis (loads.c), how it
  * is known, and how many contacts share it. */
 int ap_bm_wheel_load(const ap_model *m, const ap_data *d, const double *lam, int constraint,
                      double *normal, ap_load_kind *kind, int *count);
+/* 1 when rolling contact c is on a plane-contact body that a loop joins to a planar chassis
+ * (diff_drive_loops.yaml): its load is then its share of that vehicle's, ap_bm_wheel_load. */
+int ap_bm_plane_in_group(const ap_bmodel *M, const ap_mcon *c);
+/* The contact point p (3, world) of a wheel contact or of a plane-contact body's contact. */
+void ap_bm_contact_point(const ap_bmodel *M, double *S, const ap_mcon *c, double *p);
 /* 1 when wheel contact c's normal force is its load, not its row's multiplier: a wheel under
  * a planar chassis (the joint holds the chassis up; the contact row .z vanishes). */
 int ap_bm_wheel_by_load(const ap_bmodel *M, const ap_mcon *c);
