@@ -382,7 +382,7 @@ int ap_drv_stage_contacts(ap_sim *s, double *t) {
     if (mode == AP_CM_AIRBORNE && ap_contact_gap(M, S, c) > gap_tol(s))
       cm->armed[c - M->cons] = 1 + AP_CM_AIRBORNE;
   }
-  return AP_OK;
+  return ap_drv_contacts_watch(s);   /* CVODE BDF's Jacobian (contact_jac.c) */
 }
 
 int ap_drv_contacts_switched(ap_sim *s) {

@@ -113,17 +113,6 @@ static int check_initial(ap_sim *s, double t0, const double *q0, const double *v
   return AP_OK;
 }
 
-/* CVODE with contact modes: the differential tester found bdf 4e-3 off (0.81 in a speed) at
- * rtol 1e-8 on a sliding wheel where the explicit methods agree to 1e-10 (docs/testing.md,
- * "Contact modes"); not located, so the run says so instead of passing it off as checked. */
-static void cvode_contacts_warning(ap_sim *s) {
-  size_t used = strlen(s->warning);
-  snprintf(s->warning + used, sizeof s->warning - used, "%smethod %s with friction or lift-off "
-           "contacts is not verified (a sliding wheel came out 4e-3 off at rtol 1e-8 where the "
-           "explicit methods agree to 1e-10): prefer dop853 or dopri5", used ? "; " : "",
-           s->meth->name);
-}
-
 static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   int rc = check_initial(s, t0, q0, v0);
   ap_drv_pipeline_build(s);
@@ -159,8 +148,6 @@ static int setup(ap_sim *s, double t0, const double *q0, const double *v0) {
   if (rc == AP_OK) rc = ap_drv_evaluate_current(s);
   if (rc != AP_OK) return rc;
   ap_drv_pipeline_build(s);
-  if (s->cm && s->def.mode != AP_MODE_DAE && s->meth->backend == &ap_step_cvode)
-    cvode_contacts_warning(s);
   if (s->def.mode == AP_MODE_DAE) return ap_drv_setup_dae(s);
   return ap_drv_make_stepper(s, t0);
 }

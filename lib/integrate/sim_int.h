@@ -176,6 +176,9 @@ int ap_drv_contacts_switched(ap_sim *s);
 /* Contact impacts (contact_impact.c): the velocity jump at the touchdown of contact ci at
  * (t, q), v in and out, and the contact's mode after it. */
 int ap_drv_contact_impact(ap_sim *s, int ci, double t, const double *q, double *v);
+/* CVODE BDF: the sliding contacts' slip velocities to the stepper's Jacobian watch
+ * (contact_jac.c), from the contact modes' stage at an accepted state. */
+int ap_drv_contacts_watch(ap_sim *s);
 
 /* Inputs and controllers (sim_input.c): free them with the simulation; the time the next
  * internal step must stop at, for an advance to tout (events of t alone, controller

@@ -236,6 +236,7 @@ void ap_step_release(ap_stepper *s) {
   if (s->tmp) N_VDestroy((N_Vector)s->tmp);
   ap_nvp_free(s->pool);
   ap_ctx_give(s->ctx);   /* kept for the next stepper (sunctx.c) */
+  ap_step_jw_free(s);
   free(s->yacc);
   free(s);
 }

@@ -118,6 +118,13 @@ int ap_step_ark_jump(ap_stepper *s, double t, const double *y);
  * stepper can continue from it. */
 int ap_step_one(ap_stepper *s, double tstop, double *t, double *y);
 
+/* Watch m two-component vectors w (2 m numbers) whose inverse length scales part of f's
+ * Jacobian (a sliding contact's slip velocity s: its friction acts along s / |s|). Called
+ * after every accepted step with their values there. CVODE BDF makes its Jacobian again
+ * before the next step when one moved by more than half the shorter of its length now and
+ * where the Jacobian was made (stepper_jwatch.c); the other methods ignore it. AP_OK,
+ * AP_ERR_ARG, AP_ERR_NOMEM. */
+int ap_step_jacobian_watch(ap_stepper *s, int m, const double *w);
 /* Dense output: y at time t inside the last step. */
 int ap_step_dky(ap_stepper *s, double t, double *y);
 
@@ -172,6 +179,7 @@ struct ap_stepper {
   ap_step_stats base;    /* SUNDIALS counters accumulated before the last re-init */
   char sun_msg[256];     /* last message of SUNDIALS' error handler (never printed) */
   char msg[512];         /* last failure, for ap_step_message */
+  struct ap_step_jwatch *jw; /* ap_step_jacobian_watch's record (stepper_jwatch.c), or NULL */
 };
 
 /* The weight of component i (1 without weights) and the factor sqrt(n / number of nonzero
@@ -199,5 +207,12 @@ void ap_step_sun_message(ap_stepper *s, const char *function, const char *msg);
 int ap_step_fail(ap_stepper *s, int sun_flag, const char *flag_name);
 /* Accept the state the backend reached: s->t = t, yacc = y (SUNDIALS' vector contents). */
 void ap_step_accept(ap_stepper *s, double t, const double *y);
+/* stepper_jwatch.c, for the CVODE backend: 1 when the Jacobian must be made before the next
+ * step; after an accepted step, made = 1 when that step made it; at a re-init (the next
+ * step makes it where the watched values are unknown); free the record. */
+int ap_step_jw_force(const ap_stepper *s);
+void ap_step_jw_stepped(ap_stepper *s, int made);
+void ap_step_jw_reset(ap_stepper *s);
+void ap_step_jw_free(ap_stepper *s);
 
 #endif

@@ -176,6 +176,7 @@ static int cv_reinit(ap_stepper *s, double t, const double *y) {
   cv_counters(s, &now);
   s->base.steps += now.steps, s->base.err_fails += now.err_fails;
   memcpy(NV(s->tmp), y, sizeof(double) * (size_t)s->n);
+  ap_step_jw_reset(s);                           /* the first step makes the Jacobian */
   return CVodeReInit(s->mem, t, s->tmp);
 }
 
@@ -186,11 +187,31 @@ static int cv_reset(ap_stepper *s, double t, const double *y) {
   return AP_OK;
 }
 
+/* Jacobian evaluations of BDF's linear solver so far (0 for Adams). */
+static long cv_jac_evals(const ap_stepper *s) {
+  long nje = 0;
+  if (s->obj[1]) CVodeGetNumJacEvals(s->mem, &nje);
+  return nje;
+}
+
+/* CVODE's step with the Jacobian made first when ap_step_jacobian_watch asks for it (a new
+ * Newton matrix every step, and a new Jacobian, for this step only; 0 restores the defaults). */
+static int cv_step(ap_stepper *s, double tstop, realtype *tret) {
+  int force = ap_step_jw_force(s), flag = CV_SUCCESS;
+  long nje = cv_jac_evals(s);
+  if (force) flag = CVodeSetLSetupFrequency(s->mem, 1);
+  if (force && flag == CV_SUCCESS) flag = CVodeSetJacEvalFrequency(s->mem, 1);
+  if (flag == CV_SUCCESS) flag = CVode(s->mem, tstop, s->y, tret, CV_ONE_STEP);
+  if (force) CVodeSetLSetupFrequency(s->mem, 0), CVodeSetJacEvalFrequency(s->mem, 0);
+  if (flag >= 0) ap_step_jw_stepped(s, cv_jac_evals(s) != nje);
+  return flag;
+}
+
 static int cv_one(ap_stepper *s, double tstop, double *t, double *y) {
   (void)t, (void)y;                              /* the dispatcher copies (s->t, yacc) out */
   realtype tret = s->t;
   int flag = CVodeSetStopTime(s->mem, tstop);
-  if (flag == CV_SUCCESS) flag = CVode(s->mem, tstop, s->y, &tret, CV_ONE_STEP);
+  if (flag == CV_SUCCESS) flag = cv_step(s, tstop, &tret);
   if (flag < 0) return cv_flag_fail(s, flag);    /* CVODE stays at the last accepted step */
   int finite = 1;
   for (int i = 0; i < s->n; i++) finite = finite && isfinite(NV(s->y)[i]);

@@ -303,8 +303,8 @@ static void plan(ctx *c) {
     if (!c->sc[p]) continue;
     for (int mo = 0; mo < 3; mo++)
       for (int me = 0; me < o->nmethods; me++) {
-        if (c->modes && (modes[mo] == AP_MODE_PLAIN || !strcmp(o->methods[me], "bdf")))
-          continue;   /* contact modes: minimal and projected, explicit (docs/testing.md) */
+        if (c->modes && modes[mo] == AP_MODE_PLAIN)
+          continue;   /* contact modes: minimal and projected (docs/testing.md) */
         u = &c->runs[c->nruns++];
         *u = (run){.path = p, .mode = modes[mo], .method = o->methods[me], .rtol = o->rtol,
                    .atol = o->atol};
