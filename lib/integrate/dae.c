@@ -59,16 +59,7 @@
  * (the multipliers' columns, N, A_s, Phi_q, cj diag(I, g, 0, 0)), forward differences
  * elsewhere with increments sqrt(eps) times the component's typical size. IDA's own difference
  * quotients use an increment of 1/ewt, i.e. atol, for a component near zero, which at tight
- * tolerances left only round-off in the quotient. It is made again at every change of cj
- * (IDASetDeltaCjLSetup 0; IDA's default keeps it while cj stays within 25%). With a matrix of an
- * older cj IDA scales the Newton step by 2 / (1 + cj / cj_old), which leaves a fraction
- * |cj - cj_old| / (cj + cj_old) of the first correction (1/7 when an order-1 step of h is
- * followed by an order-2 step of 2 h), and it accepts that first iterate on the convergence rate
- * of the previous step: the error test then saw the corrector's error. After a convergence
- * failure IDA fell to order 1 and cycled there (order-1 steps, an order-2 step of twice the
- * length with a speed's v' off its trend by 4 tolerances, an error-test failure): campaign seeds
- * 1002490, 1005041, 1006806 took more than 5000 steps in a sixteenth of 0.5 s, and take 645,
- * 702 and 3997 steps in all with the new matrix (docs/testing.md, "IDA trapped at low order").
+ * tolerances left only round-off in the quotient.
  *
  * Tolerances. IDA controls the local error of each BDF step; its global error on the example
  * motions came out 4 to 720 times rtol where the Runge-Kutta methods of the Appell modes stay
@@ -238,8 +229,6 @@ static int setup_ida(ap_dae *s, double t0, const ap_step_opts *o) {
    * 1e-12 the rattleback's Newton iteration failed). */
   if (ok) ok = IDASetNonlinConvCoef(s->mem, fmin(0.33, fmax(0.03, 1e3 * DBL_EPSILON / s->rtol))) ==
                IDA_SUCCESS;
-  /* A new Newton matrix at every change of cj (see "The Newton matrix" above). */
-  if (ok) ok = IDASetDeltaCjLSetup(s->mem, 0.0) == IDA_SUCCESS;
   if (ok) {
     s->J = SUNDenseMatrix(s->ny, s->ny, s->ctx);
     s->LS = s->J ? SUNLinSol_Dense(s->yy, s->J, s->ctx) : NULL;
