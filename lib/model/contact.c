@@ -520,17 +520,11 @@ static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const
  * normal turns with the centre) and one with friction (contact modes rewrite its rows). */
 static int contact_tree_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c,
                              char *why, size_t len) {
+  (void)M;
   if (c->nhol == 0 && c->wheel < 0) return c->def.body;
-  int free = c->wheel >= 0 && M->joints[M->bodies[c->def.body].joint].kind == AP_JOINT_FREE;
-  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0 && !free) return c->def.body;
-  /* A rolling body on a free joint: with a force other than gravity on it (a spring, a
-   * damper) the tree path's runs left the dense path's by 20-140 rad in a wheel angle
-   * (difftest seeds 1000051, 1001385; tests/scenes/tree_free_rolling.yaml), cause not located:
-   * refused until it is. Free rolling bodies take the tree path on a plane_contact joint. */
+  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0) return c->def.body;
   snprintf(why, len, "model '%s': constraint '%s' is a wheel contact %s", m->name, c->name,
-           free ? "of a body on a free joint (on the tree path a free rolling body goes on a "
-                  "plane_contact joint; or use path: dense)"
-           : c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
+           c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
            : c->plane > 2 ? "on a curved ground" : "with friction (contact modes)");
   return -1;
 }
