@@ -140,12 +140,14 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
 #define TREE_WS_DOUBLES(X)                                                                 \
   X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
   X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
-  X(ws->rb, b) X(ws->hp, nhd) X(comp_dbl, ncd) X(work_dbl, ndw)
-#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi) X(comp_int, nci) X(work_int, niw)
+  X(ws->rb, b) X(ws->qn, n) X(ws->hp, nhd) X(comp_dbl, ncd) X(work_dbl, ndw)
+#define TREE_WS_INTS(X)                                                                    \
+  X(ws->avoid, k) X(ws->tkeep, nt) X(ws->hip, nhi) X(comp_int, nci) X(work_int, niw)
 
 #define WS_ADD(f_, c_) ap_arena_add(L, #f_, (c_));
 static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li) {
   size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, niw = 0;
+  size_t n = (size_t)P->M->n, nt = (size_t)P->T.ntree;
   size_t ndw = ap_la_tree_work_size(&P->T, P->lmax, &niw), nhi = 0;
   size_t nhd = ap_tree_hol_ws_size(P, &nhi), nci = 0;
   size_t ncd = P->comp ? ap_la_comp_work_size(&P->T, &nci) : 0;
