@@ -10,7 +10,9 @@
  * orthonormal basis of projected mode is replaced by a partition chosen at every position stage:
  * projected mode's state is v, and both the projection v <- b0 + B G^-1 B^T g (v - b0) and
  * v' = B e'' + w do not depend on which basis spans the null space. Consistency of redundant
- * rows: the same relative 1e-8 as forward.c. Nothing here allocates after ap_st_create. */
+ * rows: the same relative 1e-8 as forward.c; rows redundant only on the holonomic manifold (the
+ * model tells them at the partition, d->redundant_manifold) at accepted states against
+ * manifold_rtol, as partition.c. Nothing here allocates after ap_st_create. */
 #include "core/structured.h"
 
 #include <float.h>
