@@ -5,7 +5,8 @@
  * rolling as wheel contacts (a free joint: the contact rows' phi drifts and is projected after
  * every step, so the tree path's projection runs); a robot beside a free sphere rolling with a
  * spring or damper on it (free_rolling_scene); the suspended car, whose rows are redundant
- * only where its wheel contacts close (suspended_car). Also: the automatic choice takes a fleet of
+ * only where its wheel contacts close (suspended_car); refused: a rolling body on a free joint
+ * to another body. Also: the automatic choice takes a fleet of
  * 16 speeds or more; ap_body_project_q on both paths gives the same q; the energy agrees at
  * the tree path picks the dense path's partition; the example scene fleet_16.yaml on both
  * paths; refused on a forced tree path: a wheel contact with friction, wheel loads asked for
@@ -239,6 +240,16 @@ int main(int argc, char **argv) {
   free_rolling_scene(argv[1], "tree_free_rolling");
   free_rolling_scene(argv[1], "tree_free_damped");
   suspended_car(argv[1]);
+  /* refused: a rolling body on a free joint to another body (bdf's runs on the tree path) */
+  snprintf(file, sizeof file, "%s/tests/scenes/tree_free_hung.yaml", argv[1]);
+  s = NULL;
+  AP_CHECK(ap_scene_load(file, cf + 1, 1, &s, msg, sizeof msg) != AP_OK);
+  AP_CHECK(strstr(msg, "free joint to another body") != NULL);
+  printf("forced tree path, hung free rolling body: %s\n", msg);
+  ap_scene_free(s);
+  s = NULL;
+  AP_CHECK_EQ_INT(ap_scene_load(file, NULL, 0, &s, msg, sizeof msg), AP_OK);
+  ap_scene_free(s);
   /* the automatic choice: a fleet of 16 speeds or more takes the tree path */
   ap_model *m = tm_fleet(4, 0, AP_PATH_AUTO);
   AP_CHECK(ap_model_k(m) >= AP_TREE_AUTO_K);

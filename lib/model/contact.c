@@ -520,11 +520,18 @@ static int contact_wrench(const ap_bmodel *M, double *S, const ap_mcon *c, const
  * normal turns with the centre) and one with friction (contact modes rewrite its rows). */
 static int contact_tree_body(const ap_model *m, const ap_bmodel *M, const ap_mcon *c,
                              char *why, size_t len) {
-  (void)M;
   if (c->nhol == 0 && c->wheel < 0) return c->def.body;
-  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0) return c->def.body;
+  const ap_mjoint *J = &M->joints[M->bodies[c->def.body].joint];
+  /* A rolling body on a free joint to another body: with bdf the tree path took 8794 steps where
+   * the dense path takes 548 and ended 3e-4 off (1.3e-6), dopri5 and adams agree (difftest seed
+   * 1001705, tests/scenes/tree_free_hung.yaml; the dense path projects q inside CVODE's step,
+   * the tree path after it; cause not located): refused. */
+  int hung = c->wheel >= 0 && J->kind == AP_JOINT_FREE && J->parent != AP_GROUND;
+  if (c->wheel >= 0 && c->plane <= 1 && c->fric < 0 && !hung) return c->def.body;
   snprintf(why, len, "model '%s': constraint '%s' is a wheel contact %s", m->name, c->name,
-           c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
+           hung ? "of a body on a free joint to another body (with bdf the tree path's runs "
+                  "of such a body took 16 times the dense path's steps)"
+           : c->plane == 2 ? "on a sphere (its normal turns with the wheel)"
            : c->plane > 2 ? "on a curved ground" : "with friction (contact modes)");
   return -1;
 }
