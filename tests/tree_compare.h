@@ -38,8 +38,8 @@ static int run(const ap_model *m, ap_mode mode, double rtol, const double *q0, c
   return rc;
 }
 
-static void compare_runs(const char *label, ap_model *md, ap_model *mt, const double *q0,
-                         const double *v0, double t1) {
+static void compare_runs(const char *label, const ap_model *md, const ap_model *mt,
+                         const double *q0, const double *v0, double t1) {
   int n = ap_model_n(md), k = ap_model_k(md);
   double *x = calloc((size_t)(2 * (n + k)), sizeof(double));
   double *qd = x, *vd = qd + n, *qt = vd + k, *vt = qt + n;

@@ -106,6 +106,10 @@ ap_model *tm_disks(int N, ap_path path) {
   return disks("disks", N, AP_JOINT_PLANE_CONTACT, 0.5, path);
 }
 
+ap_model *tm_free_disks(int N, ap_path path) {
+  return disks("free_disks", N, AP_JOINT_FREE, 0.3, path);
+}
+
 static void complete(const ap_model *m, double *q, const int *given, double *v) {
   ap_data *d = NULL;
   check(ap_data_create(m, &d), "data");

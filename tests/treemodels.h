@@ -24,6 +24,7 @@ void tm_trailers_state(const ap_model *m, int N, double *q, double *v);
 /* Disks tilted 50-70 degrees from the vertical, spinning and turning, on a 2 m grid. */
 /* N thin disks (radius 0.3, mass 1) on free joints, each rolling: wheel contacts whose
  * contact rows' phi drifts (projected after each step). */
+ap_model *tm_free_disks(int N, ap_path path);
 ap_model *tm_fleet(int N, int trailer_every, ap_path path);
 /* Robots on a 2 m grid, headings spread, wheel rates 6..12 rad/s (turning both ways). */
 void tm_fleet_state(const ap_model *m, int N, int trailer_every, double *q, double *v);

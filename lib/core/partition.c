@@ -178,6 +178,7 @@ int ap_partition(const ap_model *m, ap_data *d) {
  * (as ap_partition, each against its own terms where one is beyond them). */
 int ap_core_judge_redundant(const ap_model *m, ap_data *d) {
   if (!d->redundant_manifold) return AP_OK;
+  if (ap_core_st(d)) return ap_st_judge_redundant(m, d, ap_core_st(d));   /* the tree path */
   ap_scratch *s = SCRATCH(d);
   double sa = ap_core_row_scale(m, d, 0), sg = ap_core_row_scale(m, d, 1);
   double tol = d->manifold_rtol;

@@ -10,7 +10,9 @@
  * orthonormal basis of projected mode is replaced by a partition chosen at every position stage:
  * projected mode's state is v, and both the projection v <- b0 + B G^-1 B^T g (v - b0) and
  * v' = B e'' + w do not depend on which basis spans the null space. Consistency of redundant
- * rows: the same relative 1e-8 as forward.c. Nothing here allocates after ap_st_create. */
+ * rows: the same relative 1e-8 as forward.c; rows redundant only on the holonomic manifold (the
+ * model tells them at the partition, d->redundant_manifold) at accepted states against
+ * manifold_rtol, as partition.c. Nothing here allocates after ap_st_create. */
 #include "core/structured.h"
 
 #include <float.h>
@@ -156,18 +158,57 @@ static int judge(const ap_model *m, ap_data *d, ap_st *st, int of_gamma) {
   return AP_ERR_INCONSISTENT;
 }
 
+/* Rows redundant only on the holonomic manifold (d->redundant_manifold; the model's position
+ * stage tells them at the partition): as ap_core_judge_redundant, their residuals against
+ * manifold_rtol times the size of the terms of A v + a0 (resp. A v' = gamma), |A x| from the
+ * operator's per-row magnitudes. */
+static double row_scale(const ap_model *m, ap_data *d, ap_st *st, const double *x,
+                        const double *y, double floor) {
+  double mag = 0.0;
+  st->ops->amul(st->ws, d, x, st->tb, st->tm);
+  for (int s = 0; s < m->b; s++) mag = fmax(mag, st->tm[s]);
+  return floor + max_abs(y, m->b) + mag;
+}
+
+int ap_st_judge_redundant(const ap_model *m, ap_data *d, ap_st *st) {
+  if (!d->redundant_manifold) return AP_OK;
+  double sa = row_scale(m, d, st, d->v, d->a0, AP_ROW_FLOOR_PER_S * st->floor_geom), tol = d->manifold_rtol;
+  double sg = row_scale(m, d, st, d->vdot, d->gamma, AP_ROW_FLOOR_PER_S2 * st->floor_geom);
+  int bad_a = d->resid_a0 > tol * sa, bad_g = !bad_a && d->resid_gamma > tol * sg;
+  if (!bad_a && !bad_g) return AP_OK;
+  ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (inconsistent along the "
+              "motion: %s by %.3g relative, more than manifold_rtol %.3g) at t = %.17g",
+              m->name, d->redundant, m->b, bad_a ? "the rows drifted apart" : "gamma",
+              bad_a ? d->resid_a0 / sa : d->resid_gamma / sg, tol, d->t);
+  return AP_ERR_INCONSISTENT;
+}
+
 int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.partitions++;
-  int rc = st->ops->position(m, d, st->ws, 1);
+  int rc = st->ops->position(m, d, st->ws, AP_ST_SELECT_PARTITION);
   if (rc != AP_OK) return rc;
   st->chosen = 1;
   st->floor_geom = floor_geom(m, d, st);
-  rc = judge(m, d, st, 0);
+  if (d->redundant_manifold) {   /* as partition.c: manifold_rtol against the rows' terms */
+    double tol = d->manifold_rtol * row_scale(m, d, st, d->v, d->a0,
+                                              AP_ROW_FLOOR_PER_S * st->floor_geom);
+    if (d->resid_a0 > tol) {
+      ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant and inconsistent at "
+                  "t = %.17g (a0 residual %.3g, more than %.3g)", m->name, d->redundant, m->b,
+                  d->t, d->resid_a0, tol);
+      return AP_ERR_INCONSISTENT;
+    }
+  } else {
+    rc = judge(m, d, st, 0);
+  }
   /* a row that no speed moves: named as on the dense path (partition.c) */
   if (rc == AP_ERR_INCONSISTENT) ap_core_refuse_vanishing_rows(m, d);
   if (rc == AP_OK && d->redundant > 0)
-    ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped) "
-                "at t = %.17g; residual %.3g", m->name, d->redundant, m->b, d->t, d->resid_a0);
+    ap_core_msg(d, "system '%s': %d of %d constraint rows are redundant (consistent, dropped%s) "
+                "at t = %.17g; residual %.3g", m->name, d->redundant, m->b,
+                !d->redundant_manifold ? "" : d->redundant_manifold == d->redundant
+                ? "; only where the loops and contacts close"
+                : "; some only where the loops and contacts close", d->t, d->resid_a0);
   return rc;
 }
 
@@ -175,10 +216,12 @@ int ap_st_position(const ap_model *m, ap_data *d, ap_st *st) {
   d->cnt.position++;
   /* projected mode (and no basis): any valid partition; minimal mode: the one chosen */
   int select = d->basis != AP_BASIS_PARTITIONED || !st->chosen;
-  int rc = st->ops->position(m, d, st->ws, select);
+  int rc = st->ops->position(m, d, st->ws, select ? AP_ST_SELECT_STAGE : 0);
   d->cnt.qr += m->b > 0;
   d->rcond_R = 1.0;
-  if (rc != AP_OK || ((const ap_scratch *)d->internal)->judge_at_accepted) return rc;
+  if (rc != AP_OK || d->redundant_manifold ||
+      ((const ap_scratch *)d->internal)->judge_at_accepted)
+    return rc;
   return judge(m, d, st, 0);   /* else judged at accepted states */
 }
 
@@ -197,7 +240,8 @@ int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st) {
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "bias", d->h, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "force", d->Q, m->k, 1);
   if (rc == AP_OK) rc = ap_core_check_finite(m, d, "gamma", d->gamma, m->b, 1);
-  if (rc == AP_OK && !((const ap_scratch *)d->internal)->judge_at_accepted)   /* as dense */
+  if (rc == AP_OK && !d->redundant_manifold &&
+      !((const ap_scratch *)d->internal)->judge_at_accepted)   /* as dense */
     rc = judge(m, d, st, 1);
   return rc;
 }

@@ -22,13 +22,20 @@ typedef struct ap_sblocks {
 
 /* A structured evaluator. Every hook returns AP_OK, AP_RECOVERABLE or AP_ERR_* and writes
  * d->msg on failure. ws is the model's per-data workspace. */
+/* ops->position's select: 0 keep the partition; 1 choose one; AP_ST_SELECT_PARTITION choose
+ * it for ap_partition (and tell rows redundant only on the holonomic manifold,
+ * d->redundant_manifold); AP_ST_SELECT_STAGE choose one for a stage of projected mode (such
+ * rows' ranks kept from the partition, as the dense path keeps its rank). */
+enum { AP_ST_SELECT_PARTITION = 2, AP_ST_SELECT_STAGE = 3 };
+
 typedef struct ap_ops {
   const void *ctx;            /* the model's own data, passed to ws_create */
   /* workspace of one data: allocated once with the data; *gcap = doubles that hold every G_t */
   void *(*ws_create)(const void *ctx, size_t *gcap);
   void (*ws_free)(void *ws);
   /* position stage at (d->t, d->q): a0, the factorization with the partition in d (select:
-   * choose it and write perm, rank, l, redundant), b0, growth, resid_a0, the blocks */
+   * choose it and write perm, rank, l, redundant; AP_ST_SELECT_*), b0, growth, resid_a0, the
+   * blocks */
   int (*position)(const ap_model *m, ap_data *d, void *ws, int select);
   /* velocity stage at d->v: h, Q, gamma, w, resid_gamma */
   int (*velocity)(const ap_model *m, ap_data *d, void *ws);
@@ -68,6 +75,9 @@ void ap_st_free(ap_st *st);
 
 /* The pipeline, as ap_partition, ap_fwd_position ... (system.h) on the dense path. */
 int ap_st_partition(const ap_model *m, ap_data *d, ap_st *st);
+/* ap_core_judge_redundant on the tree path: rows redundant only on the manifold, at an
+ * accepted state (after the position and velocity stages). */
+int ap_st_judge_redundant(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_position(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_velocity(const ap_model *m, ap_data *d, ap_st *st);
 int ap_st_acceleration(const ap_model *m, ap_data *d, ap_st *st);

@@ -165,10 +165,12 @@ void ap_la_comp_work_setup(const ap_la_tree *T, ap_la_comp_work *C);
 /* As ap_la_tree_factor with b0 = the particular v of a0 (A b0 + a0 = 0) and resid = how far
  * the dropped rows are from consistent; the blocks B_t, G_t in W as ap_la_tree_basis leaves
  * them (W->lmax must hold every tree's speeds). AP_ERR_SINGULAR (*bad = the tree's root):
- * R11 of the frozen partition singular to working precision (re-partition). */
+ * R11 of the frozen partition singular to working precision (re-partition). keep (ntree, may
+ * be NULL), on a selection: each tree's rank at most keep[t] (rows redundant only on the
+ * holonomic manifold look independent off it; the pivots are taken in pivoted QR's order). */
 int ap_la_comp_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
-                      ap_la_comp_work *C, int select, double rtol, const double *a0,
-                      double *b0, double *growth, double *resid, int *bad);
+                      ap_la_comp_work *C, int select, const int *keep, double rtol,
+                      const double *a0, double *b0, double *growth, double *resid, int *bad);
 void ap_la_comp_partition(const ap_la_tree *T, const ap_la_tree_work *W,
                           const ap_la_comp_work *C, int *perm, int *rank);
 /* u = B e + w with A w + rhs = 0 (rhs, e may be NULL), as ap_la_tree_solve; returns the

@@ -156,8 +156,8 @@ static void gram(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work 
 }
 
 int ap_la_comp_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,
-                      ap_la_comp_work *C, int select, double rtol, const double *a0,
-                      double *b0, double *growth, double *resid, int *bad) {
+                      ap_la_comp_work *C, int select, const int *keep, double rtol,
+                      const double *a0, double *b0, double *growth, double *resid, int *bad) {
   *growth = 0.0, *resid = 0.0, *bad = -1;
   C->rtol = rtol;
   for (int t = 0; t < T->ntree; t++) {
@@ -172,6 +172,7 @@ int ap_la_comp_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_
       for (int c = 0; c < kt; c++) perm[c] = c;
     }
     if (rc != AP_OK) return *bad = T->tbody[T->tofs[t]], rc;
+    if (keep && C->rank[t] > keep[t]) C->rank[t] = keep[t];
   }
   if (select) {
     int rc = assign(T, W, C);

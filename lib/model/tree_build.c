@@ -142,8 +142,8 @@ static int make_shadow(const ap_model *m, const ap_bmodel *M, ap_tplan *P) {
 #define TREE_WS_DOUBLES(X)                                                                 \
   X(ws->S, P->shadow.scratch) X(ws->g.d, 3 * nb) X(ws->g.S, 6 * k) X(ws->g.M, 13 * nb)     \
   X(ws->g.C, 6 * b) X(ws->rho, 6 * nb) X(ws->U, 6 * nb) X(ws->F, 6 * nb) X(ws->x, k)       \
-  X(ws->rb, b) X(ws->hp, nhd)
-#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->hip, nhi)
+  X(ws->rb, b) X(ws->qn, n) X(ws->hp, nhd)
+#define TREE_WS_INTS(X) X(ws->avoid, k) X(ws->tkeep, nt) X(ws->hip, nhi)
 
 /* lib/linalg's arrays (into la, fields of ws->W and ws->CW), at most 2 AP_LA_WORK_ARRAYS_MAX. */
 static int ws_la_arrays(const ap_tplan *P, ap_tree_ws *ws, ap_la_work_array *la) {
@@ -155,7 +155,7 @@ static int ws_la_arrays(const ap_tplan *P, ap_tree_ws *ws, ap_la_work_array *la)
 static void ws_layout(const ap_tplan *P, ap_arena *Ld, ap_arena *Li, ap_la_work_array *la,
                       int nla) {
   size_t nb = (size_t)P->T.nb, k = (size_t)P->T.k, b = (size_t)P->T.b, nhi = 0;
-  size_t nhd = ap_tree_hol_ws_size(P, &nhi);
+  size_t nhd = ap_tree_hol_ws_size(P, &nhi), n = (size_t)P->M->n, nt = (size_t)P->T.ntree;
   ap_arena *L = Ld;
   ap_arena_init(L, "tree workspace doubles", sizeof(double), AP_ARENA_GUARDS);
   TREE_WS_DOUBLES(WS_ADD)

@@ -18,6 +18,7 @@
  * Effects as wrenches (t; f) at the body origin (effect.c gives the same as J^T F):
  *   gravity m g at the com; applied F at R p and T; spring +-F at its two points;
  *   joint damping -c v_i, joint forces, motors and user effects straight into Q. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -97,16 +98,21 @@ static int factor_status(const ap_model *m, ap_data *d, const ap_tplan *P, int r
   return AP_ERR_UNSUPPORTED;
 }
 
-/* Component mode: the dense path's partition, basis and b0 on each tree's block. */
+/* Component mode: the dense path's partition, basis and b0 on each tree's block. select:
+ * AP_ST_SELECT_STAGE keeps each tree's rank of the partition when rows are redundant only on
+ * the manifold (ws->tkeep), as the dense path's orthonormal basis keeps the rank. */
 static int comp_factor(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select) {
   const ap_tplan *P = ws->P;
   double growth = 0.0, resid = 0.0;
-  int bad = -1, rc = ap_la_comp_factor(&P->T, &ws->g, &ws->W, &ws->CW, select, d->rank_rtol,
-                                       d->a0, d->b0, &growth, &resid, &bad);
+  int keep = select == AP_ST_SELECT_STAGE && d->redundant_manifold > 0;
+  int bad = -1, rc = ap_la_comp_factor(&P->T, &ws->g, &ws->W, &ws->CW, select != 0,
+                                       keep ? ws->tkeep : NULL, d->rank_rtol, d->a0, d->b0,
+                                       &growth, &resid, &bad);
   if (rc != AP_OK) return factor_status(m, d, P, rc, bad);
   if (select) {
     ap_la_comp_partition(&P->T, &ws->W, &ws->CW, d->perm, &d->rank);
-    d->l = m->k - d->rank, d->redundant = m->b - d->rank, d->redundant_manifold = 0;
+    d->l = m->k - d->rank, d->redundant = m->b - d->rank;
+    if (!keep) d->redundant_manifold = 0;
   }
   d->growth = growth, d->resid_a0 = resid;
   return AP_OK;
@@ -118,14 +124,10 @@ double ap_tree_solve(ap_tree_ws *ws, const double *e, const double *rhs, double 
                  : ap_la_tree_solve(&P->T, &ws->g, &ws->W, e, rhs, u);
 }
 
-static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
-                    const int *avoid) {
+/* Kinematics, the rows and a0 at (d->t, d->q). */
+static int objects(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
   const ap_tplan *P = ws->P;
   const ap_bmodel *M = P->M;
-  d->cnt.metric++;
-  d->cnt.kinematic += M->n != M->k;
-  d->cnt.constraint += M->b > 0;
-  d->cnt.rheonomic += M->rheonomic;
   int rc = ap_kin_position(&P->sm, d, d->t, d->q, ws->S);
   if (rc == AP_OK && M->nc) rc = ap_con_time(&P->sm, d, d->t, ws->S);
   if (rc != AP_OK) return rc;
@@ -136,11 +138,54 @@ static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
   if (rc == AP_OK) rc = check_finite(m, d, "joint columns", ws->g.S, 6 * (size_t)M->k);
   if (rc == AP_OK) rc = check_finite(m, d, "constraint rows", ws->g.C, 6 * (size_t)M->b);
   if (rc == AP_OK) rc = check_finite(m, d, "constraint (a0)", d->a0, (size_t)M->b);
+  return rc;
+}
+
+/* After the partition's selection (component mode): are the redundant rows redundant for every
+ * q, or only on the holonomic manifold (a free chassis on four wheels with struts)? As the
+ * dense path (core/partition.c, nearby_rank): the rank at q + N xi, xi a fixed spread of
+ * directions of size 1e-6 max(1, |q|), where the manifold's redundancy is gone. The rank of
+ * each tree is kept for projected mode's stages (ws->tkeep); the position stage at q is
+ * restored. */
+static int manifold_rows(const ap_model *m, ap_data *d, ap_tree_ws *ws) {
+  const ap_tplan *P = ws->P;
+  const ap_bmodel *M = P->M;
+  int r = d->rank, rn = r, rc = AP_OK;
+  if (M->nloop > 0 && d->redundant > 0) {
+    double qmax = 1.0;
+    for (int i = 0; i < M->n; i++) qmax = fmax(qmax, fabs(d->q[i]));
+    memcpy(ws->qn, d->q, sizeof(double) * (size_t)M->n);
+    for (int c = 0; c < M->k; c++) ws->x[c] = 1e-6 * qmax * sin(1.3 + 2.1 * c);
+    ap_bm_step_q(M, d->q, ws->x);
+    if (objects(m, d, ws) == AP_OK && comp_factor(m, d, ws, 1) == AP_OK) rn = d->rank;
+    memcpy(d->q, ws->qn, sizeof(double) * (size_t)M->n);
+    rc = objects(m, d, ws);
+    if (rc == AP_OK) rc = comp_factor(m, d, ws, 1);
+    if (rc != AP_OK) return rc;
+  }
+  d->redundant_manifold = rn > r ? rn - r : 0;
+  for (int t = 0; t < P->T.ntree; t++) ws->tkeep[t] = ws->CW.rank[t];
+  return AP_OK;
+}
+
+static int position(const ap_model *m, ap_data *d, ap_tree_ws *ws, int select,
+                    const int *avoid) {
+  const ap_tplan *P = ws->P;
+  const ap_bmodel *M = P->M;
+  d->cnt.metric++;
+  d->cnt.kinematic += M->n != M->k;
+  d->cnt.constraint += M->b > 0;
+  d->cnt.rheonomic += M->rheonomic;
+  int rc = objects(m, d, ws);
   if (rc != AP_OK) return rc;
   double growth = 0.0;
   int bad = -1;
-  if (P->comp && !avoid) return comp_factor(m, d, ws, select);   /* avoid: body-local */
-  rc = ap_la_tree_factor(&P->T, &ws->g, &ws->W, select, avoid, d->rank_rtol, &growth, &bad);
+  if (P->comp && !avoid) {   /* avoid: body-local */
+    rc = comp_factor(m, d, ws, select);
+    return rc == AP_OK && select == AP_ST_SELECT_PARTITION ? manifold_rows(m, d, ws) : rc;
+  }
+  rc = ap_la_tree_factor(&P->T, &ws->g, &ws->W, select != 0, avoid, d->rank_rtol, &growth,
+                         &bad);
   if (rc != AP_OK) return factor_status(m, d, P, rc, bad);
   if (select) {
     ap_la_tree_partition(&P->T, &ws->W, d->perm, &d->rank);

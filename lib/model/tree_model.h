@@ -53,7 +53,11 @@ typedef struct ap_tree_ws {
   double *U, *F;            /* (6 nb) temporaries */
   double *x;                /* (k) temporary */
   double *rb;               /* (b) temporary */
+  double *qn;               /* (n) q kept while the rank is taken nearby (tree_eval.c) */
   int *avoid;               /* (k) speeds to keep independent (ap_tree_complete_speeds) */
+  int *tkeep;               /* (ntree) component mode: each tree's rank at the partition, kept
+                               in projected mode when some rows are redundant only on the
+                               manifold (d->redundant_manifold) */
   double *hp;               /* projection of the holonomic rows (ap_tree_hol_ws_size) */
   int *hip;
   ap_la_tree_work W;

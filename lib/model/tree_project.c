@@ -13,6 +13,7 @@
  * projected on each joint's free columns on the way: O(depth).
  * Workspace (ap_tree_hol_ws_size): phi (nhol), dv (k), Jl^T of one tree (hkmax x hmax), its
  * right-hand side (hmax) and solution (hkmax), the solve's scratch. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -113,22 +114,46 @@ static void gradient(const ap_tplan *P, ap_tree_ws *ws, int p, double *JlT) {
   ap_la_tree_row_coeffs(T, &ws->g, i, F, P->kloc, JlT);
 }
 
-/* One Gauss-Newton step: dv (k) of minimum norm with Jl dv = -phi, tree by tree. */
+/* Gradients of tree t's rows into JlT (kt x ht), their right-hand sides -phi into rhs; the
+ * largest column norm of Jl (over the tree's speeds): the first pivot of its pivoted QR. */
+static double tree_gradients(const ap_tplan *P, ap_tree_ws *ws, int t, const double *phi,
+                             double *JlT, double *rhs) {
+  int h0 = P->hofs[t], ht = P->hofs[t + 1] - h0, kt = P->tkofs[t + 1] - P->tkofs[t];
+  double top = 0.0;
+  memset(JlT, 0, sizeof(double) * (size_t)kt * ht);
+  for (int s = 0; s < ht; s++) {
+    gradient(P, ws, h0 + s, JlT + (size_t)s * kt);
+    rhs[s] = -phi[P->hphi[h0 + s]];
+  }
+  for (int j = 0; j < kt; j++) {
+    double nn = 0.0;
+    for (int s = 0; s < ht; s++) nn += JlT[j + (size_t)s * kt] * JlT[j + (size_t)s * kt];
+    top = fmax(top, sqrt(nn));
+  }
+  return top;
+}
+
+/* One Gauss-Newton step: dv (k) of minimum norm with Jl dv = -phi, tree by tree. The dense
+ * path's one solve drops the pivots below 1e-10 of the largest pivot of the whole Jl; pivoted
+ * QR of the block-diagonal Jl takes each block's pivots, so each tree's rank tolerance is
+ * taken relative to the largest first pivot over all trees (a first pass). A tree whose
+ * gradients are all rounding (the contact rows of wheels on a planar chassis are identically
+ * zero) then gets dv = 0, not -phi / 1e-17: relative to its own pivot it would move its wheel
+ * angles by tens of radians whenever another tree's rows needed a step. */
 static int gn_step(const ap_tplan *P, ap_tree_ws *ws, const double *phi, double *dv) {
   int hk = P->hkmax, h = P->hmax;
   double *JlT = dv + P->T.k, *rhs = JlT + (size_t)hk * h, *x = rhs + h, *work = x + hk + 64;
+  double top = 0.0;
   memset(dv, 0, sizeof(double) * (size_t)P->T.k);
   ap_tree_geometry(P, ws);
+  for (int t = 0; t < P->T.ntree; t++)
+    if (P->hofs[t + 1] > P->hofs[t]) top = fmax(top, tree_gradients(P, ws, t, phi, JlT, rhs));
   for (int t = 0; t < P->T.ntree; t++) {
-    int h0 = P->hofs[t], ht = P->hofs[t + 1] - h0, kt = P->tkofs[t + 1] - P->tkofs[t];
+    int ht = P->hofs[t + 1] - P->hofs[t], kt = P->tkofs[t + 1] - P->tkofs[t];
     if (!ht) continue;
-    memset(JlT, 0, sizeof(double) * (size_t)kt * ht);
-    for (int s = 0; s < ht; s++) {
-      gradient(P, ws, h0 + s, JlT + (size_t)s * kt);
-      rhs[s] = -phi[P->hphi[h0 + s]];
-    }
-    double resid = 0.0;
-    int rc = ap_la_lstsq_At(kt, ht, JlT, rhs, 1e-10, x, &resid, work, ws->hip);
+    double tt = tree_gradients(P, ws, t, phi, JlT, rhs), resid = 0.0;
+    if (!(tt > 1e-10 * top)) continue;   /* every pivot below the tolerance: rank 0 */
+    int rc = ap_la_lstsq_At(kt, ht, JlT, rhs, 1e-10 * top / tt, x, &resid, work, ws->hip);
     if (rc != AP_OK) return rc;
     for (int j = 0; j < kt; j++) dv[P->kspeed[P->tkofs[t] + j]] = x[j];
   }

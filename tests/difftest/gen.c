@@ -253,7 +253,9 @@ static void body_constraints(uint64_t *s, dt_model *m, int i) {
       snprintf(c->text, DT_TXT, "{kind: knife_edge, body: b%d}", i);   /* redundant with roll */
   } else if (b->kind == DT_FREE && b->shape == DT_SH_SPHERE && chance(s, 0.5)) {
     if ((c = add_con(m, i, -1))) snprintf(c->text, DT_TXT, "{kind: rolling, body: b%d}", i);
-    m->expect_tree = 0;   /* a wheel contact of a free body: the tree path refuses it */
+    /* a wheel contact: on one body, the tree path takes it unless the free joint hangs from
+     * another body (lib/model/contact.c) */
+    if (b->parent >= 0) m->expect_tree = 0;
   } else if (has_speed(b) && chance(s, b->kind == DT_PLANAR ? 0.4 : 0.1) &&
              (c = add_con(m, i, -1))) {
     double a = ur(s, -3, 3);
