@@ -8,7 +8,7 @@
  * of A (a square minor M of full rank, r = rank of A, by pivoted QR) and at each accepted step
  * f = det M / s^r, s the largest row norm of M (signed, in [-1, 1], continuous in q and t):
  *   - f changes sign within a step: its root t* is found on the stepper's dense output
- *     (Illinois regula falsi) and A judged there: A lost a rank when its best minor at t* is of
+ *     (root.c, the events' root finder) and A judged there: A lost a rank when its best minor at t* is of
  *     lower rank, or below LR_DROP of the best at the step's ends: the run stops, naming the
  *     rows of M's left null vector; otherwise M alone was singular and a new minor is chosen;
  *   - |f| fell below LR_RESELECT of its value when chosen: a new minor is chosen, and the run
@@ -27,11 +27,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "integrate/root.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
 
 #define LR_RESELECT 1e-2  /* choose a new minor when |f| falls below this of its chosen value */
-#define LR_ITER 60        /* regula falsi iterations on the dense output */
+#define LR_ITER 200       /* root-finding iterations (bisection bounds them) */
 #define LR_DROP 1e-3      /* a minor's root is A's when its best minor there falls below this
                              of the best at the step's ends */
 
@@ -197,35 +198,23 @@ static int f_dense(ap_sim *s, double t, double *f) {
   return rc;
 }
 
+static int f_root(void *ctx, double t, double *f) { return f_dense(ctx, t, f); }
+
 /* The watched minor changed sign between (ta, fa) and the step's end (tb, fb), y: its root t*
- * on the dense output (Illinois regula falsi); A lost a rank there when its best minor at t* is
+ * on the dense output (root.c); A lost a rank there when its best minor at t* is
  * of lower rank or below LR_DROP of the best at the step's ends (stop), else the minor alone
  * was singular (AP_OK; the caller chooses a new one). */
 static int judge_crossing(ap_sim *s, double ta, double fa, double tb, double fb,
                           const double *y) {
   ap_drv_lrank *lr = s->lr;
-  double qa = 0.0, qb = 0.0, qm = 0.0, fm = fb, t0 = ta;
-  int side = 0, ra = 0, rb = 0, rm = 0;
+  double qa = 0.0, qb = 0.0, qm = 0.0, t0 = ta;
+  int ra = 0, rb = 0, rm = 0;
   int rc = best_at(s, tb, y, &qb, &rb);
   if (rc == AP_OK) rc = dense_q(s, ta);
   if (rc == AP_OK) rc = best_at(s, ta, lr->yd, &qa, &ra);
-  for (int it = 0; rc == AP_OK && it < LR_ITER && fb != 0.0; it++) {
-    if (tb - ta <= 4.0 * DBL_EPSILON * fmax(fabs(ta), fabs(tb))) break;
-    double tm = tb - fb * (tb - ta) / (fb - fa);
-    if (!(tm > ta && tm < tb)) tm = ta + 0.5 * (tb - ta);
-    if (!(tm > ta && tm < tb)) break;
-    rc = f_dense(s, tm, &fm);
-    if (rc != AP_OK) break;
-    if ((fm > 0) == (fa > 0)) {
-      ta = tm, fa = fm;
-      if (side == -1) fb *= 0.5;
-      side = -1;
-    } else {
-      tb = tm, fb = fm;
-      if (side == 1) fa *= 0.5;
-      side = 1;
-    }
-  }
+  if (rc == AP_OK)   /* f's sign with 0 negative: the stage's test (f > 0) != (f_prev > 0) */
+    rc = ap_drv_root_locate(f_root, s, fa > 0 ? 1 : -1, AP_ROOT_ZERO_NEGATIVE, LR_ITER, ta, fa,
+                            tb, fb, &tb);
   if (rc == AP_OK && tb > t0) rc = dense_q(s, tb);
   if (rc == AP_OK) rc = best_at(s, tb, tb > t0 ? lr->yd : y, &qm, &rm);
   if (rc < 0) return rc;
