@@ -1,15 +1,15 @@
 /* Events of a simulation (include/appell/event.h): the "events" stage of the after-step
  * pipeline (sim_after.c), root finding on the stepper's dense output, and the records.
  *
- * After each accepted step from (t0, y0) to (t1, y1) every event function is evaluated at the
- * new state (from the step's last evaluation when the data still holds it, else after loading
- * the state and running the stages the event asks for). An event whose value at t1 has left
- * the sign it had (sign, the side it was on; a value 0 at t1 counts as a crossing) is located
- * by Illinois-modified regula falsi (root.c, shared with sim_rank.c) on g(t) = e(t, y(t)), y(t) the dense output of the step
- * (dop853's order-7 interpolant, ARKODE's and CVODE's ap_step_dky, IDA's ap_dae_dky), with a
- * bisection whenever a step of the iteration fails to halve the bracket, down to a bracket of
- * 4 ulps of t. The crossing time is the bracket's right end: the state there is already on the
- * side entered, so the event never fires twice at one crossing.
+ * After each accepted step from (t0, y0) to (t1, y1) every event function is evaluated at the new
+ * state (from the step's last evaluation when the data still holds it, else after loading the state
+ * and running the stages the event asks for). An event whose value at t1 has left the sign it had
+ * (sign, the side it was on; a value 0 at t1 counts as a crossing) is located by Illinois-modified
+ * regula falsi (root.c, shared with sim_rank.c) on g(t) = e(t, y(t)), y(t) the dense output of the
+ * step (dop853's order-7 interpolant, ARKODE's and CVODE's ap_step_dky, IDA's ap_dae_dky), with a
+ * bisection whenever a step of the iteration fails to halve the bracket, down to a bracket of 4
+ * ulps of t. The crossing time is the bracket's right end: the state there is already on the side
+ * entered, so the event never fires twice at one crossing.
  *
  * Then, in time order: crossings in the direction asked for are recorded (the state at the
  * crossing from the dense output) up to the first stop or switch event, and all at that same
