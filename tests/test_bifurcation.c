@@ -8,9 +8,11 @@
  *     theta* = atan2(0.1814, 0.04965) (the point's extreme x): closed form t* = theta* / w,
  *     with w = b1.angle_dot of the consistent initial state; the stop is located on the dense
  *     output, within 10 rtol t*;
- *   - seeds 1008416 and 1006032 (tests/scenes/difftest/open/): no closed form; against the stop
- *     of a run at rtol 1e-11 (projected, dop853), within 1e-4 s: IDA gives up one accepted step
- *     before the drop (5e-5 s at rtol 1e-8) and reports it there.
+ *   - seeds 1008416, 1006032 and 1008451 (tests/scenes/difftest/): no closed form; against the
+ *     stop of a run at rtol 1e-11 (projected, dop853), within 1e-4 s: IDA gives up one accepted
+ *     step before the drop (5e-5 s at rtol 1e-8) and reports it there; plain mode with bdf
+ *     too, whose drift opens the loops and passes the singular configuration beside it (the
+ *     passage test of sim_rank.c).
  * A scene of the same kind that does not bifurcate (diff_drive_loops.yaml) runs through (the
  * monitor raises no false alarm): scene_diff_drive_loops and vehicles. */
 #include <math.h>
@@ -31,8 +33,9 @@ typedef struct bscene {
 
 static const bscene SCENES[] = {
     {"difftest/axle_loop_bifurcation.yaml", {"'c2.x'", NULL}},
-    {"difftest/open/seed_1008416.yaml", {"'c0.y'", "'c0.z'", NULL}},
-    {"difftest/open/seed_1006032.yaml", {"'c1.y'", "'c1.z'", NULL}},
+    {"difftest/seed_1008416.yaml", {"'c0.y'", "'c0.z'", NULL}},
+    {"difftest/seed_1006032.yaml", {"'c1.y'", "'c1.z'", NULL}},
+    {"difftest/seed_1008451.yaml", {"'c2.x'", "'c2.z'", NULL}},
 };
 
 /* Run the scene with the settings sets; the status, the message's located time and the
@@ -79,13 +82,13 @@ static void scene_all_modes(const bscene *sc, int closed_form) {
     printf("%s: reference (projected dop853 rtol 1e-11) stops at t = %.15g\n", sc->file, t_ref);
   }
   double tol = closed_form ? 10 * rtol * t_ref : 1e-4;
-  for (int mi = 0; mi < 4; mi++) {
-    snprintf(set_mode, sizeof set_mode, "simulation.mode=%s", MODES[mi]);
-    const char *sets[1] = {set_mode};
+  for (int mi = 0; mi < (closed_form ? 4 : 5); mi++) {   /* 4: plain mode with bdf */
+    snprintf(set_mode, sizeof set_mode, "simulation.mode=%s", MODES[mi < 4 ? mi : 2]);
+    const char *sets[2] = {set_mode, "simulation.method=bdf"};
     double t = NAN;
-    int rc = run(sc, sets, 1, &t, msg, sizeof msg, NULL, NULL);
-    printf("  %-9s status %d, located at t = %.15g (off by %.2e, bound %.2e)\n", MODES[mi], rc,
-           t, fabs(t - t_ref), tol);
+    int rc = run(sc, sets, mi < 4 ? 1 : 2, &t, msg, sizeof msg, NULL, NULL);
+    printf("  %-9s%s status %d, located at t = %.15g (off by %.2e, bound %.2e)\n",
+           MODES[mi < 4 ? mi : 2], mi < 4 ? "" : " bdf", rc, t, fabs(t - t_ref), tol);
     AP_CHECK_EQ_INT(rc, AP_ERR_RANK);
     AP_CHECK(strstr(msg, "(a bifurcation of the loop)") != NULL);
     for (int i = 0; sc->rows[i]; i++) AP_CHECK(strstr(msg, sc->rows[i]) != NULL);

@@ -1,15 +1,15 @@
 /* Events of a simulation (include/appell/event.h): the "events" stage of the after-step
  * pipeline (sim_after.c), root finding on the stepper's dense output, and the records.
  *
- * After each accepted step from (t0, y0) to (t1, y1) every event function is evaluated at the
- * new state (from the step's last evaluation when the data still holds it, else after loading
- * the state and running the stages the event asks for). An event whose value at t1 has left
- * the sign it had (sign, the side it was on; a value 0 at t1 counts as a crossing) is located
- * by Illinois-modified regula falsi on g(t) = e(t, y(t)), y(t) the dense output of the step
- * (dop853's order-7 interpolant, ARKODE's and CVODE's ap_step_dky, IDA's ap_dae_dky), with a
- * bisection whenever a step of the iteration fails to halve the bracket, down to a bracket of
- * 4 ulps of t. The crossing time is the bracket's right end: the state there is already on the
- * side entered, so the event never fires twice at one crossing.
+ * After each accepted step from (t0, y0) to (t1, y1) every event function is evaluated at the new
+ * state (from the step's last evaluation when the data still holds it, else after loading the state
+ * and running the stages the event asks for). An event whose value at t1 has left the sign it had
+ * (sign, the side it was on; a value 0 at t1 counts as a crossing) is located by Illinois-modified
+ * regula falsi (root.c, shared with sim_rank.c) on g(t) = e(t, y(t)), y(t) the dense output of the
+ * step (dop853's order-7 interpolant, ARKODE's and CVODE's ap_step_dky, IDA's ap_dae_dky), with a
+ * bisection whenever a step of the iteration fails to halve the bracket, down to a bracket of 4
+ * ulps of t. The crossing time is the bracket's right end: the state there is already on the side
+ * entered, so the event never fires twice at one crossing.
  *
  * Then, in time order: crossings in the direction asked for are recorded (the state at the
  * crossing from the dense output) up to the first stop or switch event, and all at that same
@@ -36,6 +36,7 @@
 
 #include "appell/event.h"
 #include "core/defcheck.h"
+#include "integrate/root.h"
 #include "integrate/sim_int.h"
 
 #define AP_EV_TIE (64.0 * DBL_EPSILON)   /* relative: crossings this close are simultaneous */
@@ -146,33 +147,23 @@ static int g_at(ap_sim *s, ev_item *it, double t, double *f) {
 
 /* ---- locating ---------------------------------------------------------------------------------- */
 
-/* The crossing of it between (ta, it->last) and (tb, it->end): Illinois regula falsi with
- * bisection when the bracket does not halve; the result is the bracket's right end. */
+/* g of the event being located (ctx: a located), for the shared root finder. */
+typedef struct located {
+  ap_sim *s;
+  ev_item *it;
+} located;
+
+static int g_root(void *ctx, double t, double *g) {
+  located *l = ctx;
+  return g_at(l->s, l->it, t, g);
+}
+
+/* The crossing of it between (ta, it->last) and (tb, it->end) (root.c; a value 0 is on the
+ * side entered); the result is the bracket's right end. */
 static int locate(ap_sim *s, ev_item *it, double ta, double tb) {
-  double ga = it->last, gb = it->end, width = tb - ta;
-  int side = 0, bisect = 0, rc = AP_OK;
-  for (int iter = 0; iter < AP_EV_ITER && gb != 0.0; iter++) {
-    if (tb - ta <= 4.0 * DBL_EPSILON * fmax(fabs(ta), fabs(tb))) break;
-    double tm = bisect || gb == ga ? 0.5 * (ta + tb) : tb - gb * (tb - ta) / (gb - ga);
-    if (!(tm > ta && tm < tb)) tm = ta + 0.5 * (tb - ta);
-    if (!(tm > ta && tm < tb)) break;             /* no float between them */
-    double gm = 0.0;
-    rc = g_at(s, it, tm, &gm);
-    if (rc != AP_OK) return rc;
-    if (gm * it->sign > 0) {                      /* still on the old side */
-      ta = tm, ga = gm;
-      if (side == -1) gb *= 0.5;
-      side = -1;
-    } else {
-      tb = tm, gb = gm;
-      if (side == 1) ga *= 0.5;
-      side = 1;
-    }
-    bisect = tb - ta > 0.5 * width;
-    width = tb - ta;
-  }
-  it->troot = tb;
-  return AP_OK;
+  located l = {s, it};
+  return ap_drv_root_locate(g_root, &l, it->sign, AP_ROOT_ZERO_ENTERED, AP_EV_ITER, ta,
+                            it->last, tb, it->end, &it->troot);
 }
 
 /* ---- recording ---------------------------------------------------------------------------------- */

@@ -8,12 +8,17 @@
  * of A (a square minor M of full rank, r = rank of A, by pivoted QR) and at each accepted step
  * f = det M / s^r, s the largest row norm of M (signed, in [-1, 1], continuous in q and t):
  *   - f changes sign within a step: its root t* is found on the stepper's dense output
- *     (Illinois regula falsi) and A judged there: A lost a rank when its best minor at t* is of
- *     lower rank, or below LR_DROP of the best at the step's ends: the run stops, naming the
- *     rows of M's left null vector; otherwise M alone was singular and a new minor is chosen;
- *   - |f| fell below LR_RESELECT of its value when chosen: a new minor is chosen, and the run
- *     stops when the rank fell or the best minor is below sqrt(rank_rtol) of the first one
- *     (the motion approaches the drop without crossing it).
+ *     (root.c, the events' root finder) and A judged there: A lost a rank when its best
+ *     minor at t* is of lower rank, or below LR_DROP of the best at the step's ends: the run
+ *     stops, naming the rows of M's left null vector; otherwise M alone was singular and a
+ *     new minor is chosen;
+ *   - |f| fell below LR_RESELECT of its value when chosen, or of the first minor's: a new
+ *     minor is chosen (A's best), and the run stops when the rank fell; a passage whose best
+ *     minor falls below near() (LR_NEAR sqrt of the loops' gap, at least sqrt(rank_rtol) of
+ *     the first one) stops the run once the best minor no longer falls, at the least one: a
+ *     run passes a crossing beside it, at a distance set by its own error (plain mode's
+ *     drift: campaign seeds 1006032, 1008416; explicit runs that passed at 3e-7 .. 2e-6 of
+ *     the first minor: 1003433, 1008451), so every run stops alike.
  * A minimal-mode partition switch (growth past switch_growth) does not see a vanishing row:
  * every dependent speed's coefficient in it shrinks alike, so the growth of the frozen basis
  * stays bounded through the crossing (campaign seed 1005585). A step that fails next to a drop
@@ -27,11 +32,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "integrate/root.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
 
 #define LR_RESELECT 1e-2  /* choose a new minor when |f| falls below this of its chosen value */
-#define LR_ITER 60        /* regula falsi iterations on the dense output */
+#define LR_ITER 200       /* root-finding iterations (bisection bounds them) */
 #define LR_DROP 1e-3      /* a minor's root is A's when its best minor there falls below this
                              of the best at the step's ends */
 
@@ -47,6 +53,8 @@ struct ap_drv_lrank {
   int *iwork, *ipiv;
   double *M, *AT, *work, *yd, *null;
   double f_prev, t_prev, f_sel;
+  double near_t, near_f;  /* a passage below near(): where A's best minor was least (f 0: none) */
+  double near_lev;        /* near() there */
 };
 
 /* det M / s^r for the minor M = A[rows, cols] (r x r), s its largest row norm: signed, in
@@ -197,35 +205,23 @@ static int f_dense(ap_sim *s, double t, double *f) {
   return rc;
 }
 
+static int f_root(void *ctx, double t, double *f) { return f_dense(ctx, t, f); }
+
 /* The watched minor changed sign between (ta, fa) and the step's end (tb, fb), y: its root t*
- * on the dense output (Illinois regula falsi); A lost a rank there when its best minor at t* is
+ * on the dense output (root.c); A lost a rank there when its best minor at t* is
  * of lower rank or below LR_DROP of the best at the step's ends (stop), else the minor alone
  * was singular (AP_OK; the caller chooses a new one). */
 static int judge_crossing(ap_sim *s, double ta, double fa, double tb, double fb,
                           const double *y) {
   ap_drv_lrank *lr = s->lr;
-  double qa = 0.0, qb = 0.0, qm = 0.0, fm = fb, t0 = ta;
-  int side = 0, ra = 0, rb = 0, rm = 0;
+  double qa = 0.0, qb = 0.0, qm = 0.0, t0 = ta;
+  int ra = 0, rb = 0, rm = 0;
   int rc = best_at(s, tb, y, &qb, &rb);
   if (rc == AP_OK) rc = dense_q(s, ta);
   if (rc == AP_OK) rc = best_at(s, ta, lr->yd, &qa, &ra);
-  for (int it = 0; rc == AP_OK && it < LR_ITER && fb != 0.0; it++) {
-    if (tb - ta <= 4.0 * DBL_EPSILON * fmax(fabs(ta), fabs(tb))) break;
-    double tm = tb - fb * (tb - ta) / (fb - fa);
-    if (!(tm > ta && tm < tb)) tm = ta + 0.5 * (tb - ta);
-    if (!(tm > ta && tm < tb)) break;
-    rc = f_dense(s, tm, &fm);
-    if (rc != AP_OK) break;
-    if ((fm > 0) == (fa > 0)) {
-      ta = tm, fa = fm;
-      if (side == -1) fb *= 0.5;
-      side = -1;
-    } else {
-      tb = tm, fb = fm;
-      if (side == 1) fa *= 0.5;
-      side = 1;
-    }
-  }
+  if (rc == AP_OK)   /* f's sign with 0 negative: the stage's test (f > 0) != (f_prev > 0) */
+    rc = ap_drv_root_locate(f_root, s, fa > 0 ? 1 : -1, AP_ROOT_ZERO_NEGATIVE, LR_ITER, ta, fa,
+                            tb, fb, &tb);
   if (rc == AP_OK && tb > t0) rc = dense_q(s, tb);
   if (rc == AP_OK) rc = best_at(s, tb, tb > t0 ? lr->yd : y, &qm, &rm);
   if (rc < 0) return rc;
@@ -254,6 +250,61 @@ int ap_drv_loop_rank_held(const ap_sim *s, double t, const double *y) {
          memcmp(d->q, y, sizeof(double) * (size_t)s->n) == 0;
 }
 
+/* The level of A's best minor (relative to its first value) below which a run cannot tell a
+ * crossing of the singular configuration from a passage beside it. Near a simple bifurcation
+ * point the loops read phi = x y in the kernel's coordinates (the quadratic normal form), and
+ * a state whose loops are open by e (relative to the length scale) lies on x y = e, where the
+ * Jacobian (y, x) keeps a norm of at least 2 sqrt(e): such a run passes a crossing at a best
+ * minor of about sqrt(e), and a passage beside the crossing looks the same. So the level is
+ * LR_NEAR sqrt(e), e = max |phi_r| / lscale over the loop rows at the state (plain mode's drift
+ * opens them, the other modes close them), never below sqrt(rank_rtol), the level of a drop
+ * itself. Measured at the passages of campaign seeds 1003433 and 1008416 (rtol 1e-8): the
+ * least best minor was 0.4 to 4.1 sqrt(e), for e from 2e-13 (explicit, projected) to 1.4e-8
+ * (plain bdf). Evaluated only where the watched minor is below LR_RESELECT of its own or
+ * of the first minor's value. */
+#define LR_NEAR 10.0
+
+static double near(ap_sim *s) {
+  const ap_model *m = s->m;
+  int nl = m->nhol < m->nphi ? m->nhol : m->nphi;   /* the loop rows come first in phi */
+  double e = 0.0;
+  double *scratch = ((ap_scratch *)s->d->internal)->ev;
+  if (nl > 0 && m->ev.phi && m->ev.phi(m, s->d, scratch, s->phi, NULL) == AP_OK)
+    for (int r = 0; r < nl; r++) e = fmax(e, fabs(s->phi[r]) / m->lscale);
+  return fmin(LR_RESELECT, fmax(sqrt(s->def.rank_rtol), LR_NEAR * sqrt(e)));
+}
+
+/* The run passed closest to a rank drop at lr->near_t, with A's best minor lr->near_f (of its
+ * size) there, below near(): it stops, naming the watched minor's rows at t. */
+static int passed_near(ap_sim *s, double t) {
+  ap_drv_lrank *lr = s->lr;
+  char rows[256];
+  minor_ratio(lr, s->d->A, s->m->b, lr->r, lr->rows, lr->cols);
+  name_rows(s->m, lr, rows, sizeof rows);
+  return ap_drv_fail(s, AP_ERR_RANK, "system '%s': constraint rows %s lose rank at t = %.17g "
+                     "(a bifurcation of the loop): A's best minor of rank %d falls to %.3g of "
+                     "its first value there, below %.3g (10 sqrt of the loops' gap, at least "
+                     "sqrt(rank_rtol)), where a run at this tolerance cannot tell a crossing of "
+                     "the singular configuration from a passage beside it, and no mode can say "
+                     "which motion the model takes (noticed at t = %.17g)", s->m->name, rows,
+                     lr->near_t, lr->r, lr->near_f / lr->q_ref, lr->near_lev, t);
+}
+
+/* A's best minor fr (rank r) at t, a new minor chosen there: stop where the rank fell, or once
+ * a passage below near() has passed its least value (the best minor no longer falls); a
+ * crossing within the next step is located by the watched minor's sign (judge_crossing). */
+static int judge_best(ap_sim *s, double t, int r, double fr) {
+  ap_drv_lrank *lr = s->lr;
+  if (r < lr->r) {   /* at the drop */
+    minor_ratio(lr, s->d->A, s->m->b, lr->r, lr->rows, lr->cols);
+    return lost_rank(s, t, 0.0, fabs(lr->f_sel));
+  }
+  if (lr->near_f > 0 && !(fr < lr->near_f)) return passed_near(s, t);
+  double lev = near(s);
+  if (fr < lev * lr->q_ref) lr->near_t = t, lr->near_f = fr, lr->near_lev = lev;
+  return AP_OK;
+}
+
 /* The stage: after each accepted step, before the mode's own stages (their restarts would end
  * the dense output that a crossing is located on). */
 int ap_drv_stage_loop_rank(ap_sim *s, double *tp) {
@@ -267,17 +318,15 @@ int ap_drv_stage_loop_rank(ap_sim *s, double *tp) {
     rc = judge_crossing(s, lr->t_prev, lr->f_prev, t, f, y);
     if (rc == AP_OK) rc = position_at(s, t, y);
     if (rc != AP_OK) return rc < 0 || rc == AP_ERR_RANK ? rc : AP_OK;
-  } else if (!(fabs(f) < LR_RESELECT * fabs(lr->f_sel))) {
+  } else if (!(fabs(f) < LR_RESELECT * fabs(lr->f_sel)) &&
+             !(fabs(f) < LR_RESELECT * lr->q_ref) && lr->near_f == 0) {
     lr->f_prev = f, lr->t_prev = t;
     return AP_OK;
   }
   rc = choose(s, &r, lr->brows, lr->bcols);   /* a new minor at t */
   if (rc != AP_OK) return rc;
   double fr = fabs(minor_ratio(lr, s->d->A, b, r, lr->brows, lr->bcols));
-  if (r < lr->r || fr < sqrt(s->def.rank_rtol) * lr->q_ref) {   /* at the drop, or close */
-    minor_ratio(lr, s->d->A, b, lr->r, lr->rows, lr->cols);
-    return lost_rank(s, t, r < lr->r ? 0.0 : fr, fabs(lr->f_sel));
-  }
+  if ((rc = judge_best(s, t, r, fr)) != AP_OK) return rc;
   lr->r = r;
   memcpy(lr->rows, lr->brows, sizeof(int) * (size_t)r);
   memcpy(lr->cols, lr->bcols, sizeof(int) * (size_t)r);
