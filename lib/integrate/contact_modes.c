@@ -32,8 +32,7 @@
 #include <string.h>
 
 #include "appell/event.h"
-#include "integrate/sim_int.h"
-#include "model/con_friction.h"
+#include "integrate/contact_int.h"
 
 enum { EV_SLIP, EV_LIFT, EV_STICK, EV_TOUCH, EV_N };
 static const char *const ev_suffix[EV_N] = {"slip", "lift_off", "stick", "touchdown"};
@@ -120,7 +119,7 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
 
 /* The data at (t, q, v) with the accelerations and the multipliers, whatever the mode's
  * basis (the hooks' view of the state). */
-static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
+int ap_drv_cm_forces(ap_sim *s, double t, const double *q, const double *v) {
   ap_data *d = s->d;
   ap_basis basis = d->basis;
   int sfe = d->speeds_from_e;
@@ -136,13 +135,13 @@ static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
 
 /* Normal force and tangential force (2) of contact c from the multipliers lam (the data's, or
  * IDA's own in DAE mode); a wheel under a planar chassis: its load (model/loads.c). */
-static double contact_forces(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft) {
+double ap_drv_cm_normal(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft) {
   ft[0] = lam[c->row], ft[1] = lam[c->row + 1];
   return ap_cfr_contact_normal(s->m, s->d, lam, c);
 }
 
 /* A wheel under a planar chassis cannot leave the ground: the run stops. */
-static int tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
+int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
   return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "contact '%s': the wheel's load falls to %.6g N at "
                      "t = %.17g: the vehicle would tip or lift that wheel, which a planar "
                      "chassis cannot (its joint keeps the chassis level): put the chassis on a "
@@ -167,10 +166,10 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   switch (e->kind) {
     case EV_SLIP:
       if (mode == AP_CM_ROLLING)
-        *out = mu_of(c) * contact_forces(s, lam, c, ft) - hypot(ft[0], ft[1]);
+        *out = mu_of(c) * ap_drv_cm_normal(s, lam, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = contact_forces(s, lam, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = ap_drv_cm_normal(s, lam, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {
@@ -189,7 +188,7 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
 }
 
 /* Sliding along -F_t / |F_t| (the sticking force's direction opposes the slip to come). */
-static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
+void ap_drv_cm_slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
   double *dir = ap_cfr_slip_dir(ap_bm(s->m), scratch(s->d), c), nt = hypot(ft[0], ft[1]);
   if (nt > 0) dir[0] = -ft[0] / nt, dir[1] = -ft[1] / nt;
   ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_SLIDING);
@@ -197,7 +196,7 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
 
 /* Before a contact flies: q onto the rolling mode's manifold, so that the gap the touchdown
  * event watches starts at round-off (IDA holds it only to its tolerance), then airborne. */
-static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
+int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   double *x = malloc(sizeof(double) * (size_t)s->n);
   if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(x, q, sizeof(double) * (size_t)s->n);
@@ -207,78 +206,45 @@ static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   return rc;
 }
 
-static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v);
+/* The forces at a switch's state, or the run's failure naming the event. */
+static int hook_forces(ap_sim *s, const ap_event_record *rec, const double *q, const double *v) {
+  int rc = ap_drv_cm_forces(s, rec->t, q, v);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "event '%s' at "
+                                           "t = %.17g: %s", rec->name, rec->t, s->d->msg);
+}
 
+/* The switch's own mode change; then every contact's mode made consistent (settle). */
 static int on_switch(const ap_event_record *rec, double *q, double *v, void *user) {
   const cm_event *e = user;
   ap_sim *s = e->cm->s;
   const ap_bmodel *M = ap_bm(s->m);
   const ap_mcon *c = &M->cons[e->ci];
-  double *S = scratch(s->d), ft[2], fn;
+  double ft[2], fn;
+  int changed = 0;
   switch (e->kind) {
     case EV_SLIP:
-      if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s, s->d->lambda, c, ft);
-      if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, fn);
+      if (hook_forces(s, rec, q, v) != AP_OK) return -1;
+      fn = ap_drv_cm_normal(s, s->d->lambda, c, ft);
+      if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c))
+        return ap_drv_cm_tips(s, c, rec->t, fn);
       if (unilateral(c) && fn <= 0) {
-        if (lift(s, c, rec->t, q) != AP_OK) return -1;
+        if (ap_drv_cm_lift(s, c, rec->t, q) != AP_OK) return -1;
       } else {
-        slide_against(s, c, ft);
+        ap_drv_cm_slide_against(s, c, ft);
       }
       break;
     case EV_LIFT:
-      if (ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, 0.0);
-      if (lift(s, c, rec->t, q) != AP_OK) return -1;
+      if (ap_bm_wheel_by_load(M, c)) return ap_drv_cm_tips(s, c, rec->t, 0.0);
+      if (ap_drv_cm_lift(s, c, rec->t, q) != AP_OK) return -1;
       break;
     case EV_STICK:
-      ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
-      if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s, s->d->lambda, c, ft);
-      if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
+      ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_ROLLING);   /* settle: slides on if outside */
       break;
     default:
-      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK ||
-          after_impact(s, c, rec->t, q, v) != AP_OK)
-        return -1;
+      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK) return -1;
       break;
   }
-  return 0;
-}
-
-/* With the forces of the current state in the data (forces_at): a contact whose normal force
- * is negative flies (unilateral), a rolling one whose sticking force lies outside its cone
- * slides (along -F_t). 2 when it flies, 1 when it slides, 0 when its mode stays; a wheel under
- * a planar chassis whose load is negative stops the run (tips: its negative status). */
-static int by_forces(ap_sim *s, const ap_mcon *c, double t) {
-  double ft[2], fn = contact_forces(s, s->d->lambda, c, ft);
-  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
-  if (mode == AP_CM_AIRBORNE) return 0;
-  if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(ap_bm(s->m), c)) return tips(s, c, t, fn);
-  if (unilateral(c) && fn < 0) {
-    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
-    return 2;
-  }
-  if (mode != AP_CM_ROLLING || !(mu_of(c) >= 0) || !(hypot(ft[0], ft[1]) > mu_of(c) * fn))
-    return 0;
-  slide_against(s, c, ft);
-  return 1;
-}
-
-/* After an impact (the hook's q, v+ on the new mode's rows): the forces there decide at once,
- * as at creation (a rod that sticks at a touchdown where the ground would have to pull flies
- * off again; a switch at the cut itself would only be recorded, its hook not called). */
-static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v) {
-  if (ap_cfr_mode(ap_bm(s->m), scratch(s->d), c) == AP_CM_AIRBORNE) return AP_OK;
-  int rc = forces_at(s, t, q, v);
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact '%s' after "
-                                      "its impact at t = %.17g: %s", c->name, t, s->d->msg);
-  int to = by_forces(s, c, t);
-  if (to < 0) return to;
-  if (to == 2) {
-    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_ROLLING);   /* lift projects q */
-    rc = lift(s, c, t, q);
-  }
-  return rc;
+  return ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL) == AP_OK ? 0 : -1;
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
@@ -290,21 +256,7 @@ static int initial_cone(ap_sim *s) {
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
-  int rc = forces_at(s, s->t, q, v), changed = 0;
-  for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
-    const ap_mcon *c = con(s, cm->ci[i]);
-    /* Sliding from the start too: a negative normal force lifts it (the free robot braking
-     * with locked wheels at mu_kinetic 0.6 had its caster pulled down by -2.1 N). */
-    int to = by_forces(s, c, s->t);
-    if (to < 0) {
-      rc = to;
-      break;
-    }
-    changed |= to != 0;
-    if (to == 2) cm->lifted[cm->ci[i]] = 1;
-  }
-  if (rc != AP_OK && rc != AP_ERR_UNSUPPORTED)
-    rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", s->d->msg);
+  int changed = 0, rc = ap_drv_cm_settle(s, s->t, q, v, &changed, cm->lifted);
   if (rc == AP_OK && changed) rc = ap_drv_restart_state(s, s->t, q, v);
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);
