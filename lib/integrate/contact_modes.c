@@ -51,6 +51,7 @@ struct ap_drv_contacts {
   char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
+  double *gap0;      /* (by constraint) a bounce's gap at its impact, NAN otherwise */
 };
 
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
@@ -66,6 +67,14 @@ static double slip_tol(const ap_sim *s, const double *v) {
   double vmax = 0.0;
   for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
   return s->def.atol + s->def.rtol * vmax;
+}
+/* A contact that bounced leaves the ground at a clear speed: its touchdown watches the gap
+ * from the impact's own (round-off) gap on, gap - gap0 + 1e-14 lscale (the bounce's next
+ * touchdown to round-off, however low the bounce); after a lift-off, gap + gap_tol. */
+static double unarmed_gap(const struct ap_drv_contacts *cm, int ci) {
+  const ap_sim *s = cm->s;
+  double g0 = cm->gap0[ci];
+  return isnan(g0) ? gap_tol(s) : 1e-14 * s->m->lscale - g0;
 }
 static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
   return cm->armed[ci] == mode + 1;
@@ -83,6 +92,7 @@ void ap_drv_contacts_free(ap_sim *s) {
   free(s->cm->ev);
   free(s->cm->lam);
   free(s->cm->armed);
+  free(s->cm->gap0);
   free(s->cm);
   s->cm = NULL;
 }
@@ -95,9 +105,11 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
   if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
   if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
+  if (s->cm) s->cm->gap0 = malloc(sizeof(double) * (size_t)(M->nc + 1));
+  for (int ci = 0; s->cm && s->cm->gap0 && ci < M->nc; ci++) s->cm->gap0[ci] = NAN;
   if (s->cm && s->cm->armed)
     s->cm->lifted = s->cm->armed + M->nc, s->cm->made = s->cm->lifted + M->nc;
-  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
+  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed || !s->cm->gap0)
     return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
@@ -181,7 +193,8 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
       break;
     default:
       if (mode == AP_CM_AIRBORNE)
-        *out = ap_contact_gap(M, S, c) + (armed(e->cm, e->ci, mode) ? 0.0 : gap_tol(s));
+        *out = ap_contact_gap(M, S, c) +
+               (armed(e->cm, e->ci, mode) ? 0.0 : unarmed_gap(e->cm, e->ci));
       break;
   }
   return 0;
@@ -220,7 +233,7 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
   const ap_bmodel *M = ap_bm(s->m);
   const ap_mcon *c = &M->cons[e->ci];
   double ft[2], fn;
-  int changed = 0;
+  int changed = 0, bounced = 0;
   switch (e->kind) {
     case EV_SLIP:
       if (hook_forces(s, rec, q, v) != AP_OK) return -1;
@@ -242,9 +255,15 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
       break;
     default:
       if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK) return -1;
+      bounced = ap_cfr_mode(M, scratch(s->d), c) == AP_CM_AIRBORNE;
       break;
   }
-  return ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL) == AP_OK ? 0 : -1;
+  e->cm->gap0[e->ci] = NAN;
+  e->cm->armed[e->ci] = 0;   /* a new mode (a bounce is a new flight): armed again later */
+  if (ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL) != AP_OK) return -1;
+  if (bounced && ap_cfr_mode(M, scratch(s->d), c) == AP_CM_AIRBORNE)
+    e->cm->gap0[e->ci] = ap_contact_gap(M, scratch(s->d), c);   /* the data: at (t, q) */
+  return 0;
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
