@@ -18,13 +18,14 @@ int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
 
-/* The consistent modes at a switch state (contact_settle.c): each contact's mode is checked
+/* The consistent modes at a switch state (contact_settle.c), v put on the modes' velocity
+ * rows (nearest in g) first, as the restart after it would: each contact's mode is checked
  * against the forces and accelerations it gives and changed while one of them clearly
  * contradicts it (F_n < 0 rolling or sliding; |F_t| > mu F_n rolling; an airborne contact
  * touching the ground whose gap would fall). *changed: 1 when a mode changed; contact
  * `lifted` (by constraint index, may be NULL) marks the contacts made airborne. A cycle of
  * modes stops the run with a message (no consistent mode: Painleve). */
-int ap_drv_cm_settle(ap_sim *s, double t, double *q, const double *v, int *changed,
+int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed,
                      char *lifted);
 
 #endif

@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/core.h"
 #include "integrate/contact_int.h"
 
 #define SETTLE_BAND 1e3   /* relative to rtol: decisions inside it keep the mode */
@@ -31,7 +32,7 @@ typedef struct settle_ctx {
   ap_sim *s;
   const ap_bmodel *M;
   double t, *q, *vd;
-  const double *v;
+  double *v;
   double fn_roll, ft_roll[2], gdd;   /* an airborne contact's rolling forces and gap'' */
   int turns;                         /* slip directions turned (bounded) */
 } settle_ctx;
@@ -147,6 +148,25 @@ static int stick_or_turn(settle_ctx *x, const ap_mcon *c) {
   return 2;
 }
 
+/* v onto the current modes' velocity rows, nearest in g (as the driver's restart will put
+ * it): a contact that has just stuck still carries the slip of the state before, and the
+ * forces there would be those of an inconsistent state (two wheels of one axle: their
+ * sideways rows' gamma disagree). */
+static int project_speeds(settle_ctx *x) {
+  ap_sim *s = x->s;
+  ap_data *d = s->d;
+  ap_basis basis = d->basis;
+  int sfe = d->speeds_from_e;
+  d->t = x->t, d->speeds_from_e = 0, d->basis = AP_BASIS_ORTHONORMAL;
+  memcpy(d->q, x->q, sizeof(double) * (size_t)s->n);
+  int rc = ap_partition(s->m, d);
+  if (rc == AP_OK) rc = ap_fwd_position(s->m, d);
+  if (rc == AP_OK) rc = ap_core_project_here(s->m, d, x->v, NULL);
+  d->basis = basis, d->speeds_from_e = sfe;
+  s->ev_stamp = -1;
+  return rc;
+}
+
 /* The first contact that contradicts its mode, changed; 1 when one was (2: a slip direction
  * turned), 0 when none. */
 static int settle_one(settle_ctx *x, char *lifted) {
@@ -198,7 +218,7 @@ static int no_mode(settle_ctx *x) {
                      x->t, x->gdd);
 }
 
-int ap_drv_cm_settle(ap_sim *s, double t, double *q, const double *v, int *changed,
+int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed,
                      char *lifted) {
   settle_ctx x = {s, ap_bm(s->m), t, q, NULL, v, 0.0, {0.0, 0.0}, 0.0, 0};
   uint64_t seen[SETTLE_SEEN];
@@ -215,7 +235,8 @@ int ap_drv_cm_settle(ap_sim *s, double t, double *q, const double *v, int *chang
       break;
     }
     if (nseen < SETTLE_SEEN) seen[nseen++] = code;
-    rc = ap_drv_cm_forces(s, t, q, v);
+    rc = project_speeds(&x);
+    if (rc == AP_OK) rc = ap_drv_cm_forces(s, t, q, v);
     if (rc != AP_OK) {
       rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact modes at t = %.17g: %s", t,
                        s->d->msg);
