@@ -18,14 +18,20 @@ int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
 
+/* Record contact c's switch from mode `from` to `to` at (t, q, v) as the event of that
+ * switch (NAME.slip, .stick, .lift_off, .touchdown), a switch made by another's hook. */
+int ap_drv_cm_note(ap_sim *s, const ap_mcon *c, int from, int to, double t, const double *q,
+                   const double *v);
+
 /* The consistent modes at a switch state (contact_settle.c), v put on the modes' velocity
  * rows (nearest in g) first, as the restart after it would: each contact's mode is checked
  * against the forces and accelerations it gives and changed while one of them clearly
  * contradicts it (F_n < 0 rolling or sliding; |F_t| > mu F_n rolling; an airborne contact
  * touching the ground whose gap would fall). *changed: 1 when a mode changed; contact
  * `lifted` (by constraint index, may be NULL) marks the contacts made airborne. A cycle of
- * modes stops the run with a message (no consistent mode: Painleve). */
-int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed,
-                     char *lifted);
+ * modes stops the run with a message (no consistent mode: Painleve). With `note`, each change
+ * is recorded as its switch event (ap_drv_cm_note). */
+int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed, char *lifted,
+                     int note);
 
 #endif

@@ -40,6 +40,7 @@ static const char *const ev_suffix[EV_N] = {"slip", "lift_off", "stick", "touchd
 typedef struct cm_event {
   struct ap_drv_contacts *cm;
   int ci, kind;
+  int idx;           /* its index among the simulation's events; -1 when not added */
 } cm_event;
 
 struct ap_drv_contacts {
@@ -260,7 +261,7 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
   }
   e->cm->gap0[e->ci] = NAN;
   e->cm->armed[e->ci] = 0;   /* a new mode (a bounce is a new flight): armed again later */
-  if (ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL) != AP_OK) return -1;
+  if (ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL, 1) != AP_OK) return -1;
   if (bounced && ap_cfr_mode(M, scratch(s->d), c) == AP_CM_AIRBORNE)
     e->cm->gap0[e->ci] = ap_contact_gap(M, scratch(s->d), c);   /* the data: at (t, q) */
   return 0;
@@ -275,7 +276,7 @@ static int initial_cone(ap_sim *s) {
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
-  int changed = 0, rc = ap_drv_cm_settle(s, s->t, q, v, &changed, cm->lifted);
+  int changed = 0, rc = ap_drv_cm_settle(s, s->t, q, v, &changed, cm->lifted, 0);
   if (rc == AP_OK && changed) rc = ap_drv_restart_state(s, s->t, q, v);
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);
@@ -301,7 +302,7 @@ int ap_drv_contacts_events(ap_sim *s) {
       int wanted = kind == EV_SLIP || kind == EV_STICK ? mu_of(c) >= 0 : unilateral(c);
       if (!wanted) continue;
       cm_event *e = &cm->ev[i * EV_N + kind];
-      *e = (cm_event){cm, cm->ci[i], kind};
+      *e = (cm_event){cm, cm->ci[i], kind, ap_drv_event_defined(s)};
       char name[96];
       snprintf(name, sizeof name, "%s.%s", c->name, ev_suffix[kind]);
       ap_event_def def = ap_event_def_default();
@@ -373,4 +374,17 @@ int ap_sim_contact_mode(const ap_sim *s, int constraint) {
   const ap_bmodel *M = ap_bm(s->m);
   if (constraint < 0 || constraint >= M->nc || M->cons[constraint].fric < 0) return AP_ERR_ARG;
   return ap_cfr_mode(M, scratch(s->d), &M->cons[constraint]);
+}
+
+int ap_drv_cm_note(ap_sim *s, const ap_mcon *c, int from, int to, double t, const double *q,
+                   const double *v) {
+  struct ap_drv_contacts *cm = s->cm;
+  int kind = to == AP_CM_AIRBORNE ? EV_LIFT : from == AP_CM_AIRBORNE ? EV_TOUCH
+             : to == AP_CM_SLIDING ? EV_SLIP : EV_STICK;
+  for (int i = 0; cm && i < cm->nc; i++) {
+    const cm_event *e = &cm->ev[i * EV_N + kind];
+    if (cm->ci[i] == (int)(c - ap_bm(s->m)->cons) && e->cm)
+      return ap_drv_event_note_at(s, e->idx, t, -1, q, v);
+  }
+  return AP_OK;   /* that event is not watched (a contact without friction never slips) */
 }

@@ -218,13 +218,31 @@ static int no_mode(settle_ctx *x) {
                      x->t, x->gdd);
 }
 
-int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed,
-                     char *lifted) {
+/* Contacts whose mode differs from was (by constraint): recorded as their switches. */
+static int note_changes(settle_ctx *x, char *was) {
+  int rc = AP_OK;
+  for (int ci = 0; rc == AP_OK && ci < x->M->nc; ci++) {
+    const ap_mcon *c = &x->M->cons[ci];
+    if (c->fric < 0 || mode_of(x, c) == was[ci]) continue;
+    rc = ap_drv_cm_note(x->s, c, was[ci], mode_of(x, c), x->t, x->q, x->v);
+    was[ci] = (char)mode_of(x, c);
+  }
+  return rc;
+}
+
+int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed, char *lifted,
+                     int note) {
   settle_ctx x = {s, ap_bm(s->m), t, q, NULL, v, 0.0, {0.0, 0.0}, 0.0, 0};
   uint64_t seen[SETTLE_SEEN];
   int nseen = 0, rc = AP_OK;
   x.vd = malloc(sizeof(double) * (size_t)(s->k + 1));
-  if (!x.vd) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  char *was = malloc((size_t)x.M->nc + 1);
+  if (!x.vd || !was) {
+    free(x.vd), free(was);
+    return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  }
+  for (int ci = 0; ci < x.M->nc; ci++)
+    was[ci] = x.M->cons[ci].fric >= 0 ? (char)mode_of(&x, &x.M->cons[ci]) : 0;
   *changed = 0;
   for (int iter = 0; rc == AP_OK; iter++) {
     uint64_t code = modes_code(&x);
@@ -249,7 +267,9 @@ int ap_drv_cm_settle(ap_sim *s, double t, double *q, double *v, int *changed,
     }
     if (one == 2) nseen = 0;   /* the same modes with a turned direction: not a cycle */
     *changed = 1;
+    if (note && (rc = note_changes(&x, was)) != AP_OK) break;
   }
   free(x.vd);
+  free(was);
   return rc;
 }

@@ -542,9 +542,14 @@ void ap_drv_events_free(ap_sim *s) {
 int ap_drv_event_defined(const ap_sim *s) { return s->ev ? s->ev->count : 0; }
 
 int ap_drv_event_note(ap_sim *s, int i, double t, int direction) {
+  return ap_drv_event_note_at(s, i, t, direction, s->q, s->v);   /* the current state */
+}
+
+int ap_drv_event_note_at(ap_sim *s, int i, double t, int direction, const double *q,
+                         const double *v) {
   if (!s->ev || i < 0 || i >= s->ev->count) return AP_ERR_ARG;
   ap_event_record *r = NULL;
-  memcpy(s->d->q, s->q, sizeof(double) * (size_t)s->n);   /* the current state: unchanged */
-  memcpy(s->d->v, s->v, sizeof(double) * (size_t)s->k);
+  memmove(s->d->q, q, sizeof(double) * (size_t)s->n);
+  memmove(s->d->v, v, sizeof(double) * (size_t)s->k);
   return record(s, i, t, direction, &r);
 }
