@@ -257,7 +257,8 @@ static int restep(ap_sim *s, double tcut) {
   s->stats.restarts++;
   if (s->dae) {
     rc = ap_drv_restart_state(s, t, ev->ylast, ev->ylast + s->n);
-    while (rc == AP_OK && t < tcut)
+    /* a cut a few ulps after the step's start is the start (IDA: "tout too close to t0") */
+    while (rc == AP_OK && tcut - t > 32.0 * DBL_EPSILON * fabs(tcut))
       if ((rc = ap_dae_one(s->dae, tcut, &t, s->ytry)) != AP_OK)
         rc = ap_drv_fail(s, rc, "events: %s", ap_dae_message(s->dae));
     return rc;
