@@ -18,6 +18,10 @@ int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
 
+/* The run's warning names each rolling contact whose friction is statically indeterminate
+ * at the start (its tangential rows combinations of the others; contact_indet.c). */
+int ap_drv_cm_indeterminate(ap_sim *s);
+
 /* Record contact c's switch from mode `from` to `to` at (t, q, v) as the event of that
  * switch (NAME.slip, .stick, .lift_off, .touchdown), a switch made by another's hook. */
 int ap_drv_cm_note(ap_sim *s, const ap_mcon *c, int from, int to, double t, const double *q,

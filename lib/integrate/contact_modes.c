@@ -295,6 +295,7 @@ int ap_drv_contacts_events(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   if (!cm) return AP_OK;
   int rc0 = initial_cone(s);
+  if (rc0 == AP_OK) rc0 = ap_drv_cm_indeterminate(s);
   if (rc0 != AP_OK) return rc0;
   for (int i = 0; i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
