@@ -384,8 +384,12 @@ int ap_drv_cm_note(ap_sim *s, const ap_mcon *c, int from, int to, double t, cons
              : to == AP_CM_SLIDING ? EV_SLIP : EV_STICK;
   for (int i = 0; cm && i < cm->nc; i++) {
     const cm_event *e = &cm->ev[i * EV_N + kind];
-    if (cm->ci[i] == (int)(c - ap_bm(s->m)->cons) && e->cm)
-      return ap_drv_event_note_at(s, e->idx, t, -1, q, v);
+    if (cm->ci[i] != (int)(c - ap_bm(s->m)->cons) || !e->cm) continue;
+    ap_event_record r;   /* its own crossing tied with this cut is recorded already */
+    for (int j = ap_sim_event_count(s) - 1; j >= 0 && ap_sim_event_get(s, j, &r) == AP_OK &&
+                                            r.t == t; j--)
+      if (r.event == e->idx) return AP_OK;
+    return ap_drv_event_note_at(s, e->idx, t, -1, q, v);
   }
   return AP_OK;   /* that event is not watched (a contact without friction never slips) */
 }

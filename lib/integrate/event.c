@@ -440,11 +440,12 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
   }
   for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
   if (rc == AP_OK && isfinite(tcut)) rc = jumped_at_cut(s, *t, &stop);
-  /* a switch whose hook ran is a new function from the cut on: its side is its value there
-   * (a bouncing contact's touchdown is above the ground again; keeping the crossed side
-   * missed the next touchdown when one step spanned the whole bounce) */
+  /* a falling switch whose hook put its value above 0 again watches its next fall from the
+   * cut on (a bouncing contact's touchdown: keeping the crossed side missed the next
+   * touchdown when one step spanned the whole bounce) */
   for (int i = 0; rc == AP_OK && i < ev->count; i++)
-    if (sw[i] && ev->list[i].end != 0.0) ev->list[i].crossed = 0;
+    if (sw[i] && ev->list[i].def.direction == AP_EVENT_FALLING && ev->list[i].end > 0.0)
+      ev->list[i].crossed = 0;
   if (rc == AP_OK) settle(ev), look_ahead(s, *t, h);
   return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
 }
