@@ -54,17 +54,10 @@ static const char *mode_name(ap_mode mode) {
   return mode == AP_MODE_MINIMAL ? "minimal" : mode == AP_MODE_PROJECTED ? "projected" : "dae";
 }
 
+/* The tester's settings: dop853 (bdf, i.e. IDA, in DAE mode), atol = rtol / 100. */
 static ap_sim *start(const ap_model *m, ap_mode mode, double rtol, const double *q,
                      const double *v) {
-  ap_sim_def def = ap_sim_def_default();
-  def.mode = mode, def.method = mode == AP_MODE_DAE ? "bdf" : "dop853";
-  def.rtol = rtol, def.atol = rtol * 1e-2;
-  ap_sim *s = NULL;
-  char msg[1024] = "";
-  int rc = ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg);
-  if (rc != AP_OK) printf("  sim_create: %s\n", msg);
-  AP_CHECK_EQ_INT(rc, AP_OK);
-  return s;
+  return bs_start(m, mode, mode == AP_MODE_DAE ? "bdf" : "dop853", rtol, rtol * 1e-2, q, v);
 }
 
 static void test_bounces(ap_mode mode, double rtol) {

@@ -60,7 +60,8 @@ static double force_band(const ap_sim *s, double fn, const double *ft) {
 static uint64_t modes_code(const settle_ctx *x) {
   uint64_t code = 0;
   for (int ci = 0, i = 0; ci < x->M->nc; ci++)
-    if (x->M->cons[ci].fric >= 0 && i++ < 40) code = 3 * code + (uint64_t)mode_of(x, &x->M->cons[ci]);
+    if (x->M->cons[ci].fric >= 0 && i++ < 40)
+      code = 3 * code + (uint64_t)mode_of(x, &x->M->cons[ci]);
   return code;
 }
 
