@@ -146,9 +146,15 @@ static void rod_impact(void) {
     AP_CHECK(s != NULL);
     if (!s) continue;
     AP_CHECK_EQ_INT(ap_sim_advance(s, 0.01), AP_OK);
-    ap_event_record r;
-    int ok = ap_sim_event_count(s) == 1 && ap_sim_event_get(s, 0, &r) == AP_OK;
+    ap_event_record r, r2;
+    /* +x: the touchdown, then the lift-off the forces make at once (recorded at its time) */
+    int ok = ap_sim_event_count(s) == (dir > 0 ? 2 : 1) && ap_sim_event_get(s, 0, &r) == AP_OK;
+    printf("  rod impact (%+d): %d events\n", dir, ap_sim_event_count(s));
     AP_CHECK(ok);
+    if (ok && dir > 0) {
+      AP_CHECK_EQ_INT(ap_sim_event_get(s, 1, &r2), AP_OK);
+      AP_CHECK(strcmp(r2.name, "tip.lift_off") == 0 && r2.t == r.t);
+    }
     if (!ok) {
       ap_sim_free(s);
       continue;

@@ -153,7 +153,9 @@ static int impact(ap_sim *s, const ap_mcon *c, double t, const double *q, double
   if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact '%s': impact "
                                       "at t = %.17g: %s", c->name, t, d->msg);
   double pt = mu >= 0 ? hypot(w->P[c->row], w->P[c->row + 1]) : 0.0;
-  if (mu < 0 || pt <= mu * w->P[r]) {                    /* sticking */
+  /* sticking; also with no tangential impulse at all (a grazing touchdown whose normal
+   * impulse is round-off or pulls: there is no slip direction to slide along) */
+  if (mu < 0 || pt <= mu * w->P[r] || !(pt > 0)) {
     memcpy(v, w->vs, sizeof(double) * (size_t)k);
     if (bounce) ap_cfr_set_mode(M, S, c, AP_CM_AIRBORNE);
     return AP_OK;

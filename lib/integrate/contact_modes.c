@@ -32,8 +32,7 @@
 #include <string.h>
 
 #include "appell/event.h"
-#include "integrate/sim_int.h"
-#include "model/con_friction.h"
+#include "integrate/contact_int.h"
 
 enum { EV_SLIP, EV_LIFT, EV_STICK, EV_TOUCH, EV_N };
 static const char *const ev_suffix[EV_N] = {"slip", "lift_off", "stick", "touchdown"};
@@ -41,6 +40,7 @@ static const char *const ev_suffix[EV_N] = {"slip", "lift_off", "stick", "touchd
 typedef struct cm_event {
   struct ap_drv_contacts *cm;
   int ci, kind;
+  int idx;           /* its index among the simulation's events; -1 when not added */
 } cm_event;
 
 struct ap_drv_contacts {
@@ -52,6 +52,7 @@ struct ap_drv_contacts {
   char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
+  double *gap0;      /* (by constraint) a bounce's gap at its impact, NAN otherwise */
 };
 
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
@@ -67,6 +68,14 @@ static double slip_tol(const ap_sim *s, const double *v) {
   double vmax = 0.0;
   for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(v[j]));
   return s->def.atol + s->def.rtol * vmax;
+}
+/* A contact that bounced leaves the ground at a clear speed: its touchdown watches the gap
+ * from the impact's own (round-off) gap on, gap - gap0 + 1e-14 lscale (the bounce's next
+ * touchdown to round-off, however low the bounce); after a lift-off, gap + gap_tol. */
+static double unarmed_gap(const struct ap_drv_contacts *cm, int ci) {
+  const ap_sim *s = cm->s;
+  double g0 = cm->gap0[ci];
+  return isnan(g0) ? gap_tol(s) : 1e-14 * s->m->lscale - g0;
 }
 static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
   return cm->armed[ci] == mode + 1;
@@ -84,6 +93,7 @@ void ap_drv_contacts_free(ap_sim *s) {
   free(s->cm->ev);
   free(s->cm->lam);
   free(s->cm->armed);
+  free(s->cm->gap0);
   free(s->cm);
   s->cm = NULL;
 }
@@ -96,9 +106,11 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
   if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
   if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
+  if (s->cm) s->cm->gap0 = malloc(sizeof(double) * (size_t)(M->nc + 1));
+  for (int ci = 0; s->cm && s->cm->gap0 && ci < M->nc; ci++) s->cm->gap0[ci] = NAN;
   if (s->cm && s->cm->armed)
     s->cm->lifted = s->cm->armed + M->nc, s->cm->made = s->cm->lifted + M->nc;
-  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed)
+  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed || !s->cm->gap0)
     return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
@@ -120,7 +132,7 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
 
 /* The data at (t, q, v) with the accelerations and the multipliers, whatever the mode's
  * basis (the hooks' view of the state). */
-static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
+int ap_drv_cm_forces(ap_sim *s, double t, const double *q, const double *v) {
   ap_data *d = s->d;
   ap_basis basis = d->basis;
   int sfe = d->speeds_from_e;
@@ -136,13 +148,13 @@ static int forces_at(ap_sim *s, double t, const double *q, const double *v) {
 
 /* Normal force and tangential force (2) of contact c from the multipliers lam (the data's, or
  * IDA's own in DAE mode); a wheel under a planar chassis: its load (model/loads.c). */
-static double contact_forces(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft) {
+double ap_drv_cm_normal(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft) {
   ft[0] = lam[c->row], ft[1] = lam[c->row + 1];
   return ap_cfr_contact_normal(s->m, s->d, lam, c);
 }
 
 /* A wheel under a planar chassis cannot leave the ground: the run stops. */
-static int tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
+int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
   return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "contact '%s': the wheel's load falls to %.6g N at "
                      "t = %.17g: the vehicle would tip or lift that wheel, which a planar "
                      "chassis cannot (its joint keeps the chassis level): put the chassis on a "
@@ -167,10 +179,10 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   switch (e->kind) {
     case EV_SLIP:
       if (mode == AP_CM_ROLLING)
-        *out = mu_of(c) * contact_forces(s, lam, c, ft) - hypot(ft[0], ft[1]);
+        *out = mu_of(c) * ap_drv_cm_normal(s, lam, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = contact_forces(s, lam, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = ap_drv_cm_normal(s, lam, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {
@@ -182,14 +194,15 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
       break;
     default:
       if (mode == AP_CM_AIRBORNE)
-        *out = ap_contact_gap(M, S, c) + (armed(e->cm, e->ci, mode) ? 0.0 : gap_tol(s));
+        *out = ap_contact_gap(M, S, c) +
+               (armed(e->cm, e->ci, mode) ? 0.0 : unarmed_gap(e->cm, e->ci));
       break;
   }
   return 0;
 }
 
 /* Sliding along -F_t / |F_t| (the sticking force's direction opposes the slip to come). */
-static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
+void ap_drv_cm_slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
   double *dir = ap_cfr_slip_dir(ap_bm(s->m), scratch(s->d), c), nt = hypot(ft[0], ft[1]);
   if (nt > 0) dir[0] = -ft[0] / nt, dir[1] = -ft[1] / nt;
   ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_SLIDING);
@@ -197,7 +210,7 @@ static void slide_against(ap_sim *s, const ap_mcon *c, const double *ft) {
 
 /* Before a contact flies: q onto the rolling mode's manifold, so that the gap the touchdown
  * event watches starts at round-off (IDA holds it only to its tolerance), then airborne. */
-static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
+int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   double *x = malloc(sizeof(double) * (size_t)s->n);
   if (!x) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(x, q, sizeof(double) * (size_t)s->n);
@@ -207,78 +220,51 @@ static int lift(ap_sim *s, const ap_mcon *c, double t, double *q) {
   return rc;
 }
 
-static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v);
+/* The forces at a switch's state, or the run's failure naming the event. */
+static int hook_forces(ap_sim *s, const ap_event_record *rec, const double *q, const double *v) {
+  int rc = ap_drv_cm_forces(s, rec->t, q, v);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "event '%s' at "
+                                           "t = %.17g: %s", rec->name, rec->t, s->d->msg);
+}
 
+/* The switch's own mode change; then every contact's mode made consistent (settle). */
 static int on_switch(const ap_event_record *rec, double *q, double *v, void *user) {
   const cm_event *e = user;
   ap_sim *s = e->cm->s;
   const ap_bmodel *M = ap_bm(s->m);
   const ap_mcon *c = &M->cons[e->ci];
-  double *S = scratch(s->d), ft[2], fn;
+  double ft[2], fn;
+  int changed = 0, bounced = 0;
   switch (e->kind) {
     case EV_SLIP:
-      if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s, s->d->lambda, c, ft);
-      if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, fn);
+      if (hook_forces(s, rec, q, v) != AP_OK) return -1;
+      fn = ap_drv_cm_normal(s, s->d->lambda, c, ft);
+      if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c))
+        return ap_drv_cm_tips(s, c, rec->t, fn);
       if (unilateral(c) && fn <= 0) {
-        if (lift(s, c, rec->t, q) != AP_OK) return -1;
+        if (ap_drv_cm_lift(s, c, rec->t, q) != AP_OK) return -1;
       } else {
-        slide_against(s, c, ft);
+        ap_drv_cm_slide_against(s, c, ft);
       }
       break;
     case EV_LIFT:
-      if (ap_bm_wheel_by_load(M, c)) return tips(s, c, rec->t, 0.0);
-      if (lift(s, c, rec->t, q) != AP_OK) return -1;
+      if (ap_bm_wheel_by_load(M, c)) return ap_drv_cm_tips(s, c, rec->t, 0.0);
+      if (ap_drv_cm_lift(s, c, rec->t, q) != AP_OK) return -1;
       break;
     case EV_STICK:
-      ap_cfr_set_mode(M, S, c, AP_CM_ROLLING);
-      if (forces_at(s, rec->t, q, v) != AP_OK) return -1;
-      fn = contact_forces(s, s->d->lambda, c, ft);
-      if (hypot(ft[0], ft[1]) > mu_of(c) * fn) slide_against(s, c, ft);
+      ap_cfr_set_mode(M, scratch(s->d), c, AP_CM_ROLLING);   /* settle: slides on if outside */
       break;
     default:
-      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK ||
-          after_impact(s, c, rec->t, q, v) != AP_OK)
-        return -1;
+      if (ap_drv_contact_impact(s, e->ci, rec->t, q, v) != AP_OK) return -1;
+      bounced = ap_cfr_mode(M, scratch(s->d), c) == AP_CM_AIRBORNE;
       break;
   }
+  e->cm->gap0[e->ci] = NAN;
+  e->cm->armed[e->ci] = 0;   /* a new mode (a bounce is a new flight): armed again later */
+  if (ap_drv_cm_settle(s, rec->t, q, v, &changed, NULL, 1) != AP_OK) return -1;
+  if (bounced && ap_cfr_mode(M, scratch(s->d), c) == AP_CM_AIRBORNE)
+    e->cm->gap0[e->ci] = ap_contact_gap(M, scratch(s->d), c);   /* the data: at (t, q) */
   return 0;
-}
-
-/* With the forces of the current state in the data (forces_at): a contact whose normal force
- * is negative flies (unilateral), a rolling one whose sticking force lies outside its cone
- * slides (along -F_t). 2 when it flies, 1 when it slides, 0 when its mode stays; a wheel under
- * a planar chassis whose load is negative stops the run (tips: its negative status). */
-static int by_forces(ap_sim *s, const ap_mcon *c, double t) {
-  double ft[2], fn = contact_forces(s, s->d->lambda, c, ft);
-  int mode = ap_cfr_mode(ap_bm(s->m), scratch(s->d), c);
-  if (mode == AP_CM_AIRBORNE) return 0;
-  if (unilateral(c) && fn < 0 && ap_bm_wheel_by_load(ap_bm(s->m), c)) return tips(s, c, t, fn);
-  if (unilateral(c) && fn < 0) {
-    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_AIRBORNE);
-    return 2;
-  }
-  if (mode != AP_CM_ROLLING || !(mu_of(c) >= 0) || !(hypot(ft[0], ft[1]) > mu_of(c) * fn))
-    return 0;
-  slide_against(s, c, ft);
-  return 1;
-}
-
-/* After an impact (the hook's q, v+ on the new mode's rows): the forces there decide at once,
- * as at creation (a rod that sticks at a touchdown where the ground would have to pull flies
- * off again; a switch at the cut itself would only be recorded, its hook not called). */
-static int after_impact(ap_sim *s, const ap_mcon *c, double t, double *q, const double *v) {
-  if (ap_cfr_mode(ap_bm(s->m), scratch(s->d), c) == AP_CM_AIRBORNE) return AP_OK;
-  int rc = forces_at(s, t, q, v);
-  if (rc != AP_OK) return ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "contact '%s' after "
-                                      "its impact at t = %.17g: %s", c->name, t, s->d->msg);
-  int to = by_forces(s, c, t);
-  if (to < 0) return to;
-  if (to == 2) {
-    ap_cfr_set_mode(ap_bm(s->m), scratch(s->d), c, AP_CM_ROLLING);   /* lift projects q */
-    rc = lift(s, c, t, q);
-  }
-  return rc;
 }
 
 /* At creation: a rolling contact whose sticking force already lies outside its cone slides
@@ -290,21 +276,7 @@ static int initial_cone(ap_sim *s) {
   if (!q) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   memcpy(q, s->q, sizeof(double) * (size_t)s->n);
   memcpy(v, s->v, sizeof(double) * (size_t)s->k);
-  int rc = forces_at(s, s->t, q, v), changed = 0;
-  for (int i = 0; rc == AP_OK && i < cm->nc; i++) {
-    const ap_mcon *c = con(s, cm->ci[i]);
-    /* Sliding from the start too: a negative normal force lifts it (the free robot braking
-     * with locked wheels at mu_kinetic 0.6 had its caster pulled down by -2.1 N). */
-    int to = by_forces(s, c, s->t);
-    if (to < 0) {
-      rc = to;
-      break;
-    }
-    changed |= to != 0;
-    if (to == 2) cm->lifted[cm->ci[i]] = 1;
-  }
-  if (rc != AP_OK && rc != AP_ERR_UNSUPPORTED)
-    rc = ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "initial state: %s", s->d->msg);
+  int changed = 0, rc = ap_drv_cm_settle(s, s->t, q, v, &changed, cm->lifted, 0);
   if (rc == AP_OK && changed) rc = ap_drv_restart_state(s, s->t, q, v);
   if (rc == AP_OK && changed) rc = ap_drv_evaluate_current(s);
   free(q);
@@ -323,6 +295,7 @@ int ap_drv_contacts_events(ap_sim *s) {
   struct ap_drv_contacts *cm = s->cm;
   if (!cm) return AP_OK;
   int rc0 = initial_cone(s);
+  if (rc0 == AP_OK) rc0 = ap_drv_cm_indeterminate(s);
   if (rc0 != AP_OK) return rc0;
   for (int i = 0; i < cm->nc; i++) {
     const ap_mcon *c = con(s, cm->ci[i]);
@@ -330,7 +303,7 @@ int ap_drv_contacts_events(ap_sim *s) {
       int wanted = kind == EV_SLIP || kind == EV_STICK ? mu_of(c) >= 0 : unilateral(c);
       if (!wanted) continue;
       cm_event *e = &cm->ev[i * EV_N + kind];
-      *e = (cm_event){cm, cm->ci[i], kind};
+      *e = (cm_event){cm, cm->ci[i], kind, ap_drv_event_defined(s)};
       char name[96];
       snprintf(name, sizeof name, "%s.%s", c->name, ev_suffix[kind]);
       ap_event_def def = ap_event_def_default();
@@ -402,4 +375,21 @@ int ap_sim_contact_mode(const ap_sim *s, int constraint) {
   const ap_bmodel *M = ap_bm(s->m);
   if (constraint < 0 || constraint >= M->nc || M->cons[constraint].fric < 0) return AP_ERR_ARG;
   return ap_cfr_mode(M, scratch(s->d), &M->cons[constraint]);
+}
+
+int ap_drv_cm_note(ap_sim *s, const ap_mcon *c, int from, int to, double t, const double *q,
+                   const double *v) {
+  struct ap_drv_contacts *cm = s->cm;
+  int kind = to == AP_CM_AIRBORNE ? EV_LIFT : from == AP_CM_AIRBORNE ? EV_TOUCH
+             : to == AP_CM_SLIDING ? EV_SLIP : EV_STICK;
+  for (int i = 0; cm && i < cm->nc; i++) {
+    const cm_event *e = &cm->ev[i * EV_N + kind];
+    if (cm->ci[i] != (int)(c - ap_bm(s->m)->cons) || !e->cm) continue;
+    ap_event_record r;   /* its own crossing tied with this cut is recorded already */
+    for (int j = ap_sim_event_count(s) - 1; j >= 0 && ap_sim_event_get(s, j, &r) == AP_OK &&
+                                            r.t == t; j--)
+      if (r.event == e->idx) return AP_OK;
+    return ap_drv_event_note_at(s, e->idx, t, -1, q, v);
+  }
+  return AP_OK;   /* that event is not watched (a contact without friction never slips) */
 }

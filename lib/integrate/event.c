@@ -248,7 +248,8 @@ static int restep(ap_sim *s, double tcut) {
   s->stats.restarts++;
   if (s->dae) {
     rc = ap_drv_restart_state(s, t, ev->ylast, ev->ylast + s->n);
-    while (rc == AP_OK && t < tcut)
+    /* a cut a few ulps after the step's start is the start (IDA: "tout too close to t0") */
+    while (rc == AP_OK && tcut - t > 32.0 * DBL_EPSILON * fabs(tcut))
       if ((rc = ap_dae_one(s->dae, tcut, &t, s->ytry)) != AP_OK)
         rc = ap_drv_fail(s, rc, "events: %s", ap_dae_message(s->dae));
     return rc;
@@ -430,6 +431,12 @@ int ap_drv_stage_events(ap_sim *s, double *t) {
   }
   for (int i = 0; i < ev->count; i++) ev->list[i].crossed = ev->list[i].crossed == 2;
   if (rc == AP_OK && isfinite(tcut)) rc = jumped_at_cut(s, *t, &stop);
+  /* a falling switch whose hook put its value above 0 again watches its next fall from the
+   * cut on (a bouncing contact's touchdown: keeping the crossed side missed the next
+   * touchdown when one step spanned the whole bounce) */
+  for (int i = 0; rc == AP_OK && i < ev->count; i++)
+    if (sw[i] && ev->list[i].def.direction == AP_EVENT_FALLING && ev->list[i].end > 0.0)
+      ev->list[i].crossed = 0;
   if (rc == AP_OK) settle(ev), look_ahead(s, *t, h);
   return rc != AP_OK ? rc : stop ? AP_STOPPED : AP_OK;
 }
@@ -528,9 +535,14 @@ void ap_drv_events_free(ap_sim *s) {
 int ap_drv_event_defined(const ap_sim *s) { return s->ev ? s->ev->count : 0; }
 
 int ap_drv_event_note(ap_sim *s, int i, double t, int direction) {
+  return ap_drv_event_note_at(s, i, t, direction, s->q, s->v);   /* the current state */
+}
+
+int ap_drv_event_note_at(ap_sim *s, int i, double t, int direction, const double *q,
+                         const double *v) {
   if (!s->ev || i < 0 || i >= s->ev->count) return AP_ERR_ARG;
   ap_event_record *r = NULL;
-  memcpy(s->d->q, s->q, sizeof(double) * (size_t)s->n);   /* the current state: unchanged */
-  memcpy(s->d->v, s->v, sizeof(double) * (size_t)s->k);
+  memmove(s->d->q, q, sizeof(double) * (size_t)s->n);
+  memmove(s->d->v, v, sizeof(double) * (size_t)s->k);
   return record(s, i, t, direction, &r);
 }

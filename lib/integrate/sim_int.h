@@ -131,6 +131,10 @@ int ap_drv_event_defined(const ap_sim *s);
 /* Record event i as having crossed (direction) at t with the current state s->q, s->v: a
  * switch made at creation (a contact sliding from t0). */
 int ap_drv_event_note(ap_sim *s, int i, double t, int direction);
+/* The same with the state (q, v) given: a switch a hook makes besides its own (a contact made
+ * consistent at another's switch, contact_settle.c). */
+int ap_drv_event_note_at(ap_sim *s, int i, double t, int direction, const double *q,
+                         const double *v);
 /* Events (event.c): free them with the simulation. */
 void ap_drv_events_free(ap_sim *s);
 /* The error weights s->wt, all 1 (free_coords.c). */

@@ -22,9 +22,10 @@ static double ur(uint64_t *s, double a, double b) { return a + (b - a) * ap_test
 static int chance(uint64_t *s, double p) { return ap_test_urand(s) < p; }
 
 /* Append the contact keys to a rolling constraint's flow mapping (text ends with "}"). */
-static void contact_keys(uint64_t *s, char *text) {
+static void contact_keys(uint64_t *s, dt_model *m, char *text) {
   size_t l = strlen(text);
   if (l < 2 || l + 120 >= DT_TXT) return;
+  m->expect_tree = 0;   /* the tree path refuses contacts with modes (model/contact.c) */
   text[l - 1] = 0;
   int fr = chance(s, 0.8), uni = fr ? chance(s, 0.75) : 1;
   char *end = text + strlen(text);
@@ -92,7 +93,7 @@ void dt_add_contact_modes(uint64_t seed, dt_model *m) {
     if (!m->c[c].live || i < 0 || strncmp(m->c[c].text, "{kind: rolling,", 15)) continue;
     dt_body *b = &m->b[i];
     if (b->kind == DT_FREE && b->shape == DT_SH_SPHERE && b->parent < 0 && chance(s, 0.6)) {
-      contact_keys(s, m->c[c].text);
+      contact_keys(s, m, m->c[c].text);
       int uni = !strstr(m->c[c].text, "unilateral: false");
       sphere_state(s, b, radius_of(b), uni && chance(s, 0.4));
     } else if (b->kind == DT_REVOLUTE && b->parent >= 0 && m->b[b->parent].kind != DT_FREE &&
@@ -100,6 +101,6 @@ void dt_add_contact_modes(uint64_t seed, dt_model *m) {
       chassis_free = free_chassis(s, m, b->parent) ? b->parent : -2;
     }
     if (chassis_free >= 0 && b->kind == DT_REVOLUTE && b->parent == chassis_free)
-      contact_keys(s, m->c[c].text);
+      contact_keys(s, m, m->c[c].text);
   }
 }
