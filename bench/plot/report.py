@@ -188,9 +188,11 @@ def body_ratios(curves):
           "(all controlled) | time | Simbody best | time | Simbody / Appell body | "
           + " | ".join(f"Simbody {b} / Appell {a}" for a, b in SAME_ORDER) + " |"
           + (ccols if comp else "")
-          + (" SymPy+SciPy best | time | SymPy / Appell body |" if symp else ""),
-          "|" + "---|" * (9 + len(SAME_ORDER) + (3 if comp else 0) + (3 if symp else 0))]
-    allr, allc, alls = [], [], []
+          + (" SymPy+SciPy best | time | SymPy / Appell body |" if symp else "")
+          + (" SymPy / compiled |" if symp and comp else ""),
+          "|" + "---|" * (9 + len(SAME_ORDER) + (3 if comp else 0) + (3 if symp else 0)
+                          + (1 if symp and comp else 0))]
+    allr, allc, alls, allsc = [], [], [], []
     for p in ("turntable", "turntable_var"):
         for E in LEVELS:
             def best(mode=None, meth=None, tool="appell_body"):
@@ -225,7 +227,11 @@ def body_ratios(curves):
                     alls.append(sp[0] / free[0])
                 md[-1] += (f" {label(sp[2])[12:] if sp else '-'} | {fmt_t(sp)} | "
                            f"{fmt_r(sp, free)} |")
-    return md, allr, allc, alls
+                if comp:
+                    if sp and c:
+                        allsc.append(sp[0] / c[0])
+                    md[-1] += f" {fmt_r(sp, c)} |"
+    return md, allr, allc, alls, allsc
 
 
 def overhead(curves):
@@ -367,7 +373,7 @@ def main():
           "sweep points). `<=`: upper bound (the loosest tolerance already overshoots); `*`: "
           "ratio involving such a bound.", ""] + rmd
     if sb:
-        bmd, ballr, ballc, balls = body_ratios(curves)
+        bmd, ballr, ballc, balls, ballsc = body_ratios(curves)
         md += ["", "## Body-built models: Appell's ball against Simbody's ball", "",
                "Both sides build the ball on the turntable from bodies (Appell: "
                "tests/bodysys.c; Simbody: bench/peers/simbody_turntable.cc). Appell with its "
@@ -386,6 +392,10 @@ def main():
                    f"(orientation free), best against best, over {len(balls)} levels: "
                    f"{min(balls):.0f} ... {max(balls):.0f}, median "
                    f"{statistics.median(balls):.0f}."]
+        if ballsc:
+            md += ["", f"SymPy+SciPy / Appell body compiled (orientation free), best against "
+                   f"best, over {len(ballsc)} levels: {min(ballsc):.0f} ... {max(ballsc):.0f}, "
+                   f"median {statistics.median(ballsc):.0f}."]
     md += ["", "## Appell / hand-reduced ODE under the same stepper",
            "", "Median (min-max) over the error levels 1e-4 ... 1e-10 that both reach.", ""]
     md += omd
