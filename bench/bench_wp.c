@@ -381,7 +381,8 @@ static void describe(FILE *f, const wp_problem *P) {
 static int usage(void) {
   fprintf(stderr, "usage: bench_wp [--csv FILE] [--describe FILE] [--problems a,b,...] "
                   "[--budget S] [--quick] [--compiled]\n"
-                  "       bench_wp --one PROBLEM appell|appell_body|appell_body_c|hand MODE METHOD TOL_OR_H [--reps N]\n");
+                  "       bench_wp --one PROBLEM appell|appell_body|appell_body_c|hand MODE "
+                  "METHOD TOL_OR_H [--reps N]\n");
   return 2;
 }
 

@@ -303,7 +303,8 @@ def style(key, idx):
         return f"lt {COLOR.get(meth, 8)} dt {dt} lw {2.5 if mode == 'dae' else 1.5}"
     if tool in ("appell_body", "appell_body_c"):
         pt = 7 if tool == "appell_body" else 13
-        return f"lt {COLOR.get(meth, 8)} dt {1 if mode == 'minimal_free' else 5} lw 3 pt {pt} ps 0.6"
+        dt = 1 if mode == 'minimal_free' else 5
+        return f"lt {COLOR.get(meth, 8)} dt {dt} lw 3 pt {pt} ps 0.6"
     if tool == "hand":
         return f"lt {COLOR.get(meth, 8)} dt 3 lw 1 pt 6 ps 0.5"
     if tool == "sympy_scipy":
