@@ -28,7 +28,12 @@
  * integrates the same problem from the same state and is scored against the same numbers.
  * Ratios at equal achieved error are computed from the CSV by bench/plot/report.py.
  *
+ * --compiled sweeps only the turntables' body-built ball switched once to compiled kinematics
+ * (ap_model_compile_native, docs/compiled.md; tool "appell_body_c"); the compile's wall time is
+ * printed apart and is in no run's time.
+ *
  * Usage: bench_wp [--csv FILE] [--describe FILE] [--problems a,b] [--budget S] [--quick]
+ *                 [--compiled]
  *        bench_wp --one PROBLEM TOOL MODE METHOD TOL_OR_H [--reps N]   (for callgrind)
  * Run with OPENBLAS_NUM_THREADS=1. */
 #include <math.h>
@@ -37,6 +42,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bodysys.h"
 #include "wp.h"
 
 /* ---- runs --------------------------------------------------------------------------------- */
@@ -81,8 +87,8 @@ static int run_appell(const wp_problem *pr, const ap_model *m, const wp_run *r, 
   else sd.rtol = sd.atol = r->tol;
   sd.max_steps = WP_MAX_STEPS;
   ap_sim *s = NULL;
-  int body = !strcmp(r->tool, "appell_body"), fl[MAXS] = {0};
-  if (body) m = pr->ball_model;
+  int body = !strncmp(r->tool, "appell_body", 11), fl[MAXS] = {0};
+  if (body) m = strcmp(r->tool, "appell_body_c") ? pr->ball_model : pr->ball_compiled;
   int rc = ap_sim_create(m, &sd, 0.0, body ? pr->bq0 : pr->q0, pr->v0, &s, res->msg,
                          sizeof res->msg);
   if (rc != AP_OK) return rc;
@@ -250,6 +256,40 @@ static void disk_check(const wp_problem *pr, const ap_model *m) {
   ap_sim_free(s);
 }
 
+/* --compiled: the ball's two error controls over the explicit steppers, compiled kinematics. */
+static void sweep_compiled(FILE *out, const wp_problem *pr, double budget, int quick) {
+  static const char *const body_modes[] = {"minimal", "minimal_free"};
+  printf("%s: %s, T = %g s, body ball with compiled kinematics\n", pr->name, pr->title, pr->T);
+  for (int md = 0; md < 2; md++)
+    for (int j = 0; j < NADAPT - 2; j++) {   /* adams and bdf are the last two */
+      wp_run r = {"appell_body_c", body_modes[md], adaptive_methods[j], 0, 0};
+      sweep_curve(out, pr, NULL, r, budget, quick);
+    }
+}
+
+/* The turntables' second ball, compiled once before any timed run; 0 or 1 on failure. */
+static int compile_balls(wp_problem *P) {
+  for (int i = 0; i < NPROB; i++) {
+    if (!P[i].ball_model || P[i].ball_compiled) continue;
+    char notice[256] = "";
+    struct timespec a, b;
+    clock_gettime(CLOCK_MONOTONIC, &a);
+    P[i].ball_compiled = bs_turntable_model(&P[i].p.turn);
+    int rc = P[i].ball_compiled ? ap_model_compile_native(P[i].ball_compiled, AP_COMPILE_ALWAYS,
+                                                          notice, sizeof notice) : 0;
+    clock_gettime(CLOCK_MONOTONIC, &b);
+    if (rc != 1) {
+      fprintf(stderr, "bench_wp: %s: the body ball does not compile: %s\n", P[i].name,
+              notice[0] ? notice : "model not built");
+      return 1;
+    }
+    printf("%s: body ball built and compiled in %.1f ms wall (cc, or the cache)%s%s\n",
+           P[i].name, 1e3 * (b.tv_sec - a.tv_sec) + 1e-6 * (b.tv_nsec - a.tv_nsec),
+           notice[0] ? ": " : "", notice);
+  }
+  return 0;
+}
+
 static void sweep_problem(FILE *out, const wp_problem *pr, double budget, int quick) {
   ap_model *m = NULL;
   char msg[256];
@@ -340,8 +380,9 @@ static void describe(FILE *f, const wp_problem *P) {
 
 static int usage(void) {
   fprintf(stderr, "usage: bench_wp [--csv FILE] [--describe FILE] [--problems a,b,...] "
-                  "[--budget S] [--quick]\n"
-                  "       bench_wp --one PROBLEM appell|hand MODE METHOD TOL_OR_H [--reps N]\n");
+                  "[--budget S] [--quick] [--compiled]\n"
+                  "       bench_wp --one PROBLEM appell|appell_body|appell_body_c|hand MODE "
+                  "METHOD TOL_OR_H [--reps N]\n");
   return 2;
 }
 
@@ -380,7 +421,7 @@ int main(int argc, char **argv) {
   const char *csv = NULL, *desc = NULL, *list = NULL;
   char **one = NULL;
   double budget = 0.4;
-  int quick = 0, reps = 1;
+  int quick = 0, reps = 1, compiled = 0;
   for (int i = 1; i < argc; i++) {
     if (!strcmp(argv[i], "--csv") && i + 1 < argc) csv = argv[++i];
     else if (!strcmp(argv[i], "--describe") && i + 1 < argc) desc = argv[++i];
@@ -388,11 +429,16 @@ int main(int argc, char **argv) {
     else if (!strcmp(argv[i], "--budget") && i + 1 < argc) budget = atof(argv[++i]);
     else if (!strcmp(argv[i], "--reps") && i + 1 < argc) reps = atoi(argv[++i]);
     else if (!strcmp(argv[i], "--quick")) quick = 1;
+    else if (!strcmp(argv[i], "--compiled")) compiled = 1;
     else if (!strcmp(argv[i], "--one") && i + 5 < argc) one = argv + i + 1, i += 5;
     else return usage();
   }
   if (!(budget > 0) || reps < 1) return usage();
   setup_problems(P);
+  if ((compiled || (one && !strcmp(one[1], "appell_body_c"))) && compile_balls(P)) {
+    free_problems(P);
+    return 1;
+  }
   if (one) {
     int rc = run_one(P, one, reps);
     free_problems(P);
@@ -417,8 +463,11 @@ int main(int argc, char **argv) {
                  "rhs_evals,err_fails,us_per_eval,residual\n");
   printf("  %-9s %-6s %-10s %-9s %8s %8s %11s %4s %8s %9s %s\n", "problem", "tool", "mode",
          "method", "tol/h", "err", "cpu", "reps", "steps", "evals", "cost");
-  for (int i = 0; i < NPROB; i++)
-    if (in_list(list, P[i].name)) sweep_problem(out, &P[i], budget, quick);
+  for (int i = 0; i < NPROB; i++) {
+    if (!in_list(list, P[i].name)) continue;
+    if (!compiled) sweep_problem(out, &P[i], budget, quick);
+    else if (P[i].ball_compiled) sweep_compiled(out, &P[i], budget, quick);
+  }
   if (out) fclose(out);
   free_problems(P);
   return 0;

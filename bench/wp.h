@@ -22,6 +22,8 @@ struct wp_problem {
   ap_model *body_model;     /* or a compiled body model (rolling disk) */
   ap_model *ball_model;     /* turntables: the ball built from bodies (tests/bodysys.c), run
                                beside the math-level system as tool "appell_body" */
+  ap_model *ball_compiled;  /* bench_wp --compiled: a second ball switched to compiled
+                               kinematics (docs/compiled.md), tool "appell_body_c"; else NULL */
   double bq0[MAXS];         /* its initial coordinates (x, y, unit quaternion); speeds v0 */
   int n, k;                 /* its sizes */
   double q0[MAXS], v0[MAXS];

@@ -239,5 +239,8 @@ void setup_problems(wp_problem *P) {
 }
 
 void free_problems(wp_problem *P) {
-  for (int i = 0; i < NPROB; i++) ap_model_free(P[i].body_model), ap_model_free(P[i].ball_model);
+  for (int i = 0; i < NPROB; i++) {
+    ap_model_free(P[i].body_model), ap_model_free(P[i].ball_model);
+    ap_model_free(P[i].ball_compiled);
+  }
 }

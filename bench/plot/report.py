@@ -3,7 +3,8 @@
 
 Reads the CSVs scripts/bench wrote into a results directory (bench_wp: wp_appell.csv, with
 Appell's curves and the hand-reduced "limit"; when present wp_sympy.csv and sympy_build.csv
-from bench/peers/sympy_peer.py, and wp_simbody.csv from bench_simbody) and writes there
+from bench/peers/sympy_peer.py, wp_simbody.csv from bench_simbody, and wp_appell_compiled.csv
+from bench_wp --compiled: the body ball with compiled kinematics) and writes there
   ratios.csv     per problem and error level 1e-4 ... 1e-10: the best curve of each tool
                  (Appell, the limit, SymPy+SciPy, Simbody) with its interpolated CPU time, and
                  the ratios ours / limit, ours / SymPy, ours / Simbody;
@@ -90,6 +91,8 @@ def label(key):
         return f"Appell {mode} {meth}"
     if tool == "appell_body":
         return f"Appell body {mode} {meth}"
+    if tool == "appell_body_c":
+        return f"Appell body compiled {mode} {meth}"
     if tool == "hand":
         return f"limit (hand ODE) {meth}"
     if tool == "sympy_scipy":
@@ -176,12 +179,20 @@ SAME_ORDER = (("dopri5", "rkfeldberg"), ("bs3", "rk3"))
 
 def body_ratios(curves):
     """Appell's ball built from bodies against Simbody's (both body models), at equal achieved
-    error: each side's best stepper, and steppers of the same order."""
+    error: each side's best stepper, and steppers of the same order; when bench_wp --compiled
+    ran, also the ball with compiled kinematics (orientation free) against Simbody."""
+    comp = any(k[1] == "appell_body_c" for k in curves)
+    symp = any(k[1] == "sympy_scipy" and k[0].startswith("turntable") for k in curves)
+    ccols = " Appell body compiled best (orientation free) | time | Simbody / compiled |"
     md = ["| problem | error | Appell body best (orientation free) | time | Appell body best "
           "(all controlled) | time | Simbody best | time | Simbody / Appell body | "
-          + " | ".join(f"Simbody {b} / Appell {a}" for a, b in SAME_ORDER) + " |",
-          "|" + "---|" * (9 + len(SAME_ORDER))]
-    allr = []
+          + " | ".join(f"Simbody {b} / Appell {a}" for a, b in SAME_ORDER) + " |"
+          + (ccols if comp else "")
+          + (" SymPy+SciPy best | time | SymPy / Appell body |" if symp else "")
+          + (" SymPy / compiled |" if symp and comp else ""),
+          "|" + "---|" * (9 + len(SAME_ORDER) + (3 if comp else 0) + (3 if symp else 0)
+                          + (1 if symp and comp else 0))]
+    allr, allc, alls, allsc = [], [], [], []
     for p in ("turntable", "turntable_var"):
         for E in LEVELS:
             def best(mode=None, meth=None, tool="appell_body"):
@@ -204,7 +215,23 @@ def body_ratios(curves):
                       f"{fmt_t(free)} | {label(full[2])[12:] if full else '-'} | "
                       f"{fmt_t(full)} | {label(sb[2])[8:] if sb else '-'} | {fmt_t(sb)} | "
                       f"{fmt_r(sb, free)} | " + " | ".join(same) + " |")
-    return md, allr
+            if comp:
+                c = best("minimal_free", tool="appell_body_c")
+                if c and sb:
+                    allc.append(sb[0] / c[0])
+                md[-1] += (f" {label(c[2])[21:] if c else '-'} | {fmt_t(c)} | "
+                           f"{fmt_r(sb, c)} |")
+            if symp:
+                sp = best(tool="sympy_scipy")
+                if sp and free:
+                    alls.append(sp[0] / free[0])
+                md[-1] += (f" {label(sp[2])[12:] if sp else '-'} | {fmt_t(sp)} | "
+                           f"{fmt_r(sp, free)} |")
+                if comp:
+                    if sp and c:
+                        allsc.append(sp[0] / c[0])
+                    md[-1] += f" {fmt_r(sp, c)} |"
+    return md, allr, allc, alls, allsc
 
 
 def overhead(curves):
@@ -250,7 +277,8 @@ def per_eval(rows_all):
         tool = r["tool"] if r["tool"] != "appell" else "appell " + r["mode"]
         acc.setdefault((r["problem"], tool), []).append(float(r["us_per_eval"]))
     tools = ["appell minimal", "appell projected", "appell dae", "hand", "sympy_scipy",
-             "simbody", "appell_body"]
+             "simbody", "appell_body"] + (["appell_body_c"] if any(
+                 r["tool"] == "appell_body_c" for r in rows_all) else [])
     md = ["| problem | " + " | ".join(tools) + " |", "|---|" + "---|" * len(tools)]
     for p in PROBLEMS:
         cells = [f"{statistics.median(acc[(p, t)]):.2f}" if (p, t) in acc else "-"
@@ -273,8 +301,10 @@ def style(key, idx):
     if tool == "appell":
         dt = {"minimal": 1, "projected": 2, "dae": 1}[mode]
         return f"lt {COLOR.get(meth, 8)} dt {dt} lw {2.5 if mode == 'dae' else 1.5}"
-    if tool == "appell_body":
-        return f"lt {COLOR.get(meth, 8)} dt {1 if mode == 'minimal_free' else 5} lw 3 pt 7 ps 0.6"
+    if tool in ("appell_body", "appell_body_c"):
+        pt = 7 if tool == "appell_body" else 13
+        dt = 1 if mode == 'minimal_free' else 5
+        return f"lt {COLOR.get(meth, 8)} dt {dt} lw 3 pt {pt} ps 0.6"
     if tool == "hand":
         return f"lt {COLOR.get(meth, 8)} dt 3 lw 1 pt 6 ps 0.5"
     if tool == "sympy_scipy":
@@ -331,6 +361,7 @@ def main():
     if not rows:
         print(f"report: no {out}/wp_appell.csv", file=sys.stderr)
         return 1
+    rows += read_rows(os.path.join(out, "wp_appell_compiled.csv"))
     sp = read_rows(os.path.join(out, "wp_sympy.csv"))
     sb = read_rows(os.path.join(out, "wp_simbody.csv"))
     curves = curves_of(rows + sp + sb)
@@ -343,7 +374,7 @@ def main():
           "sweep points). `<=`: upper bound (the loosest tolerance already overshoots); `*`: "
           "ratio involving such a bound.", ""] + rmd
     if sb:
-        bmd, ballr = body_ratios(curves)
+        bmd, ballr, ballc, balls, ballsc = body_ratios(curves)
         md += ["", "## Body-built models: Appell's ball against Simbody's ball", "",
                "Both sides build the ball on the turntable from bodies (Appell: "
                "tests/bodysys.c; Simbody: bench/peers/simbody_turntable.cc). Appell with its "
@@ -353,6 +384,19 @@ def main():
             md += ["", f"Simbody / Appell body (orientation free), best against best, over "
                    f"{len(ballr)} levels: {min(ballr):.0f} ... {max(ballr):.0f}, median "
                    f"{statistics.median(ballr):.0f}."]
+        if ballc:
+            md += ["", f"Simbody / Appell body compiled (orientation free), best against best, "
+                   f"over {len(ballc)} levels: {min(ballc):.0f} ... {max(ballc):.0f}, median "
+                   f"{statistics.median(ballc):.0f}."]
+        if balls:
+            md += ["", f"SymPy+SciPy (KanesMethod on a RigidBody ball, solve_ivp) / Appell body "
+                   f"(orientation free), best against best, over {len(balls)} levels: "
+                   f"{min(balls):.0f} ... {max(balls):.0f}, median "
+                   f"{statistics.median(balls):.0f}."]
+        if ballsc:
+            md += ["", f"SymPy+SciPy / Appell body compiled (orientation free), best against "
+                   f"best, over {len(ballsc)} levels: {min(ballsc):.0f} ... {max(ballsc):.0f}, "
+                   f"median {statistics.median(ballsc):.0f}."]
     md += ["", "## Appell / hand-reduced ODE under the same stepper",
            "", "Median (min-max) over the error levels 1e-4 ... 1e-10 that both reach.", ""]
     md += omd
