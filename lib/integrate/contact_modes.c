@@ -58,8 +58,9 @@ struct ap_drv_contacts {
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
  * the centre's path osculates the ground), below the integration error at first: IDA's BDF,
  * restarted at order 1, made it -2.5e-12 m 2e-6 s after a lift-off, and the touchdown event
- * fired there. Its touchdown watches gap + gap_tol until the gap at an accepted step exceeds
- * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that.
+ * fired there. Its touchdown watches gap + gap_tol (while it closes: touchdown_value) until
+ * the gap at an accepted step exceeds gap_tol = atol + rtol lscale (the "contact modes" stage
+ * arms it), the gap alone after that.
  * Likewise a slip that starts from 0 (slip onset) has s . s_ref of round-off size at first,
  * and the stick event was recorded at the slip's own time: it watches s . s_ref + slip_tol,
  * slip_tol = atol + rtol max |v_i|, until |s| exceeds slip_tol at an accepted step. */
