@@ -174,6 +174,64 @@ static void check_turning(const char *method, ap_mode mode) {
   ap_model_free(m);
 }
 
+/* The ball rolling off a dome (mu = -1: perfectly rough, unilateral; a fixed sphere of radius
+ * 1 m) from rest at th0 = 0.01 rad from its top: it leaves at cos th = 10/17 cos th0 (energy
+ * and rolling: tests/test_contact_modes.c) and flies on a parabola. bdf restarted at the
+ * lift-off steps at order 1, whose position error points along gravity, into the dome: before
+ * the touchdown of a just-lifted contact fired only while the contact closes
+ * (lib/integrate/contact_modes.c), bdf recorded a sticking touchdown and a lift-off every
+ * 2.5e-5 s. Bounds as above, with the scale L = 1.1 m of the centre's position: the parabola
+ * within N sqrt(ny) (rtol L + atol) over the flight's N steps; the angle within the
+ * position's bound for the whole run divided by L times 17/7 sin th (F_n / m g =
+ * 17/7 cos th - 10/7 cos th0 falls at 17/7 sin th per radian, and F_n / m g follows the
+ * state's error relative to L). */
+static void check_dome(const char *method, double rtol) {
+  static const double grav[3] = {0, 0, -G};
+  double Rg = 1.0, L = Rg + R, th0 = 0.01, thref = acos(10.0 / 17.0 * cos(th0)), dt = 0.3;
+  ap_constraint_def c = ap_constraint_def_default();
+  c.name = "roll", c.mu = -1.0, c.unilateral = 1, c.ground.sphere_radius = Rg;
+  ap_model *m = bs_free_ball(AP_SHAPE_SPHERE, R, MASS, &c, grav);
+  AP_CHECK(m != NULL);
+  if (!m) return;
+  double q[7] = {L * sin(th0), 0, L * cos(th0), 1, 0, 0, 0}, v[6] = {0, 0, 0, 0, 0, 0};
+  ap_sim_def def = ap_sim_def_default();
+  def.mode = AP_MODE_MINIMAL, def.method = method, def.rtol = rtol, def.atol = rtol * 1e-2;
+  ap_sim *s = NULL;
+  char msg[1024] = "";
+  int rc = ap_sim_create(m, &def, 0.0, q, v, &s, msg, sizeof msg);
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  for (int k = 1; k <= 400 && rc == AP_OK && ap_sim_event_count(s) == 0; k++)
+    rc = ap_sim_advance(s, 0.01 * k);
+  ap_event_record r = {0};
+  AP_CHECK_EQ_INT(rc, AP_OK);
+  int lifted = rc == AP_OK && ap_sim_event_count(s) == 1 && ap_sim_event_get(s, 0, &r) == AP_OK &&
+               !strcmp(r.name, "roll.lift_off");
+  AP_CHECK(lifted);
+  if (lifted) {
+    ap_sim_stats st0, st;
+    ap_sim_get_stats(s, &st0);
+    AP_CHECK_EQ_INT(ap_sim_advance(s, r.t + dt), AP_OK);
+    ap_sim_get_stats(s, &st);
+    double p[3], th = atan2(r.q[0], r.q[2]), perr = 0.0;
+    for (int i = 0; i < 3; i++) p[i] = r.q[i] + r.v[i] * dt;
+    p[2] -= 0.5 * G * dt * dt;
+    for (int i = 0; i < 3; i++) perr = fmax(perr, fabs(ap_sim_q(s)[i] - p[i]));
+    double unit = sqrt_ny(AP_MODE_MINIMAL) * (rtol * L + def.atol);
+    double bound_p = (double)(st.steps - st0.steps) * unit;
+    double bound_th = (double)st0.steps * unit / (L * 17.0 / 7 * sin(thref));
+    printf("  dome, %s rtol %g: lifts off %.1e rad from the closed form (bound %.1e), %d "
+           "event(s) in the %.2g s after, %.1e m off the parabola (bound %.1e), %ld + %ld "
+           "steps\n", method, rtol, fabs(th - thref), bound_th, ap_sim_event_count(s) - 1, dt,
+           perr, bound_p, st0.steps, st.steps - st0.steps);
+    AP_CHECK_EQ_INT(ap_sim_event_count(s), 1);
+    AP_CHECK_EQ_INT(ap_sim_contact_mode(s, 0), AP_CONTACT_AIRBORNE);
+    AP_CHECK_LE(fabs(th - thref), bound_th);
+    AP_CHECK_LE(perr, bound_p);
+  }
+  ap_sim_free(s);
+  ap_model_free(m);
+}
+
 int main(void) {
   printf("CVODE with sliding contacts:\n");
   const case_def cases[] = {{"bowling ball", 0.2, 0.0, 3.0},
@@ -187,5 +245,9 @@ int main(void) {
   check_turning("bdf", AP_MODE_PROJECTED);
   check_turning("adams", AP_MODE_MINIMAL);
   check_turning("dop853", AP_MODE_MINIMAL);   /* the closed form against an explicit method */
+  for (int i = 0; i < 3; i++) {
+    check_dome("bdf", (const double[]){1e-6, 1e-8, 1e-10}[i]);
+    check_dome("adams", (const double[]){1e-6, 1e-8, 1e-10}[i]);
+  }
   return ap_check_finish("test_cvode_contacts");
 }

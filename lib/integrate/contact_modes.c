@@ -58,8 +58,9 @@ struct ap_drv_contacts {
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
  * the centre's path osculates the ground), below the integration error at first: IDA's BDF,
  * restarted at order 1, made it -2.5e-12 m 2e-6 s after a lift-off, and the touchdown event
- * fired there. Its touchdown watches gap + gap_tol until the gap at an accepted step exceeds
- * gap_tol = atol + rtol lscale (the "contact modes" stage arms it), the gap alone after that.
+ * fired there. Its touchdown watches gap + gap_tol (while it closes: touchdown_value) until
+ * the gap at an accepted step exceeds gap_tol = atol + rtol lscale (the "contact modes" stage
+ * arms it), the gap alone after that.
  * Likewise a slip that starts from 0 (slip onset) has s . s_ref of round-off size at first,
  * and the stick event was recorded at the slip's own time: it watches s . s_ref + slip_tol,
  * slip_tol = atol + rtol max |v_i|, until |s| exceeds slip_tol at an accepted step. */
@@ -79,6 +80,23 @@ static double unarmed_gap(const struct ap_drv_contacts *cm, int ci) {
 }
 static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
   return cm->armed[ci] == mode + 1;
+}
+/* The touchdown's value: after a lift-off (unarmed, no bounce) the contact lands only while
+ * it closes (gap' < 0); while it opens its gap counts as 0 at most. A restarted CVODE `bdf`
+ * steps at order 1, whose position error h^2 a / 2 points along gravity every step: it put
+ * the ball on the dome 9.7e-10 m (= gap_tol at rtol 1e-8) below the ground 2.5e-5 s after its
+ * lift-off, the contact opening (gap' +2e-8 m/s, gap'' +1.4e-3 m/s^2, the true gap +1e-13 m),
+ * and the touchdown fired there, again after each restart (a sticking impact and a lift-off
+ * every 2.5e-5 s). The value is never below gap + gap_tol: a run without such a touchdown is
+ * the same. */
+static double touchdown_value(const struct ap_drv_contacts *cm, const ap_mcon *c, double *S,
+                              const double *v) {
+  const ap_bmodel *M = ap_bm(cm->s->m);
+  int ci = (int)(c - M->cons);
+  double rate, g = ap_contact_gap_rate(M, S, c, v, &rate);
+  if (armed(cm, ci, AP_CM_AIRBORNE)) return g;
+  if (isnan(cm->gap0[ci]) && !(rate < 0.0)) g = fmax(g, 0.0);
+  return g + unarmed_gap(cm, ci);
 }
 
 static const ap_mcon *con(const ap_sim *s, int ci) { return &ap_bm(s->m)->cons[ci]; }
@@ -193,9 +211,7 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
       }
       break;
     default:
-      if (mode == AP_CM_AIRBORNE)
-        *out = ap_contact_gap(M, S, c) +
-               (armed(e->cm, e->ci, mode) ? 0.0 : unarmed_gap(e->cm, e->ci));
+      if (mode == AP_CM_AIRBORNE) *out = touchdown_value(e->cm, c, S, v);
       break;
   }
   return 0;

@@ -52,5 +52,7 @@ void ap_cfr_coulomb(const ap_bmodel *M, const double *S, const ap_mcon *c, doubl
 int ap_cfr_unilateral(const ap_mcon *c);
 /* The gap of contact c whatever its mode (m; contact.c), after the position stage. */
 double ap_contact_gap(const ap_bmodel *M, double *S, const ap_mcon *c);
+double ap_contact_gap_rate(const ap_bmodel *M, double *S, const ap_mcon *c, const double *v,
+                           double *rate);
 
 #endif

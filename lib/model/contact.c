@@ -340,6 +340,18 @@ double ap_contact_gap(const ap_bmodel *M, double *S, const ap_mcon *c) {
 }
 #endif
 
+#ifndef AP_SC_COMPLEX
+/* The gap of contact c, m, and its rate at the speeds v (k), m/s, into *rate: the contact
+ * row's [v; 1] whatever its mode; the position stage must hold. */
+double ap_contact_gap_rate(const ap_bmodel *M, double *S, const ap_mcon *c, const double *v,
+                           double *rate) {
+  double *row = S + M->off_tmp + 6 * (size_t)M->K1, g = contact_hol_row(M, S, c, row);
+  *rate = row[M->k];
+  for (int j = 0; j < M->k; j++) *rate += row[j] * v[j];
+  return g;
+}
+#endif
+
 const AP_SC(ap_con_eval) AP_SC(ap_con_contact_eval) = {NULL, contact_rows, contact_gamma,
                                                        contact_hol};
 
