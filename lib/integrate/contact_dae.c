@@ -4,7 +4,8 @@
  *
  * Residual. A sliding contact j applies -mu_k F_n,j s^_j at its contact point, the generalized
  * force f_j F_n,j with f_j = -mu_k T_j^T s^_j (model/con_friction.c). In the residual F_n,j is
- * the multiplier of the contact's normal row, an algebraic variable of IDA:
+ * the multiplier of the contact's normal row, an algebraic variable of IDA (a wheel under a
+ * planar chassis has none: its F_n is its load, dae_loads.c):
  *     F_v = g v' + h - Q - A_s^T lambda - sum_j f_j lambda_n,j
  * so the friction is coupled to the normal force through IDA's Newton iteration (the Newton
  * matrix's multiplier column of row n,j is -cj (A_n,j^T + f_j)). The body model's velocity
@@ -35,6 +36,8 @@ int ap_drv_dae_coulomb(void *user, ap_data *d, double *W) {
     double *f = W + (size_t)(c->row + c->hrow) * (size_t)k, fn = ap_cfr_normal_force(M, S, c);
     ap_cfr_coulomb(M, S, c, f);
     for (int j = 0; j < k; j++) d->Q[j] -= f[j] * fn;   /* the Appell modes' F_n out again */
+    if (ap_bm_wheel_by_load(M, c))   /* no multiplier: its load's force (dae_loads.c) */
+      memset(f, 0, sizeof(double) * (size_t)k);
   }
   return AP_OK;
 }

@@ -11,6 +11,11 @@
 int ap_drv_cm_forces(ap_sim *s, double t, const double *q, const double *v);
 /* F_n and F_t (2) of contact c from the multipliers lam. */
 double ap_drv_cm_normal(const ap_sim *s, const double *lam, const ap_mcon *c, double *ft);
+/* DAE mode: F_n and F_t (2) of contact c at t from IDA's multipliers lam; a wheel under a
+ * planar chassis, its load at IDA's own accelerations (into vd, k) and lam (dae_loads.c). NaN
+ * when they cannot be evaluated. */
+double ap_drv_dae_cm_normal(ap_sim *s, double t, const double *lam, const ap_mcon *c,
+                            double *vd, double *ft);
 /* Contact c slides along -F_t / |F_t|. */
 void ap_drv_cm_slide_against(ap_sim *s, const ap_mcon *c, const double *ft);
 /* Contact c flies from (t, q): q onto the current modes' manifold first (q in and out). */

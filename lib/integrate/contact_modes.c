@@ -25,7 +25,8 @@
  * which that projection keeps. The number of free
  * speeds changes at a switch: in minimal mode the stepper is created again for the new state
  * size (sim.c); in DAE mode IDA is made again (contact_dae.c), and the events read the forces
- * from IDA's multipliers. */
+ * from IDA's multipliers (a wheel under a planar chassis: its load at IDA's accelerations and
+ * multipliers, dae_loads.c). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -49,6 +50,7 @@ struct ap_drv_contacts {
   int *ci;           /* their constraint index */
   cm_event *ev;      /* EV_N per contact */
   double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
+  double *vd;        /* (k, after lam) DAE mode: IDA's accelerations there (dae_loads.c) */
   char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
@@ -122,7 +124,8 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   s->cm = calloc(1, sizeof *s->cm);
   if (s->cm) s->cm->ci = calloc((size_t)M->nfric, sizeof(int));
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
-  if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi) + 1, sizeof(double));
+  if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi + s->k) + 1, sizeof(double));
+  if (s->cm && s->cm->lam) s->cm->vd = s->cm->lam + s->b + s->m->nphi;
   if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
   if (s->cm) s->cm->gap0 = malloc(sizeof(double) * (size_t)(M->nc + 1));
   for (int ci = 0; s->cm && s->cm->gap0 && ci < M->nc; ci++) s->cm->gap0[ci] = NAN;
@@ -138,13 +141,6 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (rc < 0) return ap_drv_fail(s, rc, "initial state: %s", d->msg);
   for (int ci = 0; ci < M->nc; ci++)
     if (M->cons[ci].fric >= 0) s->cm->ci[s->cm->nc++] = ci;
-  for (int i = 0; i < s->cm->nc && s->def.mode == AP_MODE_DAE; i++)
-    if (ap_bm_wheel_by_load(M, &M->cons[s->cm->ci[i]]))
-      return ap_drv_fail(s, AP_ERR_UNSUPPORTED, "contact '%s': friction under a planar chassis "
-                         "needs the wheel's true load, which DAE mode does not solve for (IDA's "
-                         "multiplier of its row is 0 there: the robot would skid without "
-                         "friction); use minimal or projected mode, or a free chassis",
-                         M->cons[s->cm->ci[i]].name);
   return AP_OK;
 }
 
@@ -179,6 +175,14 @@ int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn) {
                      "free joint (docs/vehicles.md)", c->name, fn, t);
 }
 
+/* F_n and F_t of contact c for its events at t: in DAE mode from IDA's own multipliers lam
+ * and accelerations (dae_loads.c), else from the data's. */
+static double normal_at(struct ap_drv_contacts *cm, double t, const double *lam,
+                        const ap_mcon *c, double *ft) {
+  return cm->s->dae ? ap_drv_dae_cm_normal(cm->s, t, lam, c, cm->vd, ft)
+                    : ap_drv_cm_normal(cm->s, lam, c, ft);
+}
+
 static int value(double t, const double *q, const double *v, const ap_data *d, void *user,
                  double *out) {
   const cm_event *e = user;
@@ -197,10 +201,10 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   switch (e->kind) {
     case EV_SLIP:
       if (mode == AP_CM_ROLLING)
-        *out = mu_of(c) * ap_drv_cm_normal(s, lam, c, ft) - hypot(ft[0], ft[1]);
+        *out = mu_of(c) * normal_at(e->cm, t, lam, c, ft) - hypot(ft[0], ft[1]);
       break;
     case EV_LIFT:
-      if (mode != AP_CM_AIRBORNE) *out = ap_drv_cm_normal(s, lam, c, ft);
+      if (mode != AP_CM_AIRBORNE) *out = normal_at(e->cm, t, lam, c, ft);
       break;
     case EV_STICK:
       if (mode == AP_CM_SLIDING) {

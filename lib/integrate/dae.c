@@ -178,8 +178,10 @@ static int initial_multipliers(ap_dae *s, double t0) {
       for (int i = 0; i < k; i++)
         s->jA[c + (size_t)i * bs] = s->d->A[s->rows[c] + (size_t)i * s->b] +
                                     (s->cp.fn ? s->W[i + (size_t)s->rows[c] * k] : 0.0);
+    rc = ap_dae_load_lin(s, s->jA);   /* + the loads' force in lambda (dae_res.c) */
     double resid = 0.0;
-    rc = ap_la_lstsq_At(bs, k, s->jA, r + n, 0.0, y1 + n + k, &resid, s->qr, s->jpvt);
+    if (rc == AP_OK)
+      rc = ap_la_lstsq_At(bs, k, s->jA, r + n, 0.0, y1 + n + k, &resid, s->qr, s->jpvt);
   }
   if (rc == AP_OK) ap_dae_multiplier_scales(s);
   if (rc != AP_OK && !s->msg[0])
@@ -200,8 +202,11 @@ static int alloc_arrays(ap_dae *s) {
                  rmax * cmax + 1, sizeof *s->qr);
   s->jpvt = calloc(rmax + ap_la_iwork_size((int)rmax, (int)cmax) + 1, sizeof *s->jpvt);
   s->W = calloc(2 * k * b + 1, sizeof *s->W);
-  if (!s->qr || !s->jpvt || !s->W) return AP_ERR_NOMEM;
+  if (s->cp.load) s->lamf = calloc(2 * b + 3 * k + k * k + k * b + 1, sizeof *s->lamf);
+  if (!s->qr || !s->jpvt || !s->W || (s->cp.load && !s->lamf)) return AP_ERR_NOMEM;
   s->jW = s->W + k * b;
+  if (s->lamf) s->lF = s->lamf + b, s->lw = s->lF + k, s->lFv = s->lw + b + 2 * k;
+  if (s->lamf) s->lFl = s->lFv + k * k;
   s->qr_sub = s->qr + cmax * rmax + mx + 2 * cmax * cmax + ap_la_work_size((int)rmax, (int)cmax);
   s->phi = s->Phi_q + np * n, s->jg = s->phi + np, s->jN = s->jg + k * k;
   s->jA = s->jN + n * k;
@@ -524,5 +529,6 @@ void ap_dae_free(ap_dae *s) {
   free(s->qr);
   free(s->jpvt);
   free(s->W);
+  free(s->lamf);
   free(s);
 }

@@ -30,6 +30,16 @@ typedef struct ap_dae ap_dae;
 typedef struct ap_dae_couple {
   int (*fn)(void *user, ap_data *d, double *W);
   void *user;
+  /* Forces that depend on the accelerations and on every multiplier: a sliding wheel's Coulomb
+   * force under a planar chassis, -mu_k N s^ with N the wheel's load (model/loads.c), affine in
+   * (v', lambda) (dae_loads.c). After fn, `load` writes into F (k) the force at v' = vd (k) and
+   * lambda = lam (b, all rows, the dropped ones 0); the residual then reads
+   * F_v = g v' + h - Q - (A_s^T + W_s) lambda - F. `lin` writes its derivatives at the data's
+   * state: Fv (k x k) in v' and Fl (k x b) in lambda. Both may use work (b + 2 k doubles). NULL
+   * (load): none. */
+  int (*load)(void *user, ap_data *d, const double *vd, const double *lam, double *F,
+              double *work);
+  int (*lin)(void *user, ap_data *d, double *Fv, double *Fl, double *work);
 } ap_dae_couple;
 
 /* IDA's tolerances are the user's divided by this factor (dae.c: BDF's global error against the
@@ -78,6 +88,9 @@ void ap_dae_carry_stats(ap_dae *to, const ap_dae *from);
  * the derivative of the impulses' interpolating polynomial (IDAGetDky of order 1); right after
  * a (re)start, the initial multipliers. */
 int ap_dae_multipliers(ap_dae *s, double t, double *lam);
+/* IDA's accelerations v' at t within the last step into vd (k): the derivative of v's
+ * interpolating polynomial; right after a (re)start, the initial ones (dae_loads.c). */
+int ap_dae_accelerations(ap_dae *s, double t, double *vd);
 const char *ap_dae_message(const ap_dae *s);
 void ap_dae_free(ap_dae *s);
 

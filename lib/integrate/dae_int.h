@@ -42,6 +42,8 @@ struct ap_dae {
   ap_dae_couple cp;         /* coupled forces of the multipliers (fn NULL: none) */
   double *W, *jW;           /* (k x b) their columns, at the residual and at the Jacobian's
                                base point */
+  double *lamf, *lF, *lw;   /* cp.load: lambda on all rows (b), its force (k), work (b + 2 k) */
+  double *lFv, *lFl;        /* cp.lin: its derivatives in v' (k x k) and lambda (k x b) */
   double *qr, *qr_sub;      /* row_qr's scratch; the kept rows as a matrix */
   int *jpvt, *cand;         /* row_qr's row order and integer scratch; a candidate choice */
   long nres;                /* residual evaluations, the Newton matrix's included */
@@ -61,6 +63,10 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
                     void *user, N_Vector t1, N_Vector t2, N_Vector t3);
 void ap_dae_err_handler(int code, const char *module, const char *function, char *text,
                         void *user);
+/* The loads' coupled force (ap_dae_couple.lin) at the data's state into lFv, lFl, its
+ * lambda part added to jA (bs x k, the kept rows' A_s + W_s^T; NULL: not); AP_OK without
+ * cp.load, else AP_OK or a status with res_msg set. */
+int ap_dae_load_lin(ap_dae *s, double *jA);
 /* The multipliers' maps Pl, Pm for their weights, from the data after a residual evaluation. */
 void ap_dae_multiplier_scales(ap_dae *s);
 

@@ -40,8 +40,13 @@ int ap_dae_residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
   int rc = ap_fwd_position(m, d);
   if (rc == AP_OK) rc = ap_fwd_velocity(m, d);
   if (rc == AP_OK && s->cp.fn) rc = s->cp.fn(s->cp.user, d, s->W);   /* before F_v reads Q */
-  if (rc != AP_OK) return res_fail(s, rc);
   const double *lambda = y1 + n + k, *mu = lambda + bs;   /* the impulses' derivatives */
+  if (rc == AP_OK && s->cp.load) {                         /* the loads' force at (v', lambda) */
+    memset(s->lamf, 0, sizeof(double) * (size_t)b);
+    for (int c = 0; c < bs; c++) s->lamf[s->rows[c]] = lambda[c];
+    rc = s->cp.load(s->cp.user, d, y1 + n, s->lamf, s->lF, s->lw);
+  }
+  if (rc != AP_OK) return res_fail(s, rc);
   ap_la_gemv(n, k, d->N, d->v, r);                         /* F_q = q' - N v - Phi_s^T mu */
   for (int i = 0; i < n; i++) r[i] = y1[i] - r[i];
   if (np > 0) {
@@ -56,6 +61,7 @@ int ap_dae_residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
   }
   ap_la_gemv(k, k, d->g, y1 + n, r + n);                   /* F_v = g v' + h - Q - A_s^T l */
   for (int i = 0; i < k; i++) r[n + i] += d->h[i] - d->Q[i];
+  for (int i = 0; s->cp.load && i < k; i++) r[n + i] -= s->lF[i];   /* - F */
   for (int c = 0; c < bs; c++) {                           /* F_c = A_s v + a0_s */
     int row = s->rows[c];
     double fc = d->a0[row];
@@ -74,6 +80,18 @@ int ap_dae_residual(double t, N_Vector yy, N_Vector yp, N_Vector rr, void *user)
 }
 
 /* ---- weights and the Newton matrix --------------------------------------------------------- */
+
+int ap_dae_load_lin(ap_dae *s, double *jA) {
+  if (!s->cp.load) return AP_OK;
+  int k = s->k, bs = s->bs, rc = s->cp.lin(s->cp.user, s->d, s->lFv, s->lFl, s->lw);
+  if (rc != AP_OK) {
+    res_fail(s, rc);
+    return rc;
+  }
+  for (int c = 0; jA && c < bs; c++)
+    for (int i = 0; i < k; i++) jA[c + (size_t)i * bs] += s->lFl[i + (size_t)s->rows[c] * k];
+  return AP_OK;
+}
 
 /* The multipliers' maps (after a residual evaluation, from the data's g, A and s->Phi_q):
  * Pl = (A_s g^-1 A_s^T)^-1 A_s g^-1 g = (A_s M)^-1 A_s with M = g^-1 A_s^T (bs x k), the
@@ -176,6 +194,7 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
     for (int i = 0; i < n; i++)
       s->jP[c + (size_t)i * np] = s->Phi_q[s->prows[c] + (size_t)i * s->nphi];
   if (s->cp.fn) memcpy(s->jW, s->W, sizeof(double) * (size_t)k * b);
+  if (ap_dae_load_lin(s, NULL) != AP_OK) return s->res_status > 0 ? 1 : -1;
   ap_dae_multiplier_scales(s);
   SUNMatZero(J);
   for (int j = 0; j < nd; j++) {                           /* q and v columns */
@@ -195,6 +214,7 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
       int c = j - n;
       for (int i = 0; i < n; i++) col[i] = -s->jN[i + (size_t)c * n];
       for (int i = 0; i < k; i++) col[n + i] += cj * s->jg[i + (size_t)c * k];
+      for (int i = 0; s->cp.load && i < k; i++) col[n + i] -= cj * s->lFv[i + (size_t)c * k];
       for (int r = 0; r < bs; r++) col[nd + r] = s->jA[r + (size_t)c * bs];
     }
   }
@@ -202,6 +222,7 @@ int ap_dae_jacobian(double t, double cj, N_Vector yy, N_Vector yp, N_Vector rr, 
     double *col = SUNDenseMatrix_Column(J, nd + c);
     for (int i = 0; i < k; i++) col[n + i] = -cj * s->jA[c + (size_t)i * bs];
     for (int i = 0; s->cp.fn && i < k; i++) col[n + i] -= cj * s->jW[i + (size_t)s->rows[c] * k];
+    for (int i = 0; s->cp.load && i < k; i++) col[n + i] -= cj * s->lFl[i + (size_t)s->rows[c] * k];
   }
   for (int r = 0; r < np; r++) {                           /* cj dF_q/dmu = -cj Phi_q^T */
     double *col = SUNDenseMatrix_Column(J, nd + bs + r);

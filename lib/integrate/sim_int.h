@@ -174,6 +174,9 @@ void ap_drv_contacts_free(ap_sim *s);
  * and the number of multipliers change with the modes). */
 int ap_drv_dae_coulomb(void *user, ap_data *d, double *W);
 int ap_drv_dae_remake(ap_sim *s, double t, double *y);
+/* The coupling for IDA made at the current modes: ap_drv_dae_coulomb, and while a wheel under
+ * a planar chassis slides, its Coulomb force with its load (dae_loads.c). */
+ap_dae_couple ap_drv_dae_couple(ap_sim *s);
 /* 1 when a contact's mode changed since the last call (contact_modes.c; IDA is made again
  * only then, a restart with the same modes keeps it). */
 int ap_drv_contacts_switched(ap_sim *s);

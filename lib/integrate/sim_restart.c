@@ -97,8 +97,8 @@ int ap_drv_dae_make(ap_sim *s, double t, double *y, double *yp) {
   memset(yp + s->n + s->k, 0, sizeof(double) * (size_t)nalg);
   double h0 = s->def.h_init > 0 ? s->def.h_init : ap_drv_dae_h0(s, y, d->vdot);
   ap_step_opts o = {s->def.rtol, s->def.atol, 0.0, h0, s->def.h_max, s->def.max_steps, NULL, NULL};
-  ap_dae_couple cp = {ap_drv_dae_coulomb, s};
   if (s->cm) ap_drv_contacts_switched(s);   /* the modes IDA is made for */
+  ap_dae_couple cp = ap_drv_dae_couple(s);   /* dae_loads.c */
   int rc = ap_dae_create(s->m, d, t, y, yp, &o, s->def.rank_rtol, s->cm ? &cp : NULL, &s->dae,
                          s->msg, sizeof s->msg);
   if (rc == AP_OK) ap_dae_state(s->dae, y);

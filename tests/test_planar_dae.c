@@ -1,0 +1,192 @@
+/* Friction under a planar chassis in DAE mode (docs/vehicles.md "Skidding and breaking away";
+ * lib/integrate/dae_loads.c): IDA solves each sliding wheel's true load (the chassis joint's
+ * vertical reaction and tilting moments shared among the contacts) with the accelerations and
+ * the multipliers. The braking robot of examples/scenes/diff_drive_skid.yaml and
+ * diff_drive_brake.yaml on a planar chassis, in DAE mode against minimal mode (dop853), against
+ * closed forms, and against the same robot on a free chassis (where the loads are the contact
+ * rows' multipliers):
+ *
+ *   skid      every wheel locked at v0 = 1 m/s, the drive wheels' mu_kinetic 0.4, the caster's
+ *             0.1: every contact slides along -x, and the deceleration depends on how the load
+ *             is shared (the caster's share brakes less), which depends on the deceleration
+ *             (load transfer): with the bodies' mass moments Sx = sum m x_com = -0.898 kg m and
+ *             Sz = sum m z_com = 1.62 kg m about the drive axle's ground point, and the caster's
+ *             contact at x_c = -0.34 m, pitch balance and M a = -(mu_d (M g - N_c) + mu_c N_c)
+ *             give N_c = (g Sx - a Sz) / x_c and
+ *                 a (M - (mu_c - mu_d) Sz / x_c) = -mu_d M g - (mu_c - mu_d) g Sx / x_c,
+ *             a = -3.7048 m/s^2, N_c = 8.2578 N: every contact sticks at t* = v0 / |a| and the
+ *             robot stands at x* = v0^2 / (2 |a|). (With equal mu_kinetic the loads' sum alone
+ *             would decide the motion.)
+ *   slip onset  brakes growing as 4 t N m per drive wheel, mu 0.3, mu_kinetic 0.25: the drive
+ *             wheels slip where their friction demand reaches mu times their load (rolling:
+ *             the slip event on IDA's multipliers and accelerations), then slide; the state at
+ *             0.8 s;
+ *   tipping   brakes growing as 8 t N m: the caster slips, then its load falls to 0 and the run
+ *             stops with the tipping message (a planar chassis cannot tip) at the same time;
+ *             20 N m brakes tip it at the start (refused);
+ *   gentle    1 N m brakes: no slip, deceleration 2 T / (r M_eff) (closed form).
+ *
+ * Tolerances. rtol 1e-10, atol 1e-12 (the scenes'); IDA runs at rtol / 10 (AP_DAE_TOL_FACTOR).
+ * Event times, positions and speeds of order 1 within TOLF = 10 rtol (times the value's size
+ * when larger than 1, the wheels' angles), as the other DAE cross-checks
+ * (tests/test_contact_dae.c): one decade above rtol, and far below what a wrong load gives (the
+ * caster's share counted with the drive wheels' mu_kinetic moves t* by 4e-3 s; the loads left
+ * out of DAE mode, as before, skid without friction). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <appell/appell.h>
+
+#include "check.h"
+#include "scene_runner.h"
+
+#define G 9.81
+#define RTOL 1e-10
+#define TOLF (10 * RTOL)
+
+static const char *const MODES[] = {"simulation.mode=minimal", "simulation.mode=dae"};
+
+/* Within TOLF of the reference, relative when |ref| > 1. */
+static double bound(double ref) { return TOLF * fmax(1.0, fabs(ref)); }
+
+/* dop853 at RTOL for minimal mode, IDA at the scene's RTOL for DAE mode. */
+static int start(runner *r, const char *file, const char *const *sets, int n, int dae) {
+  return runner_start(r, file, sets, n, dae ? 0.0 : RTOL);
+}
+
+/* The time of the last event whose name contains what (NaN when none), and their number. */
+static double event_time(const ap_sim *s, const char *what, int *count) {
+  double t = NAN;
+  *count = 0;
+  for (int i = 0; i < ap_sim_event_count(s); i++) {
+    ap_event_record rec;
+    if (ap_sim_event_get(s, i, &rec) == AP_OK && strstr(rec.name, what)) t = rec.t, (*count)++;
+  }
+  return t;
+}
+
+/* Skid with the caster's mu_kinetic 0.1: into out (vx and x at t* / 2, the stick time, x at
+ * 0.4 s). */
+static void skid(int dae, int planar, double *out) {
+  const double M = 11.3, Sx = -0.898, Sz = 1.62, xc = -0.34, md = 0.4, mc = 0.1, v0 = 1.0;
+  const double a = (-md * M * G - (mc - md) * G * Sx / xc) / (M - (mc - md) * Sz / xc);
+  const double ts = v0 / -a, xs = v0 * v0 / (-2 * a), t1 = 0.5 * ts;
+  const char *sets[] = {MODES[dae], "constraints.roll_c.friction={mu: 0.8, mu_kinetic: 0.1}",
+                        "joints.chassis.kind=planar", "initial.chassis={vx: 1}"};
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_skid.yaml", sets, planar ? 4 : 2, dae), AP_OK);
+  if (!r.sim) return runner_stop(&r);
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, t1), AP_OK);
+  out[0] = ap_sim_v(r.sim)[0], out[1] = ap_sim_q(r.sim)[0];
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.4), AP_OK);
+  int ns = 0, roll = 1;
+  out[2] = event_time(r.sim, ".stick", &ns), out[3] = ap_sim_q(r.sim)[0];
+  for (int c = 0; c < 3; c++) roll &= ap_sim_contact_mode(r.sim, c) == AP_CONTACT_ROLLING;
+  printf("  skid, %s chassis (%s): at t*/2 vx - (v0 + a t) %.1e m/s, x - ... %.1e m; %d stick "
+         "events, t - t* %.1e s; stands at x - x* %.1e m, rolling %d\n", planar ? "planar" : "free",
+         MODES[dae] + 16, out[0] - (v0 + a * t1), out[1] - (v0 * t1 + 0.5 * a * t1 * t1), ns,
+         out[2] - ts, out[3] - xs, roll);
+  AP_CHECK_NEAR(out[0], v0 + a * t1, TOLF);
+  AP_CHECK_NEAR(out[1], v0 * t1 + 0.5 * a * t1 * t1, TOLF);
+  AP_CHECK_NEAR(out[2], ts, TOLF);
+  AP_CHECK_NEAR(out[3], xs, TOLF);
+  AP_CHECK(ns == 3 && roll);
+  runner_stop(&r);
+}
+
+/* Brakes growing as 4 t N m, mu 0.3, mu_kinetic 0.25: into out (the slip time, then x, heading,
+ * both wheels' angles, vx and both wheels' rates at 0.8 s). */
+static void slip_onset(int dae, double *out) {
+  const char *sets[] = {MODES[dae], "joints.chassis.kind=planar", "initial.chassis={vx: 1}",
+                        "effects.brake_l.torque=-4*t", "effects.brake_r.torque=-4*t",
+                        "constraints.roll_l.friction={mu: 0.3, mu_kinetic: 0.25}",
+                        "constraints.roll_r.friction={mu: 0.3, mu_kinetic: 0.25}",
+                        "constraints.roll_c.friction={mu: 0.3, mu_kinetic: 0.25}"};
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 8, dae), AP_OK);
+  if (!r.sim) return runner_stop(&r);
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.8), AP_OK);
+  int ns = 0, nst = 0;
+  out[0] = event_time(r.sim, ".slip", &ns);
+  event_time(r.sim, ".stick", &nst);
+  const double *q = ap_sim_q(r.sim), *v = ap_sim_v(r.sim);
+  double x[] = {q[0], q[2], q[3], q[4], v[0], v[3], v[4]};
+  memcpy(out + 1, x, sizeof x);
+  int sl = ap_sim_contact_mode(r.sim, 0) == AP_CONTACT_SLIDING &&
+           ap_sim_contact_mode(r.sim, 1) == AP_CONTACT_SLIDING &&
+           ap_sim_contact_mode(r.sim, 2) == AP_CONTACT_ROLLING;
+  printf("  brakes 4 t N m (%s): %d slip events, at t = %.15g; %d stick; at 0.8 s x %.15g m, "
+         "vx %.15g m/s, drive wheels sliding, caster rolling: %d\n", MODES[dae] + 16, ns, out[0],
+         nst, out[1], out[5], sl);
+  AP_CHECK(ns == 2 && nst == 0 && sl);
+  runner_stop(&r);
+}
+
+/* Brakes growing as 8 t N m: the time the run stops with the tipping message (into *tp) and
+ * the caster's slip time (into *tc); 20 N m brakes: refused at the start. */
+static void tipping(int dae, double *tp, double *tc) {
+  const char *sets[] = {MODES[dae], "joints.chassis.kind=planar", "initial.chassis={vx: 1}",
+                        "effects.brake_l.torque=-8*t", "effects.brake_r.torque=-8*t"};
+  runner r;
+  *tp = *tc = NAN;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 5, dae), AP_OK);
+  if (r.sim) {
+    int rc = ap_sim_advance(r.sim, 1.0), n = 0;
+    const char *msg = ap_sim_message(r.sim), *at = strstr(msg, "at t = ");
+    if (at) *tp = atof(at + 7);
+    *tc = event_time(r.sim, "roll_c.slip", &n);
+    printf("  brakes 8 t N m (%s): caster slips at %.15g, the run stops at %.17g: %.60s...\n",
+           MODES[dae] + 16, *tc, *tp, msg);
+    AP_CHECK(rc == AP_ERR_UNSUPPORTED && strstr(msg, "contact 'roll_c'") &&
+             strstr(msg, "planar chassis cannot") && n == 1);
+  }
+  runner_stop(&r);
+  sets[3] = "effects.brake_l.torque=-20", sets[4] = "effects.brake_r.torque=-20";
+  AP_CHECK(start(&r, "diff_drive_brake.yaml", sets, 5, dae) == AP_ERR_UNSUPPORTED);
+  runner_stop(&r);
+}
+
+/* 1 N m brakes: no slip, v' = -2 T / (r M_eff). */
+static void gentle(void) {
+  const double T = 1.0, Meff = 11.3 + 2 * 0.25 + 0.05, a = -2 * T / (0.1 * Meff), t1 = 0.4;
+  const char *sets[] = {MODES[1], "joints.chassis.kind=planar", "initial.chassis={vx: 1}"};
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 3, 1), AP_OK);
+  if (!r.sim) return runner_stop(&r);
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, t1), AP_OK);
+  double ev = ap_sim_v(r.sim)[0] - (1 + a * t1), ex = ap_sim_q(r.sim)[0] - (t1 + a * t1 * t1 / 2);
+  printf("  brakes 1 N m (dae): vx - (v0 + a t) %.1e m/s, x - ... %.1e m, %d events\n", ev, ex,
+         ap_sim_event_count(r.sim));
+  AP_CHECK(fabs(ev) < TOLF && fabs(ex) < TOLF && ap_sim_event_count(r.sim) == 0);
+  runner_stop(&r);
+}
+
+/* The DAE run against the minimal-mode run: each of n numbers within bound(). */
+static void against(const char *what, const double *dae, const double *min, int n) {
+  double worst = 0.0, rel = 0.0;
+  for (int i = 0; i < n; i++) {
+    double e = fabs(dae[i] - min[i]);
+    if (!(e <= worst)) worst = e;   /* a NaN stays */
+    if (!(e / bound(min[i]) <= rel)) rel = e / bound(min[i]);
+  }
+  printf("  %s: largest difference %.1e (%.2g of the bound)\n", what, worst, rel);
+  AP_CHECK_LE(rel, 1.0);
+}
+
+int main(void) {
+  printf("friction under a planar chassis in DAE mode (rtol %.0e):\n", RTOL);
+  double sk[3][4], on[2][8], tp[2], tc[2];
+  skid(0, 1, sk[0]);
+  skid(1, 1, sk[1]);
+  skid(1, 0, sk[2]);
+  for (int dae = 0; dae < 2; dae++) slip_onset(dae, on[dae]), tipping(dae, &tp[dae], &tc[dae]);
+  gentle();
+  against("skid, planar: DAE vs minimal (vx, x at t*/2, t*, x at 0.4 s)", sk[1], sk[0], 4);
+  against("skid, DAE: planar vs free chassis", sk[1], sk[2], 4);
+  against("brakes 4 t: DAE vs minimal (slip time; x, heading, wheel angles, vx, wheel rates "
+          "at 0.8 s)", on[1], on[0], 8);
+  against("brakes 8 t: DAE vs minimal (caster slip, tipping stop)", (double[]){tc[1], tp[1]},
+          (double[]){tc[0], tp[0]}, 2);
+  return ap_check_finish("test_planar_dae");
+}
