@@ -95,6 +95,29 @@ static void skid(int dae, int planar, double *out) {
   runner_stop(&r);
 }
 
+/* The skid with a yaw rate of 3 rad/s at the start: the slip directions turn, the load
+ * transfer has a sideways part, and the left wheel sticks first (0.3911 s), the others later
+ * (0.4424 s). Into out (the three contacts' stick times, then x, y at 0.5 s). */
+static void spin(int dae, int planar, double *out) {
+  const char *sets[] = {MODES[dae], "constraints.roll_c.friction={mu: 0.8, mu_kinetic: 0.1}",
+                        "initial.chassis={z: 0, vx: 1, vy: 0, vz: 0, omega: [0, 0, 3]}",
+                        "joints.chassis.kind=planar"};
+  if (planar) sets[2] = "initial.chassis={vx: 1, heading_rate: 3}";
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_skid.yaml", sets, planar ? 4 : 3, dae), AP_OK);
+  if (!r.sim) return runner_stop(&r);
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.5), AP_OK);
+  static const char *const name[] = {"roll_l.stick", "roll_r.stick", "roll_c.stick"};
+  int n = 0, all = 1;
+  for (int c = 0; c < 3; c++) out[c] = event_time(r.sim, name[c], &n), all &= n == 1;
+  out[3] = ap_sim_q(r.sim)[0], out[4] = ap_sim_q(r.sim)[1];
+  printf("  spinning skid, %s chassis (%s): sticks at %.15g (left), %.15g, %.15g; at 0.5 s "
+         "x %.15g, y %.15g m\n", planar ? "planar" : "free", MODES[dae] + 16, out[0], out[1],
+         out[2], out[3], out[4]);
+  AP_CHECK(all && out[0] < out[1] - 0.01);
+  runner_stop(&r);
+}
+
 /* Brakes growing as 4 t N m, mu 0.3, mu_kinetic 0.25: into out (the slip time, then x, heading,
  * both wheels' angles, vx and both wheels' rates at 0.8 s). */
 static void slip_onset(int dae, double *out) {
@@ -176,14 +199,14 @@ static void against(const char *what, const double *dae, const double *min, int 
 
 int main(void) {
   printf("friction under a planar chassis in DAE mode (rtol %.0e):\n", RTOL);
-  double sk[3][4], on[2][8], tp[2], tc[2];
-  skid(0, 1, sk[0]);
-  skid(1, 1, sk[1]);
-  skid(1, 0, sk[2]);
+  double sk[3][4], sp[3][5], on[2][8], tp[2], tc[2];
+  for (int i = 0; i < 3; i++) skid(i > 0, i < 2, sk[i]), spin(i > 0, i < 2, sp[i]);
   for (int dae = 0; dae < 2; dae++) slip_onset(dae, on[dae]), tipping(dae, &tp[dae], &tc[dae]);
   gentle();
   against("skid, planar: DAE vs minimal (vx, x at t*/2, t*, x at 0.4 s)", sk[1], sk[0], 4);
   against("skid, DAE: planar vs free chassis", sk[1], sk[2], 4);
+  against("spinning skid, planar: DAE vs minimal (stick times, x, y at 0.5 s)", sp[1], sp[0], 5);
+  against("spinning skid, DAE: planar vs free chassis", sp[1], sp[2], 5);
   against("brakes 4 t: DAE vs minimal (slip time; x, heading, wheel angles, vx, wheel rates "
           "at 0.8 s)", on[1], on[0], 8);
   against("brakes 8 t: DAE vs minimal (caster slip, tipping stop)", (double[]){tc[1], tp[1]},
