@@ -1,7 +1,10 @@
 /* The DAE driver's callbacks for IDA (dae_int.h; the method is described at the top of
  * dae.c): the residual F = (F_q, F_v, F_c, F_phi) of (q, v, Lambda, M), the error weights of
  * the impulses from the maps Pl and Pm (independent of the step size), and the Newton matrix
- * dF/dy + cj dF/dy', exact where F is linear in y and by difference quotients in q and v. */
+ * dF/dy + cj dF/dy', exact where F is linear in y and by difference quotients in q and v.
+ * With the loads' coupled force (ap_dae_couple.load: a sliding wheel under a planar chassis,
+ * dae_loads.c) F_v has - F(v', lambda) besides, affine in v' and lambda: the Newton matrix's
+ * v' and lambda columns get -cj times its derivatives (ap_dae_couple.lin, at the base point). */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
