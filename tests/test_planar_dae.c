@@ -21,6 +21,11 @@
  *             wheels slip where their friction demand reaches mu times their load (rolling:
  *             the slip event on IDA's multipliers and accelerations), then slide; the state at
  *             0.8 s;
+ *   turn      brakes growing as 4 t (left) and 2 t N m (right) in a turn: the caster, not
+ *             aligned, slips at t0 and sticks, then each drive wheel slips, with a sideways part
+ *             of its friction that the two wheels of the axle share indeterminately (DAE mode
+ *             splits IDA's multipliers by minimum norm, as the reactions do: without it the left
+ *             wheel slipped 7.9e-3 s late);
  *   tipping   brakes growing as 8 t N m: the caster slips, then its load falls to 0 and the run
  *             stops with the tipping message (a planar chassis cannot tip) at the same time;
  *             20 N m brakes tip it at the start (refused);
@@ -29,7 +34,11 @@
  * Tolerances. rtol 1e-10, atol 1e-12 (the scenes'); IDA runs at rtol / 10 (AP_DAE_TOL_FACTOR).
  * Event times, positions and speeds of order 1 within TOLF = 10 rtol (times the value's size
  * when larger than 1, the wheels' angles), as the other DAE cross-checks
- * (tests/test_contact_dae.c): one decade above rtol, and far below what a wrong load gives (the
+ * (tests/test_contact_dae.c); the turn's slip events, on IDA's multipliers (less accurate than
+ * its states) while the demand varies with the state, within 1e3 rtol per second of motion, the
+ * bound of the other vehicles' DAE slip events (tests/test_car_breakaway.c). The straight runs'
+ * loads and demands are functions of t alone, so their switch times agree to round-off. All
+ * bounds are far below what a wrong load gives (the
  * caster's share counted with the drive wheels' mu_kinetic moves t* by 4e-3 s; the loads left
  * out of DAE mode, as before, skid without friction). */
 #include <math.h>
@@ -146,6 +155,38 @@ static void slip_onset(int dae, double *out) {
   runner_stop(&r);
 }
 
+/* Brakes growing as 4 t (left) and 2 t N m (right) in a turn (heading rate 1 rad/s, the
+ * wheels rolling at 7.5 and 12.5 rad/s): the caster, not aligned with its path, slips at t0
+ * and sticks at 0.0119 s; the drive wheels' friction has a sideways part, which two wheels on
+ * one axle share in a statically indeterminate way (their sideways rows repeat each other):
+ * DAE mode's events split IDA's multipliers as the Appell modes' reactions do (minimum norm),
+ * so the same wheel slips at the same time, the left at 0.3002 s, the right at 0.7193 s. Into
+ * out (the caster's stick, the two slips; x, y, heading at 0.8 s). */
+static void turn(int dae, double *out) {
+  const char *sets[] = {MODES[dae], "joints.chassis.kind=planar",
+                        "initial.chassis={vx: 1, heading_rate: 1}", "initial.wheel_l={rate: 7.5}",
+                        "initial.wheel_r={rate: 12.5}", "effects.brake_l.torque=-4*t",
+                        "effects.brake_r.torque=-2*t",
+                        "constraints.roll_l.friction={mu: 0.3, mu_kinetic: 0.25}",
+                        "constraints.roll_r.friction={mu: 0.3, mu_kinetic: 0.25}",
+                        "constraints.roll_c.friction={mu: 0.3, mu_kinetic: 0.25}"};
+  runner r;
+  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 10, dae), AP_OK);
+  if (!r.sim) return runner_stop(&r);
+  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.8), AP_OK);
+  int nc = 0, nl = 0, nr = 0;
+  out[0] = event_time(r.sim, "roll_c.stick", &nc);
+  out[1] = event_time(r.sim, "roll_l.slip", &nl), out[2] = event_time(r.sim, "roll_r.slip", &nr);
+  const double *q = ap_sim_q(r.sim);
+  out[3] = q[0], out[4] = q[1], out[5] = q[2];
+  printf("  brakes 4 t, 2 t N m in a turn (%s): %d events, the caster sticks at %.15g, roll_l "
+         "slips at %.15g, roll_r at %.15g; at 0.8 s x %.15g, y %.15g, heading %.15g\n",
+         MODES[dae] + 16, ap_sim_event_count(r.sim), out[0], out[1], out[2], out[3], out[4],
+         out[5]);
+  AP_CHECK(ap_sim_event_count(r.sim) == 4 && nc == 1 && nl == 1 && nr == 1);
+  runner_stop(&r);
+}
+
 /* Brakes growing as 8 t N m: the time the run stops with the tipping message (into *tp) and
  * the caster's slip time (into *tc); 20 N m brakes: refused at the start. */
 static void tipping(int dae, double *tp, double *tc) {
@@ -199,9 +240,10 @@ static void against(const char *what, const double *dae, const double *min, int 
 
 int main(void) {
   printf("friction under a planar chassis in DAE mode (rtol %.0e):\n", RTOL);
-  double sk[3][4], sp[3][5], on[2][8], tp[2], tc[2];
+  double sk[3][4], sp[3][5], on[2][8], tu[2][6], tp[2], tc[2];
   for (int i = 0; i < 3; i++) skid(i > 0, i < 2, sk[i]), spin(i > 0, i < 2, sp[i]);
-  for (int dae = 0; dae < 2; dae++) slip_onset(dae, on[dae]), tipping(dae, &tp[dae], &tc[dae]);
+  for (int dae = 0; dae < 2; dae++)
+    slip_onset(dae, on[dae]), turn(dae, tu[dae]), tipping(dae, &tp[dae], &tc[dae]);
   gentle();
   against("skid, planar: DAE vs minimal (vx, x at t*/2, t*, x at 0.4 s)", sk[1], sk[0], 4);
   against("skid, DAE: planar vs free chassis", sk[1], sk[2], 4);
@@ -209,6 +251,16 @@ int main(void) {
   against("spinning skid, DAE: planar vs free chassis", sp[1], sp[2], 5);
   against("brakes 4 t: DAE vs minimal (slip time; x, heading, wheel angles, vx, wheel rates "
           "at 0.8 s)", on[1], on[0], 8);
+  against("brakes 4 t, 2 t in a turn: DAE vs minimal (x, y, heading at 0.8 s)", tu[1] + 3,
+          tu[0] + 3, 3);
+  /* the switch times: the stick on the state (TOLF), the slips on IDA's multipliers, within the
+   * DAE cross-checks' bound for those, 1e3 rtol per second of motion (test_car_breakaway.c) */
+  for (int i = 0; i < 3; i++) {
+    double b = i ? 1e3 * RTOL * tu[0][i] : TOLF;
+    printf("  brakes 4 t, 2 t in a turn: %s, DAE - minimal %.1e s (bound %.1e)\n",
+           i ? (i == 1 ? "roll_l.slip" : "roll_r.slip") : "roll_c.stick", tu[1][i] - tu[0][i], b);
+    AP_CHECK_LE(fabs(tu[1][i] - tu[0][i]), b);
+  }
   against("brakes 8 t: DAE vs minimal (caster slip, tipping stop)", (double[]){tc[1], tp[1]},
           (double[]){tc[0], tp[0]}, 2);
   return ap_check_finish("test_planar_dae");

@@ -28,6 +28,7 @@
 
 #include "integrate/contact_int.h"
 #include "integrate/dae_int.h"
+#include "linalg/linalg.h"
 
 /* 1 when contact c slides with its load as normal force. */
 static int sliding_by_load(const ap_bmodel *M, const double *S, const ap_mcon *c) {
@@ -123,4 +124,15 @@ double ap_drv_dae_cm_normal(ap_sim *s, double t, const double *lam, const ap_mco
       ap_bm_wheel_load_at(s->m, s->d, vd, lam, (int)(c - ap_bm(s->m)->cons), &N, NULL) != AP_OK)
     return NAN;
   return N;
+}
+
+int ap_drv_dae_min_norm(ap_sim *s, double *lam, double *work, int *iwork) {
+  const ap_data *d = s->d;
+  int b = s->b, k = s->k;
+  double *rhs = work, resid = 0.0;
+  for (int j = 0; j < k; j++) {   /* A_s^T lambda_s: IDA's constraint forces */
+    rhs[j] = 0.0;
+    for (int r = 0; r < b; r++) rhs[j] += d->A[r + (size_t)j * b] * lam[r];
+  }
+  return ap_la_lstsq_At(b, k, d->A, rhs, d->rank_rtol, lam, &resid, work + k, iwork);
 }
