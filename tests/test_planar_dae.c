@@ -127,18 +127,26 @@ static void spin(int dae, int planar, double *out) {
   runner_stop(&r);
 }
 
+/* diff_drive_brake.yaml on a planar chassis with mu 0.3, mu_kinetic 0.25 on every contact and
+ * the n settings extra, run to 0.8 s. */
+static int brake_run(runner *r, int dae, const char *const *extra, int n) {
+  const char *sets[16] = {MODES[dae], "joints.chassis.kind=planar",
+                          "constraints.roll_l.friction={mu: 0.3, mu_kinetic: 0.25}",
+                          "constraints.roll_r.friction={mu: 0.3, mu_kinetic: 0.25}",
+                          "constraints.roll_c.friction={mu: 0.3, mu_kinetic: 0.25}"};
+  for (int i = 0; i < n && i < 11; i++) sets[5 + i] = extra[i];
+  int rc = start(r, "diff_drive_brake.yaml", sets, 5 + n, dae);
+  return rc == AP_OK ? ap_sim_advance(r->sim, 0.8) : rc;
+}
+
 /* Brakes growing as 4 t N m, mu 0.3, mu_kinetic 0.25: into out (the slip time, then x, heading,
  * both wheels' angles, vx and both wheels' rates at 0.8 s). */
 static void slip_onset(int dae, double *out) {
-  const char *sets[] = {MODES[dae], "joints.chassis.kind=planar", "initial.chassis={vx: 1}",
-                        "effects.brake_l.torque=-4*t", "effects.brake_r.torque=-4*t",
-                        "constraints.roll_l.friction={mu: 0.3, mu_kinetic: 0.25}",
-                        "constraints.roll_r.friction={mu: 0.3, mu_kinetic: 0.25}",
-                        "constraints.roll_c.friction={mu: 0.3, mu_kinetic: 0.25}"};
+  const char *extra[] = {"initial.chassis={vx: 1}", "effects.brake_l.torque=-4*t",
+                         "effects.brake_r.torque=-4*t"};
   runner r;
-  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 8, dae), AP_OK);
+  AP_CHECK_EQ_INT(brake_run(&r, dae, extra, 3), AP_OK);
   if (!r.sim) return runner_stop(&r);
-  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.8), AP_OK);
   int ns = 0, nst = 0;
   out[0] = event_time(r.sim, ".slip", &ns);
   event_time(r.sim, ".stick", &nst);
@@ -163,17 +171,12 @@ static void slip_onset(int dae, double *out) {
  * so the same wheel slips at the same time, the left at 0.3002 s, the right at 0.7193 s. Into
  * out (the caster's stick, the two slips; x, y, heading at 0.8 s). */
 static void turn(int dae, double *out) {
-  const char *sets[] = {MODES[dae], "joints.chassis.kind=planar",
-                        "initial.chassis={vx: 1, heading_rate: 1}", "initial.wheel_l={rate: 7.5}",
-                        "initial.wheel_r={rate: 12.5}", "effects.brake_l.torque=-4*t",
-                        "effects.brake_r.torque=-2*t",
-                        "constraints.roll_l.friction={mu: 0.3, mu_kinetic: 0.25}",
-                        "constraints.roll_r.friction={mu: 0.3, mu_kinetic: 0.25}",
-                        "constraints.roll_c.friction={mu: 0.3, mu_kinetic: 0.25}"};
+  const char *extra[] = {"initial.chassis={vx: 1, heading_rate: 1}",
+                         "initial.wheel_l={rate: 7.5}", "initial.wheel_r={rate: 12.5}",
+                         "effects.brake_l.torque=-4*t", "effects.brake_r.torque=-2*t"};
   runner r;
-  AP_CHECK_EQ_INT(start(&r, "diff_drive_brake.yaml", sets, 10, dae), AP_OK);
+  AP_CHECK_EQ_INT(brake_run(&r, dae, extra, 5), AP_OK);
   if (!r.sim) return runner_stop(&r);
-  AP_CHECK_EQ_INT(ap_sim_advance(r.sim, 0.8), AP_OK);
   int nc = 0, nl = 0, nr = 0;
   out[0] = event_time(r.sim, "roll_c.stick", &nc);
   out[1] = event_time(r.sim, "roll_l.slip", &nl), out[2] = event_time(r.sim, "roll_r.slip", &nr);
