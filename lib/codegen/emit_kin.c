@@ -86,6 +86,7 @@ static void column(cg_gen *G, const ap_mjoint *j, int i, const cg_v *rc, cg_v *s
 /* The plane contact: Rj to an array, the library's support function, u cb H rc read back. */
 static void plane(cg_kin *K, int jx, const cg_v *Rj, kjoint *J, cg_v *z) {
   char x[48];
+  if (cg_plane_support(K, jx, Rj, J, z)) return;   /* traced (emit_contact.c) */
   cg_printf(K->G, "  {\n    const double R_[9] = {");
   for (int i = 0; i < 9; i++) {
     cg_text(&Rj[i], x, sizeof x);

@@ -156,14 +156,23 @@ static int position_callbacks(const ap_model *m, ap_data *d) {
 }
 #endif
 
+/* The compiled model's promise to write its outputs in full (double build; core.h). */
+#ifdef AP_SC_COMPLEX
+#define FILLS(m) 0
+#else
+#define FILLS(m) ((m)->ev.fills)
+#endif
+
 /* g, N, A, a0 from a compiled evaluator (body models). N is rewritten only when the model has
  * its own kinematics; otherwise it stays the identity written by ap_data_create. */
 static int position_evaluator(const ap_model *m, ap_data *d) {
   size_t kk = (size_t)m->k * m->k;
-  memset(d->g, 0, sizeof(ap_sc) * kk);
-  if (m->n != m->k || m->sys.kinematic) memset(d->N, 0, sizeof(ap_sc) * (size_t)m->n * m->k);
-  memset(d->A, 0, sizeof(ap_sc) * (size_t)m->b * m->k);
-  memset(d->a0, 0, sizeof(ap_sc) * (size_t)m->b);
+  if (!(FILLS(m) & AP_EV_FILLS_POSITION)) {   /* zeroed, unless a compiled model writes all */
+    memset(d->g, 0, sizeof(ap_sc) * kk);
+    if (m->n != m->k || m->sys.kinematic) memset(d->N, 0, sizeof(ap_sc) * (size_t)m->n * m->k);
+    memset(d->A, 0, sizeof(ap_sc) * (size_t)m->b * m->k);
+    memset(d->a0, 0, sizeof(ap_sc) * (size_t)m->b);
+  }
   int rc = m->ev.AP_SC(position)(m, d, SCRATCH(d)->ev);
   if (rc != AP_OK) return rc;
 #ifndef AP_SC_COMPLEX
@@ -273,9 +282,11 @@ static int velocity_callbacks(const ap_model *m, ap_data *d) {
 /* h, Q, gamma from a compiled evaluator (body models). */
 static int velocity_evaluator(const ap_model *m, ap_data *d) {
   int k = m->k;
-  memset(d->h, 0, sizeof(ap_sc) * (size_t)k);
-  memset(d->Q, 0, sizeof(ap_sc) * (size_t)k);
-  memset(d->gamma, 0, sizeof(ap_sc) * (size_t)m->b);
+  if (!(FILLS(m) & AP_EV_FILLS_VELOCITY)) {
+    memset(d->h, 0, sizeof(ap_sc) * (size_t)k);
+    memset(d->Q, 0, sizeof(ap_sc) * (size_t)k);
+    memset(d->gamma, 0, sizeof(ap_sc) * (size_t)m->b);
+  }
   int rc = m->ev.AP_SC(velocity)(m, d, SCRATCH(d)->ev);
 #ifndef AP_SC_COMPLEX
   if (rc == AP_OK && m->ev.finite && m->ev.finite(m, d, 1)) return AP_OK;   /* one check */
