@@ -161,6 +161,7 @@ typedef struct cg_fast {
   cg_lib lib;
   unsigned char *traced;   /* per constraint: rows and gamma generated (fast_rows.c) */
   int wheels, effects;     /* cg_wheels_traced, cg_effects_traced */
+  int rest;                /* some row, or a wheel's geometry, is the library's */
 } cg_fast;
 
 /* Looks up apc_rows and apc_forces in the loaded object and installs them as the model's

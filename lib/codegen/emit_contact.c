@@ -13,7 +13,9 @@
  *                                    ap_contact_position, which reports it);
  *   void apc_forces(v, S, Q, gamma)  after apc_velocity: gravity (when every effect is gravity:
  *                                    every entry of Q written) and the generated rows' gamma.
- * The other constraints keep the library's code (fast_rows.c calls their tables). */
+ * A prescribed speed of constant value is generated too (con_speed.c: A's row e_j^T, a0 the
+ * negated value, gamma 0; its time scratch is then not written). The other constraints keep
+ * the library's code (fast_rows.c calls their tables). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,9 +52,14 @@ int cg_wheels_traced(const ap_bmodel *M) {
   return 1;
 }
 
+/* A prescribed speed of constant value (no f(t)): row v_j - value, gamma 0. */
+static int speed_traced(const ap_mcon *c) {
+  return c->kind == &ap_con_speed && !c->def.speed_fn;
+}
+
 int cg_con_traced(const ap_bmodel *M, int ci) {
   const ap_mcon *c = &M->cons[ci];
-  return contact_traced(c) && (c->wheel < 0 || cg_wheels_traced(M));
+  return speed_traced(c) || (contact_traced(c) && (c->wheel < 0 || cg_wheels_traced(M)));
 }
 
 int cg_effects_traced(const ap_bmodel *M) {
@@ -263,6 +270,14 @@ static void store_scratch(cg_kin *K) {
     if (K->sh[i].kind != CG_CONST) K->sh[i] = cg_ref('S', i);
 }
 
+/* speed_rows (con_speed.c) with f = the constant value: the whole row written. */
+static void speed_rows(cg_kin *K, const ap_mcon *c) {
+  int k = K->M->k, b = K->M->b;
+  for (int col = 0; col < k; col++)
+    out(K->G, "A", (size_t)c->row + (size_t)col * b, cg_const(col == c->col ? 1.0 : 0.0));
+  out(K->G, "a0", (size_t)c->row, cg_const(-c->def.speed_value));
+}
+
 void cg_emit_rows(cg_kin *K) {
   const ap_bmodel *M = K->M;
   cg_printf(K->G, "int apc_rows(const double *q, double *S, double *N, double *A, double *a0) "
@@ -271,7 +286,8 @@ void cg_emit_rows(cg_kin *K) {
   if (cg_wheels_traced(M)) wheel_support(K);
   if (M->n != M->k) fill_N(K);
   for (int ci = 0; ci < M->nc; ci++)
-    if (cg_con_traced(M, ci)) contact_rows(K, ci);
+    if (speed_traced(&M->cons[ci])) speed_rows(K, &M->cons[ci]);
+    else if (cg_con_traced(M, ci)) contact_rows(K, ci);
   store_scratch(K);
   cg_printf(K->G, "  return 0;\n}\n\n");
 }
@@ -352,6 +368,7 @@ void cg_emit_forces(cg_kin *K) {
     free(Q);
   }
   for (int ci = 0; ci < M->nc; ci++)
-    if (cg_con_traced(M, ci)) contact_gamma(K, ci);
+    if (speed_traced(&M->cons[ci])) out(K->G, "gamma", (size_t)M->cons[ci].row, cg_const(0.0));
+    else if (cg_con_traced(M, ci)) contact_gamma(K, ci);
   cg_printf(K->G, "}\n\n");
 }

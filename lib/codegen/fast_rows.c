@@ -38,6 +38,7 @@ static int fast_rows(const ap_bm_fast *f, const ap_model *m, ap_data *d, double 
     rc = ap_contact_position(m, d, d->t, S);
     return rc != AP_OK ? rc : rows_interp(m, d, S);
   }
+  if (!F->rest) return AP_OK;   /* every row generated */
   if (M->nwheel && !F->wheels) rc = ap_contact_position(m, d, d->t, S);
   if (rc == AP_OK && M->nc) rc = ap_con_time(m, d, d->t, S);
   for (int ci = 0; ci < M->nc && rc == AP_OK; ci++)
@@ -50,6 +51,7 @@ static int fast_forces(const ap_bm_fast *f, const ap_model *m, ap_data *d, doubl
   const cg_fast *F = (const cg_fast *)f;
   const ap_bmodel *M = ap_bm(m);
   F->lib.forces(d->v, S, d->Q, d->gamma);
+  if (!F->rest && F->effects && !M->nfric) return AP_OK;   /* all of it generated */
   int rc = M->ne && !F->effects ? ap_eff_forces(m, d, d->t, d->q, d->v, S, d->Q) : AP_OK;
   for (int ci = 0; ci < M->nc && rc == AP_OK; ci++)
     if (!F->traced[ci])
@@ -69,6 +71,7 @@ int cg_rows_install(ap_model *m, cg_fast *F) {
   F->wheels = cg_wheels_traced(M), F->effects = cg_effects_traced(M);
   F->base.rows = fast_rows, F->base.forces = fast_forces;
   int all = cg_all_cons_traced(M);
+  F->rest = !all || (M->nwheel && !F->wheels);
   m->ev.fills = (all ? AP_EV_FILLS_POSITION : 0) |
                 (all && F->effects && !M->nfric ? AP_EV_FILLS_VELOCITY : 0);
   return AP_OK;

@@ -228,7 +228,8 @@ static int fwd_position(const ap_model *m, ap_data *d) {
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
   /* the scale is at least max|a0|: below that no scale is needed (and none is computed) */
-  if (d->resid_a0 > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->a0, (size_t)m->b)) &&
+  if (d->resid_a0 > 0.0 &&   /* rows of full rank: 0, and no scale is needed */
+      d->resid_a0 > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->a0, (size_t)m->b)) &&
       d->resid_a0 > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 0)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
@@ -311,7 +312,8 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  if (d->resid_gamma > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->gamma, (size_t)m->b)) &&
+  if (d->resid_gamma > 0.0 &&
+      d->resid_gamma > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->gamma, (size_t)m->b)) &&
       d->resid_gamma > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 1)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);
