@@ -317,7 +317,8 @@ int main(void) {
   compare_dir(dir);
   const char *tests[] = {"modes_double_top.yaml", "modes_free_balls.yaml",
                          "act_motor_angle_ball.yaml", "difftest/rolling_knife.yaml",
-                         "difftest/seed_17.yaml", "difftest/locked_at_rest.yaml"};
+                         "difftest/seed_17.yaml", "difftest/locked_at_rest.yaml",
+                         "compiled_contacts.yaml"};
   for (size_t i = 0; i < sizeof tests / sizeof tests[0]; i++) {
     snprintf(dir, sizeof dir, "%s/tests/scenes/%s", AP_SRCDIR, tests[i]);
     compare_scene(dir);
