@@ -84,28 +84,18 @@ static cg_v call2(cg_gen *G, const char *fn, cg_v a, cg_v b) {
   return r;
 }
 
-/* sphere_part: adds r |u| to sigma, r u / |u| to c, r (I - u u^T / |u|^2) / |u| to H. */
-static void sphere_part(cg_gen *G, double r, const cg_v *u, cg_v n, cg_v *sigma, cg_v *c,
-                        cg_v *H) {
+/* sphere_part (dim 3, nrm = |u|) and disk_part (dim 2, nrm = |u_p|) of shape.c: adds r nrm to
+ * sigma, r u_i / nrm to c_i and r (delta_ij - u_i u_j / nrm^2) / nrm to H_ij, i, j < dim. */
+static void round_part(cg_gen *G, double r, const cg_v *u, int dim, cg_v nrm, cg_v *sigma,
+                       cg_v *c, cg_v *H) {
   cg_v R = cg_const(r);
-  *sigma = ADD(*sigma, MUL(R, n));
-  for (int i = 0; i < 3; i++) c[i] = ADD(c[i], DIV(MUL(R, u[i]), n));
-  for (int j = 0; j < 3; j++)
-    for (int i = 0; i < 3; i++)
+  *sigma = ADD(*sigma, MUL(R, nrm));
+  for (int i = 0; i < dim; i++) c[i] = ADD(c[i], DIV(MUL(R, u[i]), nrm));
+  for (int j = 0; j < dim; j++)
+    for (int i = 0; i < dim; i++)
       H[i + 3 * j] = ADD(H[i + 3 * j], DIV(MUL(R, SUB(cg_const(i == j ? 1.0 : 0.0),
-                                                      DIV(MUL(u[i], u[j]), MUL(n, n)))), n));
-}
-
-static void disk_part(cg_gen *G, double r, const cg_v *u, cg_v rho, cg_v *sigma, cg_v *c,
-                      cg_v *H) {
-  cg_v R = cg_const(r);
-  *sigma = ADD(*sigma, MUL(R, rho));
-  for (int i = 0; i < 2; i++) c[i] = ADD(c[i], DIV(MUL(R, u[i]), rho));
-  for (int j = 0; j < 2; j++)
-    for (int i = 0; i < 2; i++)
-      H[i + 3 * j] = ADD(H[i + 3 * j], DIV(MUL(R, SUB(cg_const(i == j ? 1.0 : 0.0),
-                                                      DIV(MUL(u[i], u[j]), MUL(rho, rho)))),
-                                           rho));
+                                                      DIV(MUL(u[i], u[j]), MUL(nrm, nrm)))),
+                                           nrm));
 }
 
 static void ellipsoid(cg_gen *G, const double *ax, const cg_v *u, cg_v *sigma, cg_v *c,
@@ -129,14 +119,14 @@ static void support(cg_gen *G, const ap_shape *s, const cg_v *u, cg_v *sigma, cg
   *sigma = cg_const(0.0);
   for (int i = 0; i < 3; i++) c[i] = cg_const(0.0);
   for (int i = 0; i < 9; i++) H[i] = cg_const(0.0);
-  if (s->kind == AP_SHAPE_SPHERE) sphere_part(G, s->radius, u, n, sigma, c, H);
+  if (s->kind == AP_SHAPE_SPHERE) round_part(G, s->radius, u, 3, n, sigma, c, H);
   if (s->kind == AP_SHAPE_ELLIPSOID) ellipsoid(G, s->semi_axes, u, sigma, c, H);
   if (s->kind != AP_SHAPE_DISK && s->kind != AP_SHAPE_TORUS) return;
   char x[48], y[48];
   cg_text(&rho, x, sizeof x), cg_text(&n, y, sizeof y);
   cg_printf(G, "  if (!(%s / %s >= %a)) {\n%s  }\n", x, y, s->flat_tol, flat);
-  disk_part(G, s->radius, u, rho, sigma, c, H);
-  if (s->kind == AP_SHAPE_TORUS) sphere_part(G, s->tube, u, n, sigma, c, H);
+  round_part(G, s->radius, u, 2, rho, sigma, c, H);   /* the disk's up = (u0, u1, 0) */
+  if (s->kind == AP_SHAPE_TORUS) round_part(G, s->tube, u, 3, n, sigma, c, H);
 }
 
 /* The plane contact's support point (kinematics.c plane_contact) in apc_position: u, cb, H, rc
