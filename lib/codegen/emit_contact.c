@@ -346,7 +346,7 @@ void cg_emit_forces(cg_kin *K) {
     if (K->sh[i].kind != CG_CONST) K->sh[i] = cg_ref('S', i);
   cg_printf(K->G, "void apc_forces(const double *v, double *S, double *Q, double *gamma) {\n"
             "  (void)v, (void)S, (void)Q, (void)gamma;\n");
-  if (cg_effects_traced(M) && M->ne > 0) {
+  if (cg_effects_traced(M)) {   /* Q written in full, zeros too: inputs add to it later */
     cg_v *Q = calloc((size_t)M->k + 1, sizeof *Q);
     if (!Q) {
       K->G->fail = 1;
