@@ -1,8 +1,9 @@
 /* Compiled models (appell/compiled.h): generate the model's code (emit_kin.c, emit_vel.c),
  * get its shared object (cache.c) and install it as the body model's fast kinematics
  * (model/model.h ap_bm_fast), which the position and velocity hooks call in place of
- * ap_kin_position + ap_kin_metric and ap_kin_velocity + ap_kin_bias. The plane contact's
- * support function is called back into the library (ap_kin_plane). */
+ * ap_kin_position + ap_kin_metric and ap_kin_velocity + ap_kin_bias, and the rest of both
+ * stages (contacts, N, rows, gravity, gamma: fast_rows.c). The plane contact's support function
+ * is called back into the library (ap_kin_plane) to report a shape lying flat. */
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
