@@ -119,6 +119,9 @@ typedef int (*cg_basis_fn)(const int *perm, const double *A, const double *a0, d
 typedef int (*cg_part_fn)(const int *perm, const double *F, const double *tau,
                           const double *gamma, double *w, double *resid);
 
+typedef int (*cg_rows_fn)(const double *q, double *S, double *N, double *A, double *a0);
+typedef void (*cg_forces_fn)(const double *v, double *S, double *Q, double *gamma);
+
 typedef struct cg_lib {
   void *handle;
   cg_pos_fn position;
@@ -127,6 +130,8 @@ typedef struct cg_lib {
   cg_finite_fn finite_pos, finite_vel;   /* 1: every output of the stage finite, <= AP_HUGE */
   cg_basis_fn basis;                     /* NULL when the model has none (no rows) */
   cg_part_fn particular;
+  cg_rows_fn rows;                       /* apc_rows, apc_forces (emit_contact.c): NULL when */
+  cg_forces_fn forces;                   /* absent; set by cg_rows_install, not by cg_load */
   double ms_compile;     /* wall time of the compiler run (0 from the cache) */
   int from_cache;
 } cg_lib;
@@ -134,5 +139,35 @@ typedef struct cg_lib {
 /* The shared object for src: from the cache when a valid one is there, else compiled and
  * cached. 0, or -1 with a one-line reason in why. */
 int cg_load(const char *src, cg_lib *out, char *why, size_t len);
+
+/* ---- contacts, N and gravity (emit_contact.c) and their run-time side (fast_rows.c) ------- */
+
+/* What the generator takes: the wheel contacts' support points (all of them or none), a
+ * constraint's rows and gamma, the effects (every one gravity). */
+int cg_wheels_traced(const ap_bmodel *M);
+int cg_con_traced(const ap_bmodel *M, int ci);
+int cg_all_cons_traced(const ap_bmodel *M);
+int cg_effects_traced(const ap_bmodel *M);
+/* The plane contact's support point traced in place of the library's call (emit_kin.c): 1 when
+ * done, 0 when the shape is not traced. */
+int cg_plane_support(cg_kin *K, int jx, const cg_v *Rj, kjoint *J, cg_v *z);
+/* apc_rows after the position stage, apc_forces after the velocity stage (cg_source). */
+void cg_emit_rows(cg_kin *K);
+void cg_emit_forces(cg_kin *K);
+
+/* A compiled model's strategy (compiled.c): the model holds a pointer to base. */
+typedef struct cg_fast {
+  ap_bm_fast base;
+  cg_lib lib;
+  unsigned char *traced;   /* per constraint: rows and gamma generated (fast_rows.c) */
+  int wheels, effects;     /* cg_wheels_traced, cg_effects_traced */
+  int rest;                /* some row, or a wheel's geometry, is the library's */
+} cg_fast;
+
+/* Looks up apc_rows and apc_forces in the loaded object and installs them as the model's
+ * rows and forces hooks (and the core's fills flags); without them the model keeps the
+ * library's contacts, N and effects. AP_OK or AP_ERR_NOMEM. */
+int cg_rows_install(ap_model *m, cg_fast *F);
+void cg_rows_free(cg_fast *F);
 
 #endif

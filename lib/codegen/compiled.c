@@ -1,8 +1,9 @@
 /* Compiled models (appell/compiled.h): generate the model's code (emit_kin.c, emit_vel.c),
  * get its shared object (cache.c) and install it as the body model's fast kinematics
  * (model/model.h ap_bm_fast), which the position and velocity hooks call in place of
- * ap_kin_position + ap_kin_metric and ap_kin_velocity + ap_kin_bias. The plane contact's
- * support function is called back into the library (ap_kin_plane). */
+ * ap_kin_position + ap_kin_metric and ap_kin_velocity + ap_kin_bias, and the rest of both
+ * stages (contacts, N, rows, gravity, gamma: fast_rows.c). The plane contact's support function
+ * is called back into the library (ap_kin_plane) to report a shape lying flat. */
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,11 +12,6 @@
 #include "appell/compiled.h"
 #include "codegen/codegen.h"
 #include "linalg/linalg.h"
-
-typedef struct cg_fast {
-  ap_bm_fast base;   /* first: the model holds a pointer to it */
-  cg_lib lib;
-} cg_fast;
 
 typedef struct plane_ctx {
   const ap_model *m;
@@ -107,6 +103,7 @@ static int fast_particular(const ap_model *m, ap_data *d) {
 static void fast_destroy(ap_bm_fast *f) {
   cg_fast *F = (cg_fast *)f;
   if (F->lib.handle) dlclose(F->lib.handle);
+  cg_rows_free(F);
   free(F);
 }
 
@@ -148,6 +145,11 @@ int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notic
   }
   F->base.position = fast_position, F->base.velocity = fast_velocity;
   F->base.destroy = fast_destroy;
+  if (cg_rows_install((ap_model *)m, F) != AP_OK) {   /* contacts, N, gravity (fast_rows.c) */
+    fast_destroy(&F->base);
+    snprintf(notice, len, "appell: model '%s' runs interpreted: out of memory", m->name);
+    return 0;
+  }
   ((ap_bmodel *)ap_bm(m))->fast = &F->base;   /* the model's evaluation strategy */
   ((ap_model *)m)->ev.acceleration = fast_acceleration;
   ((ap_model *)m)->ev.finite = fast_finite;

@@ -3,8 +3,9 @@
  *
  * Mirrors joint_position, joint_columns, body_mass and ap_kin_metric statement by statement;
  * a change there must be made here too (tests/test_compiled.c compares both paths bit for bit
- * up to 1e-13). The plane contact's support function stays the library's (ap_kin_plane, called
- * through a pointer): the generated code reads its u, cb, H, rc back from the scratch. */
+ * up to 1e-13). The plane contact's support point is traced too (emit_contact.c); the library's
+ * ap_kin_plane, called through a pointer, reports a disk or torus lying flat (and computes the
+ * support of a shape the tracer does not take: the generated code reads u, cb, H, rc back). */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -86,6 +87,7 @@ static void column(cg_gen *G, const ap_mjoint *j, int i, const cg_v *rc, cg_v *s
 /* The plane contact: Rj to an array, the library's support function, u cb H rc read back. */
 static void plane(cg_kin *K, int jx, const cg_v *Rj, kjoint *J, cg_v *z) {
   char x[48];
+  if (cg_plane_support(K, jx, Rj, J, z)) return;   /* traced (emit_contact.c) */
   cg_printf(K->G, "  {\n    const double R_[9] = {");
   for (int i = 0; i < 9; i++) {
     cg_text(&Rj[i], x, sizeof x);

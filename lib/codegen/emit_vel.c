@@ -142,16 +142,20 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
   cg_v *gpos = G.fail ? NULL : malloc((kk + 1) * sizeof *gpos);   /* g's structure */
   if (gpos) memcpy(gpos, K.out, kk * sizeof *gpos);
   else G.fail = 1;
-  cg_printf(&G, "  return 0;\n}\n\nvoid apc_velocity(const double *v, double *S, double *h) {\n"
-            "  (void)v, (void)S, (void)h;\n");
+  cg_printf(&G, "  return 0;\n}\n\n");
   for (size_t i = 0; !G.fail && i < ns; i++)   /* the position stage's values, from S */
     if (K.sh[i].kind != CG_CONST) K.sh[i] = cg_ref('S', i);
+  if (!G.fail) cg_emit_rows(&K);   /* apc_rows: contacts, N (emit_contact.c) */
+  cg_printf(&G, "void apc_velocity(const double *v, double *S, double *h) {\n"
+            "  (void)v, (void)S, (void)h;\n");
   if (!G.fail) {
     stage_begin(&K, M->k);
     cg_kin_velocity(&K);
     cg_kin_store(&K, "h", M->k);
   }
-  cg_printf(&G, "}\n\nint apc_acceleration(const double *g, const double *B, const double *Q, "
+  cg_printf(&G, "}\n\n");
+  if (!G.fail) cg_emit_forces(&K);   /* apc_forces: gravity, gamma (emit_contact.c) */
+  cg_printf(&G, "int apc_acceleration(const double *g, const double *B, const double *Q, "
             "const double *h, const double *w, const double *N, const double *v, double *tk1, "
             "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
             "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "

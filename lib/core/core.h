@@ -80,7 +80,14 @@ typedef struct ap_evaluator {
    * linalg routine runs and reports). */
   int (*basis)(const ap_model *m, ap_data *d, double *resid);
   int (*particular)(const ap_model *m, ap_data *d);
+  /* Optional (compiled models), double build, AP_EV_FILLS_* bits: the position hook writes
+   * every entry of g, N, A, a0 (FILLS_POSITION), the velocity hook every entry of h, Q, gamma
+   * (FILLS_VELOCITY) that can be nonzero, and no one writes the others (structural zeros, kept
+   * from ap_data_create): the core then does not zero the arrays before the call. 0: it does. */
+  int fills;
 } ap_evaluator;
+
+enum { AP_EV_FILLS_POSITION = 1, AP_EV_FILLS_VELOCITY = 2 };
 
 struct ap_model {
   ap_system_def sys;        /* callbacks and sizes; names point into the arrays below */

@@ -156,14 +156,23 @@ static int position_callbacks(const ap_model *m, ap_data *d) {
 }
 #endif
 
+/* The compiled model's promise to write its outputs in full (double build; core.h). */
+#ifdef AP_SC_COMPLEX
+#define FILLS(m) 0
+#else
+#define FILLS(m) ((m)->ev.fills)
+#endif
+
 /* g, N, A, a0 from a compiled evaluator (body models). N is rewritten only when the model has
  * its own kinematics; otherwise it stays the identity written by ap_data_create. */
 static int position_evaluator(const ap_model *m, ap_data *d) {
   size_t kk = (size_t)m->k * m->k;
-  memset(d->g, 0, sizeof(ap_sc) * kk);
-  if (m->n != m->k || m->sys.kinematic) memset(d->N, 0, sizeof(ap_sc) * (size_t)m->n * m->k);
-  memset(d->A, 0, sizeof(ap_sc) * (size_t)m->b * m->k);
-  memset(d->a0, 0, sizeof(ap_sc) * (size_t)m->b);
+  if (!(FILLS(m) & AP_EV_FILLS_POSITION)) {   /* zeroed, unless a compiled model writes all */
+    memset(d->g, 0, sizeof(ap_sc) * kk);
+    if (m->n != m->k || m->sys.kinematic) memset(d->N, 0, sizeof(ap_sc) * (size_t)m->n * m->k);
+    memset(d->A, 0, sizeof(ap_sc) * (size_t)m->b * m->k);
+    memset(d->a0, 0, sizeof(ap_sc) * (size_t)m->b);
+  }
   int rc = m->ev.AP_SC(position)(m, d, SCRATCH(d)->ev);
   if (rc != AP_OK) return rc;
 #ifndef AP_SC_COMPLEX
@@ -219,7 +228,8 @@ static int fwd_position(const ap_model *m, ap_data *d) {
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
   /* the scale is at least max|a0|: below that no scale is needed (and none is computed) */
-  if (d->resid_a0 > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->a0, (size_t)m->b)) &&
+  if (d->resid_a0 > 0.0 &&   /* rows of full rank: 0, and no scale is needed */
+      d->resid_a0 > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->a0, (size_t)m->b)) &&
       d->resid_a0 > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 0)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows became inconsistent at "
                        "t = %.17g (a0 residual %.3g)", m->name, d->t, d->resid_a0);
@@ -273,9 +283,11 @@ static int velocity_callbacks(const ap_model *m, ap_data *d) {
 /* h, Q, gamma from a compiled evaluator (body models). */
 static int velocity_evaluator(const ap_model *m, ap_data *d) {
   int k = m->k;
-  memset(d->h, 0, sizeof(ap_sc) * (size_t)k);
-  memset(d->Q, 0, sizeof(ap_sc) * (size_t)k);
-  memset(d->gamma, 0, sizeof(ap_sc) * (size_t)m->b);
+  if (!(FILLS(m) & AP_EV_FILLS_VELOCITY)) {
+    memset(d->h, 0, sizeof(ap_sc) * (size_t)k);
+    memset(d->Q, 0, sizeof(ap_sc) * (size_t)k);
+    memset(d->gamma, 0, sizeof(ap_sc) * (size_t)m->b);
+  }
   int rc = m->ev.AP_SC(velocity)(m, d, SCRATCH(d)->ev);
 #ifndef AP_SC_COMPLEX
   if (rc == AP_OK && m->ev.finite && m->ev.finite(m, d, 1)) return AP_OK;   /* one check */
@@ -300,7 +312,8 @@ static int particular(const ap_model *m, ap_data *d) {
                                            d->gamma, d->w, &d->resid_gamma, s->work);
   if (rc != AP_OK || d->redundant_manifold || SCRATCH(d)->judge_at_accepted)
     return rc;                                            /* judged at accepted states */
-  if (d->resid_gamma > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->gamma, (size_t)m->b)) &&
+  if (d->resid_gamma > 0.0 &&
+      d->resid_gamma > AP_CONSISTENCY_RTOL * (AP_TERMS_TINY + max_abs(d->gamma, (size_t)m->b)) &&
       d->resid_gamma > AP_CONSISTENCY_RTOL * AP_SC(ap_core_row_scale)(m, d, 1)) {
     AP_SC(ap_core_msg)(d, "system '%s': redundant constraint rows have inconsistent gamma at "
                        "t = %.17g (residual %.3g)", m->name, d->t, d->resid_gamma);

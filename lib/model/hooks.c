@@ -22,6 +22,7 @@ static int bm_position(const ap_model *m, ap_data *d, ap_sc *S, const ap_bm_fast
   d->cnt.rheonomic += M->rheonomic;
 #ifndef AP_SC_COMPLEX
   int rc = F ? F->position(F, m, d, S) : ap_kin_position(m, d, d->t, d->q, S);
+  if (F && F->rows && rc == AP_OK) return F->rows(F, m, d, S);   /* lib/codegen fast_rows.c */
   if (F && rc == AP_OK && M->nwheel) rc = ap_contact_position(m, d, d->t, S);
 #else
   (void)F;
@@ -51,6 +52,7 @@ static int bm_velocity(const ap_model *m, ap_data *d, ap_sc *S, const ap_bm_fast
 #ifndef AP_SC_COMPLEX
   if (F) {
     F->velocity(F, d->v, S, d->h);
+    if (F->forces) return F->forces(F, m, d, S);   /* lib/codegen fast_rows.c */
   } else {
     ap_kin_velocity(M, d->v, S);
     ap_kin_bias(M, S, d->h);

@@ -162,6 +162,11 @@ typedef struct ap_meff {
 typedef struct ap_bm_fast {
   int (*position)(const struct ap_bm_fast *f, const ap_model *m, ap_data *d, double *S);
   void (*velocity)(const struct ap_bm_fast *f, const double *v, double *S, double *h);
+  /* Optional: the rest of the position stage after position (wheel contacts, time functions,
+   * N, rows: A, a0) and of the velocity stage after velocity (effects: Q; gamma; friction),
+   * in place of hooks.c's; NULL: hooks.c's. */
+  int (*rows)(const struct ap_bm_fast *f, const ap_model *m, ap_data *d, double *S);
+  int (*forces)(const struct ap_bm_fast *f, const ap_model *m, ap_data *d, double *S);
   void (*destroy)(struct ap_bm_fast *f);
 } ap_bm_fast;
 
