@@ -129,7 +129,7 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
             "#include <math.h>\n\n"
             "typedef int (*apc_plane_fn)(void *ctx, int joint, const double *Rj, double *z);\n"
             "typedef int (*apc_drive_fn)(void *ctx, int joint);\n"
-            "extern const char apc_hash[];\n\n"
+            "extern const char apc_hash[];\n\n" CG_TU_MARK
             "int apc_position(const double *q, double *S, double *g, apc_plane_fn plane, "
             "apc_drive_fn drive, void *ctx) {\n  double z[%d];\n"
             "  (void)plane, (void)drive, (void)ctx, (void)z;\n",
@@ -142,7 +142,7 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
   cg_v *gpos = G.fail ? NULL : malloc((kk + 1) * sizeof *gpos);   /* g's structure */
   if (gpos) memcpy(gpos, K.out, kk * sizeof *gpos);
   else G.fail = 1;
-  cg_printf(&G, "  return 0;\n}\n\nvoid apc_velocity(const double *v, double *S, double *h) {\n"
+  cg_printf(&G, "  return 0;\n}\n\n" CG_TU_MARK "void apc_velocity(const double *v, double *S, double *h) {\n"
             "  (void)v, (void)S, (void)h;\n");
   for (size_t i = 0; !G.fail && i < ns; i++)   /* the position stage's values, from S */
     if (K.sh[i].kind != CG_CONST) K.sh[i] = cg_ref('S', i);
@@ -151,7 +151,7 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
     cg_kin_velocity(&K);
     cg_kin_store(&K, "h", M->k);
   }
-  cg_printf(&G, "}\n\nint apc_acceleration(const double *g, const double *B, const double *Q, "
+  cg_printf(&G, "}\n\n" CG_TU_MARK "int apc_acceleration(const double *g, const double *B, const double *Q, "
             "const double *h, const double *w, const double *N, const double *v, double *tk1, "
             "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
             "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "
