@@ -78,6 +78,8 @@ typedef struct cg_kin {
   unsigned char *wr;     /* written in this stage */
   cg_v *out;             /* g (k x k) or h (k) */
   unsigned char *owr;
+  size_t text0;          /* where the stage's text starts in G->s */
+  int id0;               /* its first temporary */
 } cg_kin;
 
 static inline cg_v *cg_at(cg_kin *K, const double *p) { return K->sh + (p - K->base); }
