@@ -33,10 +33,21 @@
 extern char **environ;
 
 /* Compile (each unit, cc -c) and link flags. -ffp-contract=off: no fused multiply-adds (they
- * would change the roundings). -nostdlib: the object needs no start files and no C library of
- * its own; its calls (sin, cos) resolve at dlopen from the process's libm. */
-static const char *const cflags[] = {"-O1", "-fPIC", "-ffp-contract=off", "-fno-fast-math",
-                                     "-pipe", NULL};
+ * would change the roundings). The -fno-* passes of -O1 find nothing in code that the tracer
+ * already folded, and cost the compiler about a tenth of its time; without them the generated
+ * code is no longer (each was measured alone and all together: the instructions per evaluation
+ * of the disk, robot and bicycle did not rise, docs/compiled.md). -nostdlib: the object needs no
+ * start files and no C library of its own; its calls (sin, cos) resolve at dlopen from the
+ * process's libm. */
+static const char *const cflags[] = {
+    "-O1", "-fPIC", "-ffp-contract=off", "-fno-fast-math", "-pipe",
+    "-fno-tree-ccp", "-fno-tree-bit-ccp", "-fno-ssa-phiopt", "-fno-if-conversion",
+    "-fno-forward-propagate", "-fno-split-wide-types", "-fno-tree-fre",
+    "-fno-asynchronous-unwind-tables", "-fno-tree-dce", "-fno-tree-pta", "-fno-tree-slsr",
+    "-fno-ipa-modref", "-fno-ipa-pure-const", "-fno-ipa-reference", "-fno-ipa-profile",
+    "-fno-ipa-reference-addressable", "-fno-tree-ch", "-fno-tree-sra", "-fno-tree-copy-prop",
+    "-fno-ssa-backprop", "-fno-tree-phiprop", "-fno-compare-elim", "-fno-tree-loop-optimize",
+    NULL};
 static const char *const ldflags[] = {"-shared", "-nostdlib", NULL};
 
 static uint64_t fnv1a(const char *s, uint64_t h) {
@@ -153,7 +164,7 @@ static int push(char **argv, int a, const char *const *list) {
 static int run_cc(const char *stem, int n, const char *so, char *why, size_t len) {
   const char *cc = getenv("APPELL_CC");
   if (!cc || !cc[0]) cc = "cc";
-  char src[CG_MAX_TU][4400], obj[CG_MAX_TU][4400], *argv[48] = {(char *)cc};
+  char src[CG_MAX_TU][4400], obj[CG_MAX_TU][4400], *argv[64] = {(char *)cc};
   pid_t pid[CG_MAX_TU];
   int started = 0, rc = 0;
   why[0] = '\0';
@@ -179,12 +190,24 @@ static int run_cc(const char *stem, int n, const char *so, char *why, size_t len
   return rc;
 }
 
+/* The compiler's work on a piece, about: its statements, array accesses and arithmetic
+ * operations. */
+static size_t weight(const char *s, size_t n) {
+  size_t w = 0;
+  for (size_t i = 0; i < n; i++)
+    w += s[i] == ';' || s[i] == '[' ||
+         (i + 2 < n && s[i] == ' ' && strchr("+-*/", s[i + 1]) && s[i + 1] && s[i + 2] == ' ');
+  return w;
+}
+
 /* The source split into at most CG_MAX_TU units at its CG_TU_MARK lines: each unit is the
  * prelude (the text before the first mark) and some of the pieces between the marks, in their
- * order, the pieces dealt largest first to the unit with the fewest bytes so far; unit 0 also
- * defines apc_hash. Returns the number of units (their texts malloc'ed into tu), or -1. */
+ * order, the pieces dealt heaviest first (statements) to the unit with the least work so far;
+ * unit 0 also defines apc_hash. Returns the number of units (their texts malloc'ed into tu), or
+ * -1. */
 static int split_units(const char *src, const char *hash, char **tu) {
-  size_t ml = strlen(CG_TU_MARK), start[256], end[256], load[CG_MAX_TU] = {0};
+  size_t ml = strlen(CG_TU_MARK), start[256], end[256], w[256], load[CG_MAX_TU] = {0};
+  size_t bytes[CG_MAX_TU] = {0};
   int np = 0, unit[256];
   const char *first = strstr(src, CG_TU_MARK), *p = first;
   size_t pre = first ? (size_t)(first - src) : strlen(src);
@@ -192,6 +215,7 @@ static int split_units(const char *src, const char *hash, char **tu) {
     const char *next = strstr(p + ml, CG_TU_MARK);
     start[np] = (size_t)(p + ml - src);
     end[np] = next ? (size_t)(next - src) : strlen(src);
+    w[np] = weight(src + start[np], end[np] - start[np]);
     np++, p = next;
   }
   if (p) return -1;   /* more pieces than the table holds */
@@ -200,14 +224,14 @@ static int split_units(const char *src, const char *hash, char **tu) {
   for (int done = 0; done < np; done++) {   /* the largest piece not yet dealt */
     int big = -1;
     for (int i = 0; i < np; i++)
-      if (unit[i] < 0 && (big < 0 || end[i] - start[i] > end[big] - start[big])) big = i;
+      if (unit[i] < 0 && (big < 0 || w[i] > w[big])) big = i;
     int to = 0;
     for (int u = 1; u < n; u++)
       if (load[u] < load[to]) to = u;
-    unit[big] = to, load[to] += end[big] - start[big];
+    unit[big] = to, load[to] += w[big], bytes[to] += end[big] - start[big];
   }
   for (int u = 0; u < n; u++) {
-    size_t size = pre + load[u] + 128;
+    size_t size = pre + bytes[u] + 128;
     char *t = tu[u] = malloc(size + 1);
     if (!t) {
       while (u-- > 0) free(tu[u]);
