@@ -235,7 +235,8 @@ void cg_kin_position(cg_kin *K) {
  * of a temporary goes right after the statement that computes it (short live ranges: fewer
  * spills, and less work for the compiler's register allocator) when that statement comes after
  * the stage's last statement of another kind (a callback) and the stage never reads that
- * scratch entry back; the others go at the end. */
+ * scratch entry back; the others go at the end. The stage's sin and cos of coordinates go
+ * first. */
 typedef struct store {
   int early;       /* right after the temporary's statement */
   int next;        /* the next early store of the same temporary, or -1 */
@@ -276,8 +277,28 @@ static void place(cg_kin *K, const char *out_name, const store *st, const int *h
   G->s = N.s, G->len = N.len, G->cap = N.cap, G->fail |= N.fail;
 }
 
+/* sin and cos of a coordinate at the start of the stage: nothing is live across those calls
+ * then (a call clobbers every floating-point register), so fewer spills. */
+static int is_trig(const char *l) {
+  const char *e = strchr(l, '=');
+  return strncmp(l, "  const double t", 16) == 0 && e &&
+         (strncmp(e, "= sin(q[", 8) == 0 || strncmp(e, "= cos(q[", 8) == 0);
+}
+
+static void hoist(cg_kin *K) {
+  cg_gen *G = K->G, N = {0};
+  const char *b = G->s + K->text0, *end = G->s + G->len;
+  cg_printf(&N, "%.*s", (int)(b - G->s), G->s);
+  for (int pass = 0; pass < 2; pass++)
+    for (const char *l = b; l < end && !N.fail; l = next_line(l))
+      if (is_trig(l) == !pass) cg_printf(&N, "%.*s", (int)(next_line(l) - l), l);
+  free(G->s);
+  G->s = N.s, G->len = N.len, G->cap = N.cap, G->fail |= N.fail;
+}
+
 void cg_kin_store(cg_kin *K, const char *out_name, int nout) {
   cg_gen *G = K->G;
+  if (!G->fail) hoist(K);
   size_t ns = K->M->scratch, n = 0, nt = (size_t)(G->ntemp - K->id0) + 1;
   store *st = malloc((ns + (size_t)nout + 1) * sizeof *st);
   int *head = malloc(nt * sizeof *head);
