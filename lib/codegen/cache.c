@@ -3,11 +3,14 @@
  *
  * Cache: $XDG_CACHE_HOME/appell, else $HOME/.cache/appell (created 0700, and used only when
  * it is a directory owned by the user and not writable by others), one file
- * model-<hash>.so per model (FNV-1a 64 of the source and the compiler flags). A cached file
- * is used only when it is a regular file owned by the user, dlopen takes it, and its
- * apc_hash matches; otherwise it is rebuilt. Writes are atomic: the compiler writes a file
- * named after the process, a per-process sequence number and the hash, renamed over the final
- * name when complete.
+ * model-<hash>.so per model (FNV-1a 64 of the source, the compiler flags and the number of
+ * units). A cached file is used only when it is a regular file owned by the user, dlopen takes
+ * it, and its apc_hash matches; otherwise it is rebuilt. Writes are atomic: the compiler writes
+ * files named after the process, a per-process sequence number and the hash; the shared object
+ * is renamed over the final name when complete.
+ * Compile: the source is split at its CG_TU_MARK lines into CG_MAX_TU translation units
+ * (codegen.h), compiled side by side (cc -c, one process each) and linked into the shared
+ * object; the compile time is that of the longest unit, about half the whole on two cores.
  * The compiler (`cc`, or $APPELL_CC) runs by posix_spawnp with an argument vector, never a
  * shell; its output goes to /dev/null (the notice says that it failed and how). */
 #include <dlfcn.h>
@@ -38,9 +41,11 @@ extern char **environ;
  * code is no longer (each was measured alone and all together: the instructions per evaluation
  * of the disk, robot and bicycle did not rise, docs/compiled.md). -nostdlib: the object needs no
  * start files and no C library of its own; its calls (sin, cos) resolve at dlopen from the
- * process's libm. */
-static const char *const cflags[] = {
-    "-O1", "-fPIC", "-ffp-contract=off", "-fno-fast-math", "-pipe",
+ * process's libm. A compiler that refuses the -fno-* flags (they are GCC's; clang stops on
+ * some) gets a second run without them. */
+static const char *const cflags[] = {"-O1", "-fPIC", "-ffp-contract=off", "-fno-fast-math",
+                                     "-pipe", NULL};
+static const char *const gcc_flags[] = {
     "-fno-tree-ccp", "-fno-tree-bit-ccp", "-fno-ssa-phiopt", "-fno-if-conversion",
     "-fno-forward-propagate", "-fno-split-wide-types", "-fno-tree-fre",
     "-fno-asynchronous-unwind-tables", "-fno-tree-dce", "-fno-tree-pta", "-fno-tree-slsr",
@@ -161,7 +166,7 @@ static int push(char **argv, int a, const char *const *list) {
 
 /* Compile the n units <stem>-<i>.c side by side (cc -c), then link their objects into so (one
  * unit: compiled and linked by one run); 0, or -1 with the reason. */
-static int run_cc(const char *stem, int n, const char *so, char *why, size_t len) {
+static int run_cc(const char *stem, int n, const char *so, int tuned, char *why, size_t len) {
   const char *cc = getenv("APPELL_CC");
   if (!cc || !cc[0]) cc = "cc";
   char src[CG_MAX_TU][4400], obj[CG_MAX_TU][4400], *argv[64] = {(char *)cc};
@@ -173,6 +178,7 @@ static int run_cc(const char *stem, int n, const char *so, char *why, size_t len
     snprintf(obj[i], sizeof obj[i], "%s-%d.o", stem, i);
     const char *one[] = {"-o", so, src[i], NULL}, *part[] = {"-c", "-o", obj[i], src[i], NULL};
     int a = push(argv, 1, cflags);
+    if (tuned) a = push(argv, a, gcc_flags);
     a = n == 1 ? push(argv, push(argv, a, ldflags), one) : push(argv, a, part);
     argv[a] = NULL;
     if ((rc = spawn(argv, &pid[i], why, len)) == 0) started++;
@@ -251,6 +257,7 @@ static int split_units(const char *src, const char *hash, char **tu) {
 static uint64_t key(const char *src) {
   uint64_t h = fnv1a(src, 14695981039346656037ULL);
   for (int i = 0; cflags[i]; i++) h = fnv1a(cflags[i], h);
+  for (int i = 0; gcc_flags[i]; i++) h = fnv1a(gcc_flags[i], h);
   for (int i = 0; ldflags[i]; i++) h = fnv1a(ldflags[i], h);
   return h * 1099511628211ULL + CG_MAX_TU;
 }
@@ -277,7 +284,8 @@ int cg_load(const char *src, cg_lib *out, char *why, size_t len) {
       rc = -1, snprintf(why, len, "cannot write %s", name[i]);
     free(tu[i]);
   }
-  if (rc == 0) rc = run_cc(stem, n, tmp_so, why, len);
+  if (rc == 0) rc = run_cc(stem, n, tmp_so, 1, why, len);
+  if (rc != 0 && strstr(why, "failed (status")) rc = run_cc(stem, n, tmp_so, 0, why, len);
   clock_gettime(CLOCK_MONOTONIC, &t1);
   for (int i = 0; i < n; i++) unlink(name[i]);
   if (rc == 0 && rename(tmp_so, path) != 0) {
