@@ -9,8 +9,11 @@
  * children), and the wall time beside it. Instructions (stable): under callgrind, one function per side,
  *   valgrind --tool=callgrind --toggle-collect=eval_interp build/bench/compiled_eval --only disk
  *   (eval_compiled, eval_hand likewise); divide the total by the printed evaluation count.
- * Usage: compiled_eval [--reps N] [--blocks N] [--only disk|robot|bicycle]
+ * Usage: compiled_eval [--reps N] [--blocks N] [--only disk|robot|bicycle] [--compile N]
+ * (--compile N: only the cold compiles, N of each model, their median and least CPU and wall
+ * time and the load average)
  * Run with OPENBLAS_NUM_THREADS=1; XDG_CACHE_HOME picks the cache the runs load from. */
+#define _DEFAULT_SOURCE   /* getloadavg */
 #include <dirent.h>
 #include <math.h>
 #include <stdio.h>
@@ -154,18 +157,43 @@ static void compile_time(const char *file, double *fresh, double *warm, double *
   rmdir(sub), rmdir(dir);
 }
 
+/* --compile N: N cold compiles of each model (a fresh cache each), the medians of CPU and wall
+ * time, and the load average before and after. */
+static void compile_only(int runs, const char *only, const char *const *names,
+                         const char *const *files) {
+  double load[2][3] = {{0}};
+  getloadavg(load[0], 3);
+  printf("%-8s %11s %11s %11s %11s   (cold cache, %d runs; median, min)\n", "model",
+         "CPU ms", "(min)", "wall ms", "(min)", runs);
+  for (int c = 0; c < 3; c++) {
+    if (only && strcmp(only, names[c]) != 0) continue;
+    double cpu[64], wall[64], warm;
+    for (int r = 0; r < runs; r++) compile_time(files[c], &cpu[r], &warm, &wall[r]);
+    qsort(cpu, (size_t)runs, sizeof *cpu, cmp), qsort(wall, (size_t)runs, sizeof *wall, cmp);
+    printf("%-8s %11.1f %11.1f %11.1f %11.1f\n", names[c], cpu[runs / 2], cpu[0],
+           wall[runs / 2], wall[0]);
+  }
+  getloadavg(load[1], 3);
+  printf("load average %.2f %.2f %.2f before, %.2f %.2f %.2f after\n", load[0][0], load[0][1],
+         load[0][2], load[1][0], load[1][1], load[1][2]);
+}
+
 int main(int argc, char **argv) {
-  int reps = 2000, blocks = 9;
+  int reps = 2000, blocks = 9, compile_runs = 0;
   const char *only = NULL;
   for (int i = 1; i < argc; i++) {
     if (strcmp(argv[i], "--reps") == 0 && i + 1 < argc) reps = atoi(argv[++i]);
     else if (strcmp(argv[i], "--blocks") == 0 && i + 1 < argc) blocks = atoi(argv[++i]);
     else if (strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
-    else die("usage", "compiled_eval [--reps N] [--blocks N] [--only disk|robot|bicycle]");
+    else if (strcmp(argv[i], "--compile") == 0 && i + 1 < argc) compile_runs = atoi(argv[++i]);
+    else die("usage", "compiled_eval [--reps N] [--blocks N] [--only disk|robot|bicycle] "
+             "[--compile N]");
   }
+  if (compile_runs < 0 || compile_runs > 63) die("usage", "0 <= compile runs <= 63");
   if (reps < 1 || blocks < 1 || blocks > 63) die("usage", "reps >= 1, 1 <= blocks <= 63");
   static const char *const names[] = {"disk", "robot", "bicycle"};
   static const char *const files[] = {"rolling_disk.yaml", "diff_drive.yaml", "bicycle.yaml"};
+  if (compile_runs > 0) return compile_only(compile_runs, only, names, files), 0;
   printf("%-8s %10s %10s %6s %11s %11s %10s   (CPU time; evaluations per side: %d)\n",
          "model", "interp ns", "compil. ns", "ratio", "compile ms", "(wall ms)", "cached ms",
          reps * (blocks + 1));

@@ -35,6 +35,13 @@ typedef struct cg_gen {
 } cg_gen;
 
 void cg_printf(cg_gen *G, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The source is compiled as up to CG_MAX_TU translation units side by side (cache.c): every
+ * top-level function (with the static helpers only it calls) starts with cg_tu, which writes
+ * CG_TU_MARK; the text before the first mark (includes, typedefs, declarations) opens every
+ * unit. A piece may use only that prelude and what it defines itself. */
+#define CG_TU_MARK "/* appell: unit */\n"
+#define CG_MAX_TU 2
+void cg_tu(cg_gen *G);
 cg_v cg_const(double c);
 cg_v cg_ref(char base, size_t idx);
 void cg_text(const cg_v *a, char *out, size_t len);
@@ -71,6 +78,8 @@ typedef struct cg_kin {
   unsigned char *wr;     /* written in this stage */
   cg_v *out;             /* g (k x k) or h (k) */
   unsigned char *owr;
+  size_t text0;          /* where the stage's text starts in G->s */
+  int id0;               /* its first temporary */
 } cg_kin;
 
 static inline cg_v *cg_at(cg_kin *K, const double *p) { return K->sh + (p - K->base); }

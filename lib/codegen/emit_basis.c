@@ -156,6 +156,7 @@ static cg_v gather(cg_gen *G, const char *arr, int col, int i) {
 
 static void emit_basis(cg_gen *G, int b, int k, cg_v *F, cg_v *C) {
   int r = cg_basis_rank(b, k), l = k - r, nc = l + 1;
+  cg_tu(G);
   cg_printf(G, "int apc_basis(const int *perm, const double *A, const double *a0, double *F, "
             "double *tau, double *B, double *b0, double *growth, double *resid) {\n"
             "  const double *a = a0;\n");
@@ -223,6 +224,7 @@ static void emit_basis(cg_gen *G, int b, int k, cg_v *F, cg_v *C) {
 
 static void emit_particular(cg_gen *G, int b, int k, cg_v *F, cg_v *c) {
   int r = cg_basis_rank(b, k);
+  cg_tu(G);
   cg_printf(G, "int apc_particular(const int *perm, const double *F, const double *tau, "
             "const double *gamma, double *w, double *resid) {\n"
             "  const double *c = gamma, *u = tau;\n");
@@ -253,6 +255,7 @@ int cg_basis_supported(const ap_bmodel *M) { return M->b > 0 && M->b <= 64; }
  * structure entry). */
 static void emit_check(cg_gen *G, const char *name, const char *const arr[3], const int len[3],
                        const cg_v *gstruct) {
+  cg_tu(G);
   cg_printf(G, "int %s(const double *%s, const double *%s, const double *%s) {\n"
             "  double s0 = 0.0, s1 = 0.0;\n  (void)%s, (void)%s, (void)%s;\n",
             name, arr[0], arr[1], arr[2], arr[0], arr[1], arr[2]);

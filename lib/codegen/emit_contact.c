@@ -270,6 +270,7 @@ static void speed_rows(cg_kin *K, const ap_mcon *c) {
 
 void cg_emit_rows(cg_kin *K) {
   const ap_bmodel *M = K->M;
+  cg_tu(K->G);
   cg_printf(K->G, "int apc_rows(const double *q, double *S, double *N, double *A, double *a0) "
             "{\n  (void)q, (void)S, (void)N, (void)A, (void)a0;\n");
   memset(K->wr, 0, M->scratch);
@@ -344,6 +345,7 @@ void cg_emit_forces(cg_kin *K) {
   const ap_bmodel *M = K->M;
   for (size_t i = 0; i < M->scratch; i++)   /* the velocity stage's values, from S */
     if (K->sh[i].kind != CG_CONST) K->sh[i] = cg_ref('S', i);
+  cg_tu(K->G);
   cg_printf(K->G, "void apc_forces(const double *v, double *S, double *Q, double *gamma) {\n"
             "  (void)v, (void)S, (void)Q, (void)gamma;\n");
   if (cg_effects_traced(M)) {   /* Q written in full, zeros too: inputs add to it later */

@@ -232,21 +232,105 @@ void cg_kin_position(cg_kin *K) {
   metric(K);
 }
 
-/* Stores of the stage: the scratch entries it wrote (a zero constant is there already: the
- * scratch starts zeroed and no path writes anything else into those entries), then out. */
-void cg_kin_store(cg_kin *K, const char *out_name, int nout) {
+/* The stage's stores: the scratch entries it wrote (a zero constant is there already: the
+ * scratch starts zeroed and no path writes anything else into those entries), then out. A store
+ * of a temporary goes right after the statement that computes it (short live ranges: fewer
+ * spills, and less work for the compiler's register allocator) when that statement comes after
+ * the stage's last statement of another kind (a callback) and the stage never reads that
+ * scratch entry back; the others go at the end. The stage's sin and cos of coordinates go
+ * first. */
+typedef struct store {
+  int early;       /* right after the temporary's statement */
+  int next;        /* the next early store of the same temporary, or -1 */
+  char arr;        /* 'S' or 'o' (out) */
+  size_t idx;
+  cg_v v;
+} store;
+
+static void put(cg_gen *G, const char *out_name, const store *st) {
   char x[48];
-  for (size_t i = 0; i < K->M->scratch; i++) {
+  cg_text(&st->v, x, sizeof x);
+  cg_printf(G, "  %s[%zu] = %s;\n", st->arr == 'S' ? "S" : out_name, st->idx, x);
+}
+
+static const char *next_line(const char *l) { return strchr(l, '\n') + 1; }
+
+/* Where the stage's early stores may start: after its last line that is not a temporary's
+ * statement. */
+static const char *barrier(const cg_kin *K) {
+  const char *b = K->G->s + K->text0, *end = K->G->s + K->G->len;
+  for (const char *l = b; l < end; l = next_line(l))
+    if (strncmp(l, "  const double t", 16) != 0) b = next_line(l);
+  return b;
+}
+
+/* Rewrite the stage's text from b on with the early stores (head[id - id0]: the first early
+ * store of t<id>). */
+static void place(cg_kin *K, const char *out_name, const store *st, const int *head,
+                  const char *b) {
+  cg_gen *G = K->G, N = {0};
+  const char *end = G->s + G->len;
+  cg_printf(&N, "%.*s", (int)(b - G->s), G->s);
+  for (const char *l = b; l < end && !N.fail; l = next_line(l)) {
+    cg_printf(&N, "%.*s", (int)(next_line(l) - l), l);
+    for (int i = head[atoi(l + 16) - K->id0]; i >= 0; i = st[i].next) put(&N, out_name, &st[i]);
+  }
+  free(G->s);
+  G->s = N.s, G->len = N.len, G->cap = N.cap, G->fail |= N.fail;
+}
+
+/* sin and cos of a coordinate at the start of the stage: nothing is live across those calls
+ * then (a call clobbers every floating-point register), so fewer spills. */
+static int is_trig(const char *l) {
+  const char *e = strchr(l, '=');
+  return strncmp(l, "  const double t", 16) == 0 && e &&
+         (strncmp(e, "= sin(q[", 8) == 0 || strncmp(e, "= cos(q[", 8) == 0);
+}
+
+static void hoist(cg_kin *K) {
+  cg_gen *G = K->G, N = {0};
+  const char *b = G->s + K->text0, *end = G->s + G->len;
+  cg_printf(&N, "%.*s", (int)(b - G->s), G->s);
+  for (int pass = 0; pass < 2; pass++)
+    for (const char *l = b; l < end && !N.fail; l = next_line(l))
+      if (is_trig(l) == !pass) cg_printf(&N, "%.*s", (int)(next_line(l) - l), l);
+  free(G->s);
+  G->s = N.s, G->len = N.len, G->cap = N.cap, G->fail |= N.fail;
+}
+
+void cg_kin_store(cg_kin *K, const char *out_name, int nout) {
+  cg_gen *G = K->G;
+  if (!G->fail) hoist(K);
+  size_t ns = K->M->scratch, n = 0, nt = (size_t)(G->ntemp - K->id0) + 1;
+  store *st = malloc((ns + (size_t)nout + 1) * sizeof *st);
+  int *head = malloc(nt * sizeof *head);
+  unsigned char *read = calloc(ns + 1, 1), *late = calloc(nt, 1);
+  if (!st || !head || !read || !late || G->fail) {
+    free(st), free(head), free(read), free(late), G->fail = 1;
+    return;
+  }
+  for (const char *p = strstr(G->s + K->text0, "S["); p; p = strstr(p + 2, "S["))
+    if ((size_t)atol(p + 2) < ns) read[atol(p + 2)] = 1;   /* entries the stage reads */
+  const char *b = barrier(K);
+  for (const char *l = b; l < G->s + G->len; l = next_line(l)) late[atoi(l + 16) - K->id0] = 1;
+  for (size_t i = 0; i < ns; i++) {
     const cg_v *v = &K->sh[i];
-    if (!K->wr[i] || (v->kind == CG_CONST && v->c == 0.0) ||
-        (v->kind == CG_REF && v->base == 'S' && v->idx == i))
+    if (K->wr[i] && !(v->kind == CG_CONST && v->c == 0.0) &&
+        !(v->kind == CG_REF && v->base == 'S' && v->idx == i))
+      st[n++] = (store){0, -1, 'S', i, *v};
+  }
+  for (int i = 0; i < nout; i++)
+    if (K->owr[i]) st[n++] = (store){0, -1, 'o', (size_t)i, K->out[i]};
+  for (size_t i = 0; i < nt; i++) head[i] = -1;
+  int any = 0;
+  for (size_t i = n; i-- > 0;) {   /* the early ones, linked per temporary in store order */
+    int id = st[i].v.id - K->id0;
+    if (st[i].v.kind != CG_TEMP || id < 0 || !late[id] || (st[i].arr == 'S' && read[st[i].idx]))
       continue;
-    cg_text(v, x, sizeof x);
-    cg_printf(K->G, "  S[%zu] = %s;\n", i, x);
+    st[i].next = head[id], head[id] = (int)i, st[i].early = any = 1;
   }
-  for (int i = 0; i < nout; i++) {
-    if (!K->owr[i]) continue;
-    cg_text(&K->out[i], x, sizeof x);
-    cg_printf(K->G, "  %s[%d] = %s;\n", out_name, i, x);
-  }
+  if (any) place(K, out_name, st, head, b);
+  for (size_t i = 0; i < n; i++)
+    if (!st[i].early) put(G, out_name, &st[i]);
+  free(st), free(head), free(read), free(late);
 }

@@ -32,6 +32,8 @@ void cg_printf(cg_gen *G, const char *fmt, ...) {
   }
 }
 
+void cg_tu(cg_gen *G) { cg_printf(G, "%s", CG_TU_MARK); }
+
 cg_v cg_const(double c) {
   cg_v v = {CG_CONST, c, 0, 0, 0};
   return v;
