@@ -149,15 +149,6 @@ static inline ap_st *ap_core_st(const ap_data *d) {
   return ((const ap_scratch *)d->internal)->st;
 }
 
-/* The tree path (data.c): park a copy of the evaluation the data holds (everything its stages
- * leave in the data, the structured state and the operators' workspace) under the key
- * (t, y[0..ny)), and bring it back when asked with exactly that key (1; else 0, nothing
- * changed). Counters, message and settings (basis, want_reactions, estimate_cond, rank_rtol,
- * manifold_rtol) stay current. On the dense path nothing is parked (0). One park per data. */
-int ap_core_park(ap_data *d, double t, const double *y, int ny);
-int ap_core_unpark(ap_data *d, double t, const double *y, int ny);
-void ap_core_park_drop(ap_data *d);
-
 /* 1 when m and d are not NULL and d was made by ap_data_create for m: the public functions
  * that take (m, d) return AP_ERR_ARG otherwise. */
 static inline int ap_core_data_ok(const ap_model *m, const ap_data *d) {

@@ -24,10 +24,6 @@ typedef struct ap_data_block {
   int *ints;
   ap_arena dl, il;          /* the layouts of dbl and ints (their guards in the guard build) */
   const char *hit_stage;    /* guard build: the stage after which a guard was first seen hit */
-  unsigned char *park;      /* the tree path: a parked evaluation (ap_core_park), or NULL */
-  size_t park_ws, park_key; /* bytes of the operators' workspace; doubles of the key */
-  int parked, park_ny;      /* park holds an evaluation; its key's length */
-  double park_t;            /* its key's time */
 } ap_data_block;
 
 /* ---- the layout tables -------------------------------------------------------------------
@@ -194,79 +190,6 @@ static void guards_at_create(ap_data_block *blk) {
 }
 
 #ifndef AP_SC_COMPLEX
-/* ---- a parked evaluation (the tree path) -------------------------------------------------
- * One block: the data struct, its doubles and ints, the structured state (struct and doubles),
- * the operators' workspace (one block, its own pointers included: it is copied back to the
- * same address), then the key (t, y). */
-static size_t park_parts(const ap_data_block *blk, size_t *sz) {
-  const ap_st *st = blk->s.st;
-  sz[0] = sizeof(ap_data), sz[1] = blk->dl.total * sizeof(ap_sc);
-  sz[2] = blk->il.total * sizeof(int), sz[3] = sizeof(ap_st);
-  sz[4] = st->nd * sizeof(double), sz[5] = blk->park_ws;
-  size_t tot = 0;
-  for (int i = 0; i < 6; i++) sz[i] = (sz[i] + 7) & ~(size_t)7, tot += sz[i];
-  return tot;
-}
-
-static int park_alloc(const ap_model *m, ap_data_block *blk) {
-  size_t sz[6];
-  blk->park_ws = m->ops->ws_bytes(m->ops->ctx);
-  blk->park_key = (size_t)(m->n + m->k + m->b) + 1;
-  blk->park = malloc(park_parts(blk, sz) + blk->park_key * sizeof(double));
-  return blk->park ? AP_OK : AP_ERR_NOMEM;
-}
-
-/* memcpy in pieces of at most 2 kB: glibc copies larger blocks with rep movsb, which
- * callgrind counts byte by byte (the bench's measure); below that it takes 32-byte vector
- * moves, the work that is actually done. */
-static void copy_blocks(void *dst, const void *src, size_t len) {
-  for (size_t o = 0; o < len; o += 2048)
-    memcpy((unsigned char *)dst + o, (const unsigned char *)src + o, len - o < 2048 ? len - o : 2048);
-}
-
-/* Copy the parts out of (to_park) or back into the data. */
-static void park_copy(ap_data *d, ap_data_block *blk, int to_park) {
-  ap_st *st = blk->s.st;
-  void *src[6] = {d, blk->dbl, blk->ints, st, st->Gf, st->ws};
-  size_t sz[6];
-  park_parts(blk, sz);
-  unsigned char *p = blk->park;
-  ap_data keep = *d;
-  size_t len[6] = {sizeof(ap_data), blk->dl.total * sizeof(ap_sc), blk->il.total * sizeof(int),
-                   sizeof(ap_st), st->nd * sizeof(double), blk->park_ws};
-  for (int i = 0; i < 6; p += sz[i], i++)
-    if (to_park) copy_blocks(p, src[i], len[i]);
-    else copy_blocks(src[i], p, len[i]);
-  if (to_park) return;   /* the counters, message and settings stay the caller's */
-  d->cnt = keep.cnt, memcpy(d->msg, keep.msg, sizeof d->msg);
-  d->basis = keep.basis, d->want_reactions = keep.want_reactions;
-  d->estimate_cond = keep.estimate_cond, d->rank_rtol = keep.rank_rtol;
-  d->manifold_rtol = keep.manifold_rtol;
-}
-
-int ap_core_park(ap_data *d, double t, const double *y, int ny) {
-  ap_data_block *blk = d->internal;
-  if (!blk->park || (size_t)ny + 1 > blk->park_key) return 0;
-  size_t sz[6];
-  park_copy(d, blk, 1);
-  memcpy(blk->park + park_parts(blk, sz), y, sizeof(double) * (size_t)ny);
-  blk->parked = 1, blk->park_t = t, blk->park_ny = ny;
-  return 1;
-}
-
-int ap_core_unpark(ap_data *d, double t, const double *y, int ny) {
-  ap_data_block *blk = d->internal;
-  size_t sz[6];
-  if (!blk->parked || blk->park_t != t || blk->park_ny != ny ||
-      memcmp(blk->park + park_parts(blk, sz), y, sizeof(double) * (size_t)ny) != 0)
-    return 0;
-  park_copy(d, blk, 0);
-  blk->parked = 0;
-  return 1;
-}
-
-void ap_core_park_drop(ap_data *d) { ((ap_data_block *)d->internal)->parked = 0; }
-
 /* The tree path's data: its structured state gives the evaluator scratch. */
 static int create_structured(const ap_model *m, ap_data **out) {
   ap_st *st = NULL;
@@ -281,10 +204,6 @@ static int create_structured(const ap_model *m, ap_data **out) {
   }
   blk->s.ev = m->ops->ev_scratch(st->ws);
   blk->s.st = st;
-  if (m->ops->ws_bytes && park_alloc(m, blk) != AP_OK) {
-    AP_SC(ap_data_free)(d);
-    return AP_ERR_NOMEM;
-  }
   guards_at_create(blk);
   *out = d;
   return AP_OK;
@@ -324,7 +243,6 @@ void AP_SC(ap_data_free)(ap_data *d) {
   if (blk) {
 #ifndef AP_SC_COMPLEX
     ap_st_free(blk->s.st);
-    free(blk->park);
 #endif
     free(blk->dbl);
     free(blk->ints);

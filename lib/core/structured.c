@@ -51,7 +51,6 @@ int ap_st_create(const ap_model *m, const ap_ops *ops, ap_st **out) {
   }
   int i = 0;
   ST_DOUBLES(ST_CARVE)
-  st->nd = L.total;
   *out = st;
   return AP_OK;
 }

@@ -53,9 +53,6 @@ typedef struct ap_ops {
   /* guard build: 0 when the workspace's guard words are intact, else -1 with a message naming
    * the array and the stage; NULL: no guards */
   int (*guard_msg)(const void *ws, const char *stage, char *msg, size_t len);
-  /* bytes of one workspace: ws_create's one block, which holds no pointer outside itself, so
-   * a copy put back at the same address restores it (ap_core_park); NULL: not parked */
-  size_t (*ws_bytes)(const void *ctx);
 } ap_ops;
 
 /* The core's part of a structured data: the model, the operators' workspace, the factors of
@@ -64,9 +61,7 @@ typedef struct ap_st {
   const ap_model *m;
   const ap_ops *ops;
   void *ws;
-  double *Gf;                 /* (gcap) Cholesky factors of the blocks of G; first of the nd
-                                 doubles of one block (the vectors below) */
-  size_t nd;
+  double *Gf;                 /* (gcap) Cholesky factors of the blocks of G */
   double *tk1, *tk2, *tb;     /* (k), (k), (b) */
   double *tl, *te;            /* (k), (k) */
   double *tm;                 /* (b) */

@@ -44,9 +44,6 @@ struct ap_sim {
   int ev_basis;             /* the data's basis (ap_basis) in that evaluation */
   int ev_inputs_old;        /* 1: the inputs changed since (sim_input.c): its position stage
                                still holds, its forces and derivatives do not */
-  long park_after;          /* the tree path: stage count right after the evaluation that
-                               followed a parked one (ap_core_park), -1 when none: the parked
-                               one comes back only while nothing else has run */
   double growth_cap;        /* minimal mode: a stage whose basis growth exceeds this fails
                                (recoverably): the step went too far on a frozen partition */
   double *q, *v;            /* (n), (k) the state at t as coordinates and speeds */

@@ -71,32 +71,10 @@ static void rhs_out(const ap_sim *s, double *ydot) {
     memcpy(ydot + s->n, d->vdot, sizeof(double) * (size_t)s->k);
 }
 
-/* 1 when no stage ran since the last successful right-hand side, at exactly (t, y). On the tree
- * path also when the evaluation before it was at (t, y) and parked, and nothing but that one
- * evaluation ran since: the data is brought back to it (ARKODE's dense output at the stop time
- * evaluates at t_n + 2h/3 after the last stage at the new state; the work after the step and
- * the output need the new state's evaluation). */
+/* 1 when no stage ran since the last successful right-hand side, at exactly (t, y). */
 static int same_state(const ap_sim *s, double t, const double *y) {
-  if (s->ev_stamp == stage_count(s->d) && s->ev_t == t &&
-      memcmp(s->yev, y, sizeof(double) * (size_t)s->ny) == 0)
-    return 1;
-  if (s->park_after <= 0 || s->park_after != stage_count(s->d) || s->ev_inputs_old ||
-      !ap_core_unpark(s->d, t, y, s->ny))
-    return 0;
-  ap_sim *w = (ap_sim *)s;   /* the data holds the parked evaluation now */
-  w->ev_stamp = stage_count(s->d), w->ev_t = t, w->park_after = -1;
-  memcpy(w->yev, y, sizeof(double) * (size_t)s->ny);
-  return 1;
-}
-
-/* Tree path, before an evaluation at an earlier time than the one the data holds (ARKODE's
- * interpolation point, a retry after a rejected step): park the held one. */
-static void park_held(ap_sim *s, double t) {
-  s->park_after = -1;
-  if (ap_core_st(s->d) && !s->dae && s->ev_stamp == stage_count(s->d) && !s->ev_inputs_old &&
-      t < s->ev_t &&
-      (int)s->d->basis == s->ev_basis && ap_core_park(s->d, s->ev_t, s->yev, s->ny))
-    s->park_after = -2;   /* valid once the next evaluation succeeds */
+  return s->ev_stamp == stage_count(s->d) && s->ev_t == t &&
+         memcmp(s->yev, y, sizeof(double) * (size_t)s->ny) == 0;
 }
 
 /* The stages after the position stage (the inputs enter at the velocity stage). */
@@ -117,12 +95,11 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
   ap_sim *s = user;
   ap_data *d = s->d;
   int held = !s->dae && (int)d->basis == s->ev_basis && same_state(s, t, y), rc;
-  /* (the tree path has no condition estimate: rcond is 1) */
+  /* (the tree path has no condition estimate: its rcond is 1) */
   if (held && !s->ev_inputs_old && (!d->estimate_cond || ap_core_st(d)))
     return rhs_out(s, ydot), 0;
   if (!held || ap_core_st(d)) {
     if (check_trial(s, t, y) != AP_OK) return -1;
-    park_held(s, t);
     ap_drv_load_state(s, t, y);
     rc = ap_forward(s->m, d);
   } else {
@@ -143,7 +120,6 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
   rhs_out(s, ydot);
   s->ev_stamp = stage_count(d), s->ev_t = t;    /* the data now describes (t, y) */
   s->ev_basis = (int)d->basis, s->ev_inputs_old = 0;
-  if (s->park_after == -2) s->park_after = s->ev_stamp;
   memcpy(s->yev, y, sizeof(double) * (size_t)s->ny);
   return 0;
 }

@@ -489,17 +489,12 @@ static void ops_nmul(void *wsp, const double *q, const double *v, double *qdot) 
 }
 
 
-/* One allocation: the struct, then the doubles, then the ints; its doubles. */
-static size_t ws_head(void) { return (sizeof(ap_tree_ws) + sizeof(double) - 1) / sizeof(double); }
-static size_t ws_doubles(const ap_tplan *P) {
-  return ws_head() + P->nd + (P->ni * sizeof(int) + sizeof(double) - 1) / sizeof(double) + 1;
-}
-static size_t ops_ws_bytes(const void *ctx) { return ws_doubles(ctx) * sizeof(double); }
-
+/* One allocation: the struct, then the doubles, then the ints. */
 static void *ops_ws_create(const void *ctx, size_t *gcap) {
   const ap_tplan *P = ctx;
-  size_t head = ws_head();
-  double *blk = calloc(ws_doubles(P), sizeof(double));
+  size_t head = (sizeof(ap_tree_ws) + sizeof(double) - 1) / sizeof(double);
+  double *blk = calloc(head + P->nd + (P->ni * sizeof(int) + sizeof(double) - 1) / sizeof(double) + 1,
+                       sizeof(double));
   if (!blk) return NULL;
   ap_tree_ws *ws = (ap_tree_ws *)blk;
   ap_tree_ws_init(P, blk + head, (int *)(blk + head + P->nd), ws);
@@ -522,7 +517,6 @@ static int ops_guard_msg(const void *ws, const char *stage, char *msg, size_t le
 
 void ap_tree_ops(const ap_tplan *P, ap_ops *ops) {
   ap_ops o = {P, ops_ws_create, ops_ws_free, ops_position, ops_velocity, ops_blocks, ops_gmul,
-              ops_amul, ops_nmul, ops_psolve, ops_reactions, ops_ev_scratch, ops_guard_msg,
-              ops_ws_bytes};
+              ops_amul, ops_nmul, ops_psolve, ops_reactions, ops_ev_scratch, ops_guard_msg};
   *ops = o;
 }
