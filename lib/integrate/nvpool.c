@@ -78,10 +78,19 @@ static void axpy(sunindextype n, double a, const double *restrict x, double *res
   for (sunindextype j = 0; j < n; j++) y[j] += a * x[j];
 }
 
+static void scale(sunindextype n, double a, const double *restrict x, double *restrict z) {
+  for (sunindextype j = 0; j < n; j++) z[j] = a * x[j];
+}
+
 static int pool_linear_combination(int nvec, realtype *c, N_Vector *X, N_Vector z) {
   sunindextype n = NV_LENGTH_S(z);
   double *zd = NV_DATA_S(z);
-  N_VScale_Serial(c[0], X[0], z);
+  const double *x0 = NV_DATA_S(X[0]);
+  if (x0 == zd)   /* N_VScale_Serial: z *= c, else z = c x (its copy for c = 1 and negation
+                     for c = -1 give the same numbers) */
+    for (sunindextype j = 0; j < n; j++) zd[j] *= c[0];
+  else
+    scale(n, c[0], x0, zd);
   for (int i = 1; i < nvec; i++) {
     const double *xd = NV_DATA_S(X[i]);
     if (xd == zd)   /* z += c z */
