@@ -14,7 +14,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 cg=/tmp/tree_profile.$n.cg
 [ -n "${REUSE:-}" ] || OPENBLAS_NUM_THREADS=1 valgrind --tool=callgrind --collect-atstart=no --callgrind-out-file="$cg" \
   build/bench/bench_scaling --callgrind disks "$n" "$steps" 2>/dev/null | grep '^callgrind'
-annotate() { (cd / && callgrind_annotate "$@" 2>/dev/null); }   # from / : one name per source file
+annotate() { (cd / && callgrind_annotate --threshold=100 "$@" 2>/dev/null); }   # from / : one name per source file
 annotate --inclusive=yes --tree=both "$cg" >"$cg.tree"
 annotate --inclusive=yes "$cg" >"$cg.flat"
 tot=$(grep -E '^(summary|totals):' "$cg" | head -n 1 | awk '{print $2}')
