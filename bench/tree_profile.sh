@@ -14,18 +14,18 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 cg=/tmp/tree_profile.$n.cg
 [ -n "${REUSE:-}" ] || OPENBLAS_NUM_THREADS=1 valgrind --tool=callgrind --collect-atstart=no --callgrind-out-file="$cg" \
   build/bench/bench_scaling --callgrind disks "$n" "$steps" 2>/dev/null | grep '^callgrind'
-annotate() { (cd / && callgrind_annotate "$@" 2>/dev/null); }   # from / : one name per source file
+annotate() { (cd / && callgrind_annotate --threshold=100 "$@" 2>/dev/null); }   # from / : one name per source file
 annotate --inclusive=yes --tree=both "$cg" >"$cg.tree"
 annotate --inclusive=yes "$cg" >"$cg.flat"
 tot=$(grep -E '^(summary|totals):' "$cg" | head -n 1 | awk '{print $2}')
 # inclusive Ir of a function (the flat listing), or of CALLEE called from CALLER (the tree)
-incl() { grep -E "^ *[0-9,]+ \([ 0-9.]+%\)  [^ ]*$1( |$)" "$cg.flat" | head -n 1 |
-         awk '{gsub(",", "", $1); print $1 + 0}'; }
+incl() { { grep -E "^ *[0-9,]+ \([ 0-9.]+%\)  [^ ]*$1( |$)" "$cg.flat" || true; } | head -n 1 |
+         awk '{gsub(",", "", $1); print $1 + 0}'; }   # (empty: not called, or below the listing)
 from() { awk -v f="$1" -v c="$2" 'BEGIN { RS = "" } $0 ~ ("\\*  [^\n]*" f " ") {
            n = split($0, L, "\n"); for (i = 1; i <= n; i++) if (L[i] ~ (">   [^ ]*" c " ")) {
              split(L[i], w, " "); gsub(",", "", w[1]); print w[1]; exit } }' "$cg.tree"; }
 per() { echo $(( ${1:-0} / (n * steps) )); }
-rhs=$(incl 'sim_step.c:ap_drv_rhs'); after=$(incl 'sim_after.c:ap_drv_after_step')
+rhs=$(incl 'sim_step.c:ap_drv_rhs'); after=$(incl 'sim_after.c:ap_drv_after_step'); after=${after:-0}
 apos=$(from 'sim_step.c:ap_drv_stage_partition' 'forward.c:ap_fwd_position')
 pos=$(incl 'structured.c:ap_st_position')
 printf '%-62s %9s\n' "stage (Ir per disk per step, N = $n)" Ir

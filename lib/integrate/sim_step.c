@@ -95,7 +95,9 @@ int ap_drv_rhs(double t, const double *y, double *ydot, void *user) {
   ap_sim *s = user;
   ap_data *d = s->d;
   int held = !s->dae && (int)d->basis == s->ev_basis && same_state(s, t, y), rc;
-  if (held && !s->ev_inputs_old && !d->estimate_cond) return rhs_out(s, ydot), 0;
+  /* (the tree path has no condition estimate: its rcond is 1) */
+  if (held && !s->ev_inputs_old && (!d->estimate_cond || ap_core_st(d)))
+    return rhs_out(s, ydot), 0;
   if (!held || ap_core_st(d)) {
     if (check_trial(s, t, y) != AP_OK) return -1;
     ap_drv_load_state(s, t, y);

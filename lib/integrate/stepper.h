@@ -180,6 +180,7 @@ struct ap_stepper {
   char sun_msg[256];     /* last message of SUNDIALS' error handler (never printed) */
   char msg[512];         /* last failure, for ap_step_message */
   struct ap_step_jwatch *jw; /* ap_step_jacobian_watch's record (stepper_jwatch.c), or NULL */
+  int stepping;          /* ARKODE: inside ark_one's ERKStepEvolve (stepper_arkode.c) */
 };
 
 /* The weight of component i (1 without weights) and the factor sqrt(n / number of nonzero

@@ -17,6 +17,7 @@
  * A recoverable rhs failure (f > 0, or NaN/Inf in ydot) makes ERKStep 6.4.1 give up the step
  * (ARK_UNREC_RHSFUNC_ERR), so the retry is done here: restart from the last accepted state
  * with a step 4 times smaller, at most AP_ARK_RETRIES times. */
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -113,7 +114,28 @@ int ap_step_butcher(const ap_step_method *meth, int max_s, int *s, int *q, doubl
 
 /* ---- SUNDIALS callbacks ---------------------------------------------------------------- */
 
+/* The state at the stop time. ERKStep 6.4 returns it through its Hermite interpolant at the
+ * new state's own time (tau = 0: the weight of every datum but y_{n+1} is a product by 0),
+ * and for degrees 4 and 5 (methods of order 5 and more) that interpolant first evaluates f at
+ * t_{n+1} - h/3 (and - 2h/3). Those values do not enter the result, so zeros are handed back
+ * in their place: a call during ark_one's step at a time before ERKStep's current time, which
+ * has reached the stop time, is that one (the stages are at or after the current time; our
+ * own dense output, ark_dky, runs outside ark_one and is always evaluated). The evaluation
+ * would cost one call of f per step that ends at an output time, and its result leaves the
+ * data describing t_{n+1} - h/3 in place of the step's end. */
+static int interpolation_at_stop(ap_stepper *s, realtype t) {
+  realtype tcur = t, h = 0.0;
+  if (!s->stepping || ERKStepGetCurrentTime(s->mem, &tcur) != ARK_SUCCESS || !(t < tcur))
+    return 0;
+  ERKStepGetLastStep(s->mem, &h);
+  return fabs(tcur - s->tstop) <= 1e3 * DBL_EPSILON * (fabs(tcur) + fabs(h));
+}
+
 static int ark_rhs(realtype t, N_Vector y, N_Vector ydot, void *user) {
+  if (interpolation_at_stop(user, t)) {
+    N_VConst(0.0, ydot);
+    return 0;
+  }
   return ap_step_rhs_eval(user, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
 }
 
@@ -260,7 +282,9 @@ static int ark_one(ap_stepper *s, double tstop, double *t, double *y) {
   int flag, tries = 0;
   for (;;) {
     flag = ERKStepSetStopTime(s->mem, tstop);
+    s->stepping = 1;   /* s->tstop is tstop (ap_step_one) */
     if (flag == ARK_SUCCESS) flag = ERKStepEvolve(s->mem, tstop, s->y, &tret, ARK_ONE_STEP);
+    s->stepping = 0;
     if (flag >= 0 || s->rhs_neg || !s->rhs_pos || tries++ == AP_ARK_RETRIES) break;
     if (ark_restart(s, s->t, s->yacc, retry_h(s, tstop)) != ARK_SUCCESS) break;
   }

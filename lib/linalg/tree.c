@@ -343,13 +343,15 @@ static void body_speeds(const ap_la_tree *T, const ap_la_tree_work *W, int i, co
 /* U_i = X_i Up + S_i u (u local, nf entries). */
 static void body_twist(const ap_la_tree *T, const ap_la_tree_geom *g, int i, const double *Up,
                        const double *u, double *U) {
-  if (T->parent[i] >= 0) transport_twist(g->d + 3 * (size_t)i, Up, U);
-  else memset(U, 0, 6 * sizeof *U);
-  for (int c = T->fofs[i]; c < T->fofs[i + 1]; c++) {
-    const double *Sc = g->S + 6 * (size_t)c;
-    double uc = u[c - T->fofs[i]];
-    for (int q = 0; q < 6; q++) U[q] += Sc[q] * uc;
+  double a[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};   /* the sums in registers, U written once */
+  if (T->parent[i] >= 0) transport_twist(g->d + 3 * (size_t)i, Up, a);
+  const double *Sc = g->S + 6 * (size_t)T->fofs[i];
+  for (int c = 0, nf = T->fofs[i + 1] - T->fofs[i]; c < nf; c++, Sc += 6) {
+    double uc = u[c];
+    a[0] += Sc[0] * uc, a[1] += Sc[1] * uc, a[2] += Sc[2] * uc;
+    a[3] += Sc[3] * uc, a[4] += Sc[4] * uc, a[5] += Sc[5] * uc;
   }
+  for (int q = 0; q < 6; q++) U[q] = a[q];
 }
 
 double ap_la_tree_solve(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_work *W,

@@ -178,8 +178,7 @@ int ap_la_comp_factor(const ap_la_tree *T, const ap_la_tree_geom *g, ap_la_tree_
     int rc = assign(T, W, C);
     if (rc != AP_OK) return rc;
   }
-  memset(b0, 0, sizeof(double) * (size_t)T->k);
-  for (int t = 0; t < T->ntree; t++) {
+  for (int t = 0; t < T->ntree; t++) {   /* b0: every speed is in one tree's list */
     int kt, bt, r = C->rank[t];
     tsize(W, C, t, &kt, &bt);
     double gt = 0.0, rs = 0.0, *a0t = C->x, *b0t = C->y;

@@ -55,26 +55,6 @@ void ap_kin_layout(ap_bmodel *M) {
 }
 #endif
 
-kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int b) {
-  ap_sc *p = S + M->off_body + (size_t)b * M->body_stride;
-  size_t K3 = 3 * (size_t)M->K1;
-  kbody B;
-#define KB_VIEW(f, c) B.f = p + KB_##f;
-  KBODY_FIELDS(KB_VIEW)
-#undef KB_VIEW
-  B.Jw = p + KBODY_FIXED, B.Jo = B.Jw + K3, B.Jc = B.Jo + K3;
-  return B;
-}
-
-kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j) {
-  ap_sc *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
-  kjoint J;
-#define KJ_VIEW(f, c) J.f = p + KJ_##f;
-  KJOINT_FIELDS(KJ_VIEW)
-#undef KJ_VIEW
-  return J;
-}
-
 /* out[:, c] += J[:, c] x r for the first ncol columns (the velocity of an offset point). Without
  * drives ncol = k: the rheonomic column k is zero everywhere and is not touched. */
 static void cols_cross_r(int ncol, const ap_sc *J, const ap_sc *r, ap_sc *out) {

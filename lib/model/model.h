@@ -269,8 +269,27 @@ static inline ap_sc *ap_bm_scratch(const ap_data *d) {
   return ((ap_scratch *)d->internal)->ev;
 }
 
-kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int body);
-kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j);
+/* The views of body b and joint j in the scratch S (inline: a caller that reads one field
+ * computes one pointer). */
+static inline kbody ap_kin_body(const ap_bmodel *M, ap_sc *S, int b) {
+  ap_sc *p = S + M->off_body + (size_t)b * M->body_stride;
+  size_t K3 = 3 * (size_t)M->K1;
+  kbody B;
+#define KB_VIEW(f, c) B.f = p + KB_##f;
+  KBODY_FIELDS(KB_VIEW)
+#undef KB_VIEW
+  B.Jw = p + KBODY_FIXED, B.Jo = B.Jw + K3, B.Jc = B.Jo + K3;
+  return B;
+}
+
+static inline kjoint ap_kin_joint(const ap_bmodel *M, ap_sc *S, int j) {
+  ap_sc *p = S + M->off_joint + (size_t)j * JOINT_STRIDE;
+  kjoint J;
+#define KJ_VIEW(f, c) J.f = p + KJ_##f;
+  KJOINT_FIELDS(KJ_VIEW)
+#undef KJ_VIEW
+  return J;
+}
 
 /* ---- 3-vectors and 3 x 3 matrices (column-major) ---------------------------------------- */
 

@@ -74,6 +74,9 @@ static void row(const ap_tplan *P, ap_tree_ws *ws, int i, int p, double *a0) {
 
 static int check_finite(const ap_model *m, ap_data *d, const char *what, const double *x,
                         size_t len) {
+  double z = 0.0;   /* x * 0 is 0 for a finite x, NaN for an infinite or NaN one */
+  for (size_t i = 0; i < len; i++) z += x[i] * 0.0;
+  if (z == 0.0) return AP_OK;
   for (size_t i = 0; i < len; i++)
     if (!isfinite(x[i])) {
       AP_BM_MSG(d, "model '%s': the tree path's %s has %g in entry %zu at t = %.17g", m->name,
@@ -450,11 +453,14 @@ void ap_tree_nmul(const ap_tplan *P, const double *q, const double *v, double *q
     for (int i = 0; i < J->ndrivable; i++)
       if (J->qidx[i] >= 0) qdot[J->qidx[i]] = v[J->vidx[i]];
     if (J->quat < 0) continue;
-    double N[12];
-    const double *w = v + J->vidx[J->wofs];
-    ap_quat_N(q + J->qidx[J->quat], N, 4, 0, 0);
-    for (int r = 0; r < 4; r++)
-      qdot[J->qidx[J->quat] + r] = N[r] * w[0] + N[r + 4] * w[1] + N[r + 8] * w[2];
+    /* p' = N(p) w with ap_quat_N's N = [-x -y -z; w z -y; -z w x; y -x w] / 2, term by term */
+    const double *w = v + J->vidx[J->wofs], *p = q + J->qidx[J->quat];
+    double a = 0.5 * p[0], x = 0.5 * p[1], y = 0.5 * p[2], z = 0.5 * p[3];
+    double *pd = qdot + J->qidx[J->quat];
+    pd[0] = -x * w[0] + -y * w[1] + -z * w[2];
+    pd[1] = a * w[0] + z * w[1] + -y * w[2];
+    pd[2] = -z * w[0] + a * w[1] + x * w[2];
+    pd[3] = y * w[0] + -x * w[1] + a * w[2];
   }
 }
 
