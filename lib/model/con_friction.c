@@ -36,6 +36,13 @@
 
 #include "model/con_friction.h"
 
+/* The friction of a sliding contact acts along s_ref while |s| <= sig = FR_PIN (1 + max |v_i|)
+ * (round-off), s_ref its slip direction at the last accepted step (or the onset's), and along
+ * (|s| - sig) s / |s| + sig s_ref beyond: continuous in s, and s / |s| to sig / |s| once the
+ * slip has outgrown round-off. (A switch from s_ref to s / |s| at |s| = sig made the friction
+ * jump by up to 90 degrees where a slip that started at 0 grew across s_ref, and CVODE BDF's
+ * Newton iteration failed there: the car after breakaway with mu_kinetic = mu.) */
+#define FR_PIN 1e-13
 #define FR_HEAD 6   /* mode, F_n, slip direction (2), direction of the last friction (2) */
 static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }
 
@@ -272,8 +279,11 @@ static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c,
   double s[2], mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu, vmag = 0.0;
   ap_cfr_slip(M, S, c, d->v, s);
   for (int j = 0; j < k; j++) vmag = fmax(vmag, fabs(d->v[j]));
-  double ns = hypot(s[0], s[1]), *dir = ap_cfr_slip_dir(M, S, c);
-  if (ns > 1e-13 * (1.0 + vmag)) s[0] /= ns, s[1] /= ns;
+  double *dir = ap_cfr_slip_dir(M, S, c), sig = FR_PIN * (1.0 + vmag), ns = hypot(s[0], s[1]);
+  double e = ns > sig ? (ns - sig) / ns : 0.0;   /* s^ (|s| - sig) + s_ref sig */
+  s[0] = e * s[0] + sig * dir[0], s[1] = e * s[1] + sig * dir[1];
+  ns = hypot(s[0], s[1]);
+  if (ns > 0) s[0] /= ns, s[1] /= ns;
   else s[0] = dir[0], s[1] = dir[1];
   dir[2] = s[0], dir[3] = s[1];   /* for ap_cfr_friction_force */
   const double *T = block(M, S, c) + FR_HEAD;
