@@ -36,12 +36,16 @@
 
 #include "model/con_friction.h"
 
-/* The friction of a sliding contact acts along s_ref while |s| <= sig = FR_PIN (1 + max |v_i|)
- * (round-off), s_ref its slip direction at the last accepted step (or the onset's), and along
- * (|s| - sig) s / |s| + sig s_ref beyond: continuous in s, and s / |s| to sig / |s| once the
- * slip has outgrown round-off. (A switch from s_ref to s / |s| at |s| = sig made the friction
- * jump by up to 90 degrees where a slip that started at 0 grew across s_ref, and CVODE BDF's
- * Newton iteration failed there: the car after breakaway with mu_kinetic = mu.) */
+/* The friction direction of a sliding contact (docs/scenes.md "Slip direction near zero
+ * slip"): s_ref (its slip direction at the last accepted step, or the onset's) while
+ * |s| <= sig = FR_PIN (1 + max |v_i|) (round-off); beyond, in the second pass of
+ * ap_cfr_friction, along s + wt g with g = -F* / (mu_k F_n) (F* the sticking force of the
+ * first pass) and wt = FR_FOLLOW sig times a weight that is 1 while |g| >= 1 (the sticking force
+ * at or beyond the cone), 0 below 1 - FR_BAND, and times max(0, cos(g, s_ref)) (a slip that
+ * decays towards sticking keeps s / |s|). Held at the onset's direction, a slip that started
+ * at 0 grew across it as the needed force turned, and the friction jumped onto s / |s| once
+ * |s| outgrew round-off, where every stepper stalled (the car after breakaway with
+ * mu_kinetic = mu). */
 #define FR_PIN 1e-13
 #define FR_FOLLOW 1e5
 #define FR_BAND 1e-3
