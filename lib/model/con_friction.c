@@ -41,14 +41,14 @@
  * |s| <= sig = FR_PIN (1 + max |v_i|) (round-off); beyond, in the second pass of
  * ap_cfr_friction, along s + wt g with g = -F* / (mu_k F_n) (F* the sticking force of the
  * first pass) and wt = FR_FOLLOW sig times a weight that is 1 while |g| >= 1 (the sticking force
- * at or beyond the cone), 0 below 1 - FR_BAND, and times max(0, cos(g, s_ref)) (a slip that
+ * at or beyond the cone), 0 below 1 - FR_BAND (0.9), and times max(0, cos(g, s_ref)) (a slip that
  * decays towards sticking keeps s / |s|). Held at the onset's direction, a slip that started
  * at 0 grew across it as the needed force turned, and the friction jumped onto s / |s| once
  * |s| outgrew round-off, where every stepper stalled (the car after breakaway with
  * mu_kinetic = mu). */
 #define FR_PIN 1e-13
 #define FR_FOLLOW 1e5
-#define FR_BAND 1e-3
+#define FR_BAND 1e-1
 #define FR_HEAD 8   /* mode, F_n, slip direction (2), direction of the last friction (2), gamma of
                        the tangential rows (2) */
 static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }
