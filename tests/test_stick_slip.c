@@ -14,7 +14,9 @@
  *    dop853 reached 8.79858 in 120 s); bdf runs to 8.85 s in minimal and projected mode,
  *    within 5000 steps each from t = 0 (about 750 now), a tyre slides there at |F_t| / F_n = 0.8 to 1e-12, and projected
  *    mode is within 1e3 rtol max(1, |x|) of minimal mode at 8.85 s. (DAE mode runs there too,
- *    but takes 1e5 steps and ends 5e-5 off: docs/vehicles.md; not asserted.) */
+ *    but takes 1e5 steps and ends 5e-5 off: docs/vehicles.md; not asserted.)
+ *  The 0.15 N m steady turn with mu = 0.8 holds in projected and DAE mode as in minimal mode
+ *    (test_bicycle_friction.c): no event in 10 s, the frictionless run of the same mode. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -32,7 +34,7 @@ typedef struct run_def {
 } run_def;
 
 typedef struct run_out {
-  int ok, n, k;
+  int ok, n, k, nev, rolling;   /* events; every contact with modes rolling at the end */
   long steps;
   double t_slip, x[128], ratio_sliding;   /* x: q then v; the sliding contact's |F_t| / F_n */
   char first[96];
@@ -78,7 +80,11 @@ static void run(const run_def *rd, run_out *o) {
     ap_event_record rec;
     const double *lam = NULL;
     o->ok = 1, o->n = n, o->k = k;
-    if (runner_event(sim, 0, &rec) > 0) o->t_slip = rec.t;
+    o->nev = runner_event(sim, 0, &rec);
+    if (o->nev > 0) o->t_slip = rec.t;
+    o->rolling = 1;
+    for (int c = 0; c < ap_scene_count(sc, AP_SCENE_CONSTRAINTS); c++)
+      if (ap_sim_contact_mode(sim, c) >= 0) o->rolling &= ap_sim_contact_mode(sim, c) == 0;
     snprintf(o->first, sizeof o->first, "%s", rec.name);
     o->steps = polls;
     memcpy(o->x, ap_sim_q(sim), sizeof(double) * (size_t)n);
@@ -148,9 +154,30 @@ static void test_bicycle(void) {
   }
 }
 
+/* The 0.15 N m steady turn with mu = 0.8 in projected and DAE mode (bdf, rtol 1e-8, 10 s):
+ * no event, both tyres rolling, the state within 1e3 rtol max(1, |x|) of the frictionless run
+ * of the same mode (the tyres hold: the run is the frictionless one). */
+static void test_holds(void) {
+  const char *fr[] = {"effects.steer.torque=0.15", "constraints.rear_contact.friction={mu: 0.8}",
+                      "constraints.front_contact.friction={mu: 0.8}"};
+  const char *modes[2] = {"projected", "dae"};
+  for (int i = 0; i < 2; i++) {
+    run_def a = {"bicycle_turn.yaml", modes[i], fr, 3, 1e-8, 1e-10, 10.0};
+    run_def b = {"bicycle_turn.yaml", modes[i], fr, 1, 1e-8, 1e-10, 10.0};
+    run_out oa, ob;
+    run(&a, &oa), run(&b, &ob);
+    double dx = oa.ok && ob.ok ? state_diff(&oa, &ob) : INFINITY;
+    printf("  steady turn, mu 0.8, %s: %d events, both rolling %d, state after 10 s %.2g from "
+           "the frictionless run (bound %.2g)\n", modes[i], oa.nev, oa.rolling, dx, 1e3 * 1e-8);
+    AP_CHECK(oa.ok && ob.ok && oa.nev == 0 && oa.rolling);
+    AP_CHECK_LE(dx, 1e3 * 1e-8);
+  }
+}
+
 int main(void) {
   printf("slip near zero with mu_kinetic = mu:\n");
   test_car();
   test_bicycle();
+  test_holds();
   return ap_check_finish("test_stick_slip");
 }
