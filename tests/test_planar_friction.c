@@ -222,7 +222,10 @@ static void test_tip_mid_run(void) {
 }
 
 /* Refused under a planar chassis: friction on a tilted plane (the loads assume z = 0), and a
- * sliding wheel of the four-wheeled car (statically indeterminate loads), as on a free one. */
+ * sliding wheel of the four-wheeled car (statically indeterminate loads), as on a free one.
+ * All four wheels have friction: with perfectly rough ones beside it, those would carry the
+ * sideways force that the wheel's row repeats (contact_share.c), and the wheel, needing no
+ * longitudinal force, would roll on. */
 static void test_refusals(void) {
   char path[1200], msg[1024] = "";
   snprintf(path, sizeof path, "%s/examples/scenes/diff_drive_skid.yaml", AP_SRCDIR);
@@ -233,9 +236,12 @@ static void test_refusals(void) {
   printf("  tilted plane: %s\n", msg);
   AP_CHECK(rc != AP_OK && strstr(msg, "'roll_l'") && strstr(msg, "level ground"));
   ap_scene_free(sc);
-  const char *car[] = {"constraints.roll_rl.friction={mu: 0.01}"};
+  const char *car[] = {"constraints.roll_rl.friction={mu: 0.01}",
+                       "constraints.roll_rr.friction={mu: 0.01}",
+                       "constraints.roll_fl.friction={mu: 0.01}",
+                       "constraints.roll_fr.friction={mu: 0.01}"};
   runner r;
-  rc = runner_start(&r, "car_ackermann.yaml", car, 1, 1e-10);
+  rc = runner_start(&r, "car_ackermann.yaml", car, 4, 1e-10);
   AP_CHECK(rc == AP_ERR_SINGULAR);
   runner_stop(&r);
 }

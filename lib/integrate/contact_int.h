@@ -28,6 +28,12 @@ int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
 
+/* F_t (2, in place) of rolling contact c less the share that rows without a friction limit
+ * can carry (its tangential rows' combinations in their span; contact_share.c), from the
+ * data's A; the scratch it uses ((b + 2) k doubles, NULL when the run has no modes). */
+void ap_drv_cm_determinate(ap_sim *s, const ap_mcon *c, double *ft);
+double *ap_drv_cm_share_scratch(ap_sim *s);
+
 /* The run's warning names each rolling contact whose friction is statically indeterminate
  * at the start (its tangential rows combinations of the others; contact_indet.c). */
 int ap_drv_cm_indeterminate(ap_sim *s);

@@ -58,6 +58,7 @@ struct ap_drv_contacts {
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
   double *gap0;      /* (by constraint) a bounce's gap at its impact, NAN otherwise */
+  double *share;     /* ((b + 2) k) contact_share.c's scratch */
 };
 
 /* A contact that has just left the ground has a gap of third order in the time (at lift-off
@@ -119,6 +120,7 @@ void ap_drv_contacts_free(ap_sim *s) {
   free(s->cm->mni);
   free(s->cm->armed);
   free(s->cm->gap0);
+  free(s->cm->share);
   free(s->cm);
   s->cm = NULL;
 }
@@ -138,10 +140,12 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   }
   if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
   if (s->cm) s->cm->gap0 = malloc(sizeof(double) * (size_t)(M->nc + 1));
+  if (s->cm) s->cm->share = malloc(sizeof(double) * ((size_t)(s->b + 2) * (size_t)s->k + 1));
   for (int ci = 0; s->cm && s->cm->gap0 && ci < M->nc; ci++) s->cm->gap0[ci] = NAN;
   if (s->cm && s->cm->armed)
     s->cm->lifted = s->cm->armed + M->nc, s->cm->made = s->cm->lifted + M->nc;
-  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed || !s->cm->gap0)
+  if (!s->cm || !s->cm->ci || !s->cm->ev || !s->cm->lam || !s->cm->armed || !s->cm->gap0 ||
+      !s->cm->share)
     return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   s->cm->s = s;
   ap_data *d = s->d;
@@ -169,6 +173,8 @@ int ap_drv_cm_forces(ap_sim *s, double t, const double *q, const double *v) {
   s->ev_stamp = -1;
   return rc;
 }
+
+double *ap_drv_cm_share_scratch(ap_sim *s) { return s->cm ? s->cm->share : NULL; }
 
 /* Normal force and tangential force (2) of contact c from the multipliers lam (the data's, or
  * IDA's own in DAE mode); a wheel under a planar chassis: its load (model/loads.c). */
@@ -212,8 +218,11 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   }
   switch (e->kind) {
     case EV_SLIP:
-      if (mode == AP_CM_ROLLING)
-        *out = mu_of(c) * normal_at(e->cm, t, lam, c, ft) - hypot(ft[0], ft[1]);
+      if (mode == AP_CM_ROLLING) {
+        double fn = normal_at(e->cm, t, lam, c, ft);
+        ap_drv_cm_determinate(s, c, ft);
+        *out = mu_of(c) * fn - hypot(ft[0], ft[1]);
+      }
       break;
     case EV_LIFT:
       if (mode != AP_CM_AIRBORNE) *out = normal_at(e->cm, t, lam, c, ft);
@@ -271,6 +280,7 @@ static int on_switch(const ap_event_record *rec, double *q, double *v, void *use
     case EV_SLIP:
       if (hook_forces(s, rec, q, v) != AP_OK) return -1;
       fn = ap_drv_cm_normal(s, s->d->lambda, c, ft);
+      ap_drv_cm_determinate(s, c, ft);
       if (unilateral(c) && fn <= 0 && ap_bm_wheel_by_load(M, c))
         return ap_drv_cm_tips(s, c, rec->t, fn);
       if (unilateral(c) && fn <= 0) {

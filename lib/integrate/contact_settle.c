@@ -82,6 +82,7 @@ static int gap_falls(settle_ctx *x, const ap_mcon *c) {
   for (int j = 0; j < k; j++) vn += d->A[r + (size_t)j * b] * x->v[j];
   for (int j = 0; j < k; j++) an += d->A[r + (size_t)j * b] * x->vd[j];
   if (rc == AP_OK) x->fn_roll = ap_drv_cm_normal(s, d->lambda, c, x->ft_roll);
+  if (rc == AP_OK) ap_drv_cm_determinate(s, c, x->ft_roll);
   ap_cfr_set_mode(x->M, scr(s), c, AP_CM_AIRBORNE);
   int rc2 = ap_drv_cm_forces(s, x->t, x->q, x->v);   /* the airborne data back */
   if (rc != AP_OK) return 0;   /* rolling has no solution here: the mode stays */
@@ -131,6 +132,7 @@ static int stick_or_turn(settle_ctx *x, const ap_mcon *c) {
   int rc = ap_drv_cm_forces(s, x->t, x->q, x->v);
   if (rc == AP_OK) {
     fn = ap_drv_cm_normal(s, d->lambda, c, ft), band = force_band(s, fn, ft);
+    ap_drv_cm_determinate(s, c, ft);
     for (int r = 0; r < 2; r++) {
       sa[r] = -d->gamma[c->row + r];
       for (int j = 0; j < k; j++) sa[r] += d->A[c->row + r + (size_t)j * b] * x->vd[j];
@@ -186,6 +188,7 @@ static int settle_one(settle_ctx *x, char *lifted) {
                                            "lifting off at t = %.17g: %s", c->name, x->t,
                                            s->d->msg);
     }
+    if (mode == AP_CM_ROLLING && c->def.mu >= 0) ap_drv_cm_determinate(s, c, ft);
     if (mode == AP_CM_ROLLING && c->def.mu >= 0 && hypot(ft[0], ft[1]) > c->def.mu * fn + band) {
       ap_drv_cm_slide_against(s, c, ft);
       return 1;

@@ -125,6 +125,10 @@ int ap_step_one(ap_stepper *s, double tstop, double *t, double *y);
  * where the Jacobian was made (stepper_jwatch.c); the other methods ignore it. AP_OK,
  * AP_ERR_ARG, AP_ERR_NOMEM. */
 int ap_step_jacobian_watch(ap_stepper *s, int m, const double *w);
+/* CVODE BDF: difference the Jacobian with the relative increment rho (> 0) instead of
+ * CVODE's sqrt(eps), from the next step on; 0 gives CVODE's own difference quotients back
+ * (stepper_cvjac.c). The other methods ignore it. AP_OK, AP_ERR_ARG, AP_ERR_NOMEM. */
+int ap_step_jacobian_increment(ap_stepper *s, double rho);
 /* Dense output: y at time t inside the last step. */
 int ap_step_dky(ap_stepper *s, double t, double *y);
 
@@ -214,6 +218,13 @@ void ap_step_accept(ap_stepper *s, double t, const double *y);
 int ap_step_jw_force(const ap_stepper *s);
 void ap_step_jw_stepped(ap_stepper *s, int made);
 void ap_step_jw_reset(ap_stepper *s);
+double ap_step_jw_rho(const ap_stepper *s);
+/* stepper_cvjac.c: CVODE's Jacobian function with ap_step_jw_rho's increments. */
+struct _generic_N_Vector;
+struct _generic_SUNMatrix;
+int ap_step_cv_jac(double t, struct _generic_N_Vector *y, struct _generic_N_Vector *fy,
+                   struct _generic_SUNMatrix *J, void *user, struct _generic_N_Vector *tmp1,
+                   struct _generic_N_Vector *tmp2, struct _generic_N_Vector *tmp3);
 void ap_step_jw_free(ap_stepper *s);
 
 #endif

@@ -212,6 +212,8 @@ static long cv_jac_evals(const ap_stepper *s) {
 static int cv_step(ap_stepper *s, double tstop, realtype *tret) {
   int force = ap_step_jw_force(s), flag = CV_SUCCESS;
   long nje = cv_jac_evals(s);
+  double rho = ap_step_jw_rho(s);
+  if (s->obj[1]) flag = CVodeSetJacFn(s->mem, rho > 0 ? ap_step_cv_jac : NULL);
   if (force) flag = CVodeSetLSetupFrequency(s->mem, 1);
   if (force && flag == CV_SUCCESS) flag = CVodeSetJacEvalFrequency(s->mem, 1);
   if (flag == CV_SUCCESS) flag = CVode(s->mem, tstop, s->y, tret, CV_ONE_STEP);

@@ -27,6 +27,8 @@ struct ap_step_jwatch {
   int jac_ok;        /* jac holds the values where the Jacobian was made */
   int made;          /* the last step made the Jacobian (at its start: prev) */
   int force;         /* make it before the next step */
+  double rho;        /* relative increment of the difference quotients (stepper_cvjac.c); 0:
+                        CVODE's own */
   double *prev, *jac;
 };
 
@@ -80,6 +82,16 @@ void ap_step_jw_stepped(ap_stepper *s, int made) {
   s->jw->made |= made;
   s->jw->force = 0;
 }
+
+int ap_step_jacobian_increment(ap_stepper *s, double rho) {
+  if (!s || !(rho >= 0)) return AP_ERR_ARG;
+  if (!ap_step_native_projection(s->meth)) return AP_OK;
+  if (jw_size(s, s->jw ? s->jw->m : 0) != AP_OK) return AP_ERR_NOMEM;
+  s->jw->rho = rho;
+  return AP_OK;
+}
+
+double ap_step_jw_rho(const ap_stepper *s) { return s->jw ? s->jw->rho : 0.0; }
 
 void ap_step_jw_reset(ap_stepper *s) {
   if (s->jw) s->jw->prev_ok = 0, s->jw->made = 1;

@@ -36,7 +36,21 @@
 
 #include "model/con_friction.h"
 
-#define FR_HEAD 6   /* mode, F_n, slip direction (2), direction of the last friction (2) */
+/* The friction direction of a sliding contact (docs/scenes.md "Slip direction near zero
+ * slip"): s_ref (its slip direction at the last accepted step, or the onset's) while
+ * |s| <= sig = FR_PIN (1 + max |v_i|) (round-off); beyond, in the second pass of
+ * ap_cfr_friction, along s + wt g with g = -F* / (mu_k F_n) (F* the sticking force of the
+ * first pass) and wt = FR_FOLLOW sig times a weight that is 1 while |g| >= 1 (the sticking force
+ * at or beyond the cone), 0 below 1 - FR_BAND (0.9), and times max(0, cos(g, s_ref)) (a slip that
+ * decays towards sticking keeps s / |s|). Held at the onset's direction, a slip that started
+ * at 0 grew across it as the needed force turned, and the friction jumped onto s / |s| once
+ * |s| outgrew round-off, where every stepper stalled (the car after breakaway with
+ * mu_kinetic = mu). */
+#define FR_PIN 1e-13
+#define FR_FOLLOW 1e5
+#define FR_BAND 1e-1
+#define FR_HEAD 8   /* mode, F_n, slip direction (2), direction of the last friction (2), gamma of
+                       the tangential rows (2) */
 static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }
 
 static double *block(const ap_bmodel *M, const double *S, const ap_mcon *c) {
@@ -47,7 +61,7 @@ size_t ap_cfr_scratch_size(const ap_bmodel *M) {
   if (!M->nfric) return 0;
   size_t k = (size_t)M->k, b = (size_t)M->b, nf = (size_t)M->nfric;
   return nf * fr_stride(M) + k * k + k * b + b * b + 2 * k + 4 * b + b * nf + k * nf +
-         nf * nf + 2 * nf + (M->nwheel ? 2 * k + 2 * b + nf : 0);
+         nf * nf + 2 * nf + 3 * k + 2 * nf + (M->nwheel ? 2 * k + 2 * b + nf : 0);
 }
 
 int ap_cfr_mode(const ap_bmodel *M, const double *S, const ap_mcon *c) {
@@ -91,6 +105,7 @@ void ap_cfr_rows(const ap_bmodel *M, double *S, const ap_mcon *c, double *A, dou
 
 void ap_cfr_gamma(const ap_bmodel *M, const double *S, const ap_mcon *c, double *gamma) {
   if (ap_cfr_mode(M, S, c) == AP_CM_ROLLING) return;
+  block(M, S, c)[6] = gamma[c->row], block(M, S, c)[7] = gamma[c->row + 1];
   for (int r = 0; r < c->nrows; r++)
     if (dropped(M, S, c, r)) gamma[c->row + r] = 0.0;
 }
@@ -143,6 +158,7 @@ static double solve_nopivot(int n, double *Mx, double *y) {
 
 typedef struct fr_work {
   double *Lg, *X, *Sm, *y, *z, *rhs, *lam0, *U, *F, *Mp, *lamN, *act, *nidx, *drop;
+  double *ex, *gs;                    /* (3 k) sticking forces' scratch, (2 nf) -F* / (mu F_n) */
   double *vd0, *vd, *lf0, *lf, *N0;   /* wheel loads: v', lambda (all rows), loads at F_n = 0 */
   int na, nrow;                       /* active rows; sliding contacts with a normal row */
 } fr_work;
@@ -155,7 +171,8 @@ static fr_work carve(const ap_bmodel *M, double *S) {
   w.rhs = w.z + k, w.lam0 = w.rhs + b, w.act = w.lam0 + b, w.U = w.act + b;
   w.F = w.U + b * nf, w.Mp = w.F + k * nf, w.lamN = w.Mp + nf * nf, w.nidx = w.lamN + nf;
   w.drop = w.nidx + nf;
-  w.vd0 = w.drop + b, w.vd = w.vd0 + k, w.lf0 = w.vd + k, w.lf = w.lf0 + b, w.N0 = w.lf + b;
+  w.ex = w.drop + b, w.gs = w.ex + 3 * k;
+  w.vd0 = w.gs + 2 * nf, w.vd = w.vd0 + k, w.lf0 = w.vd + k, w.lf = w.lf0 + b, w.N0 = w.lf + b;
   w.na = w.nrow = 0;
   return w;
 }
@@ -267,13 +284,20 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
 
 /* f_j of sliding contact c into F (k), u_j into U (na). */
 static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c, fr_work *w,
-                    double *F, double *U) {
+                    double *F, double *U, const double *g) {
   int k = M->k;
   double s[2], mu = c->def.mu_kinetic >= 0 ? c->def.mu_kinetic : c->def.mu, vmag = 0.0;
   ap_cfr_slip(M, S, c, d->v, s);
   for (int j = 0; j < k; j++) vmag = fmax(vmag, fabs(d->v[j]));
-  double ns = hypot(s[0], s[1]), *dir = ap_cfr_slip_dir(M, S, c);
-  if (ns > 1e-13 * (1.0 + vmag)) s[0] /= ns, s[1] /= ns;
+  double *dir = ap_cfr_slip_dir(M, S, c), sig = FR_PIN * (1.0 + vmag), ns = hypot(s[0], s[1]);
+  if (g && ns > sig) {   /* while the sticking force is at or beyond the cone: |g| >= 1 */
+    double ng = hypot(g[0], g[1]), cs = ng > 0 ? (g[0] * dir[0] + g[1] * dir[1]) / ng : 0.0;
+    double wt = fmin(fmax((ng - 1.0) / FR_BAND + 1.0, 0.0), 1.0) * fmax(cs, 0.0) * FR_FOLLOW * sig;
+    s[0] += wt * g[0], s[1] += wt * g[1];
+  }
+  else if (ns <= sig) s[0] = dir[0], s[1] = dir[1];   /* round-off: the pinned direction */
+  ns = hypot(s[0], s[1]);
+  if (ns > 0) s[0] /= ns, s[1] /= ns;
   else s[0] = dir[0], s[1] = dir[1];
   dir[2] = s[0], dir[3] = s[1];   /* for ap_cfr_friction_force */
   const double *T = block(M, S, c) + FR_HEAD;
@@ -339,6 +363,114 @@ static int load_column(const ap_model *m, ap_data *d, fr_work *w, const ap_mcon 
   return AP_OK;
 }
 
+/* The sliding contacts' friction directions and normal forces (w->F, w->U, w->lamN): pass 0
+ * along their slip (the pinned direction within round-off), pass 1 along
+ * s + FR_FOLLOW sig w->gs (sticking). A status (the message set). */
+static int normals(const ap_model *m, ap_data *d, double *S, fr_work *w,
+                   const ap_mcon *const *sl, int p, int pass) {
+  const ap_bmodel *M = ap_bm(m);
+  int k = M->k, rc = AP_OK;
+  if (p > w->nrow) rc = load_base(m, d, w, sl, p);
+  for (int j = 0; rc == AP_OK && j < p; j++) {
+    coulomb(M, d, S, sl[j], w, w->F + (size_t)j * k, w->U + (size_t)j * w->na,
+            pass ? w->gs + 2 * j : NULL);
+    if (p > w->nrow) rc = load_column(m, d, w, sl, p, j);
+  }
+  if (rc != AP_OK) return rc;
+  for (int i = 0; i < p; i++) {
+    int n = (int)w->nidx[i];
+    w->lamN[i] = n >= 0 ? w->lam0[n] : w->N0[i];
+    for (int j = 0; n >= 0 && j < p; j++)
+      w->Mp[i + (size_t)j * p] = (i == j) + w->U[n + (size_t)j * w->na];
+  }
+  double m00 = w->Mp[0], small = solve_nopivot(p, w->Mp, w->lamN);
+  if (small < 0) {
+    AP_BM_MSG(d, "model '%s': contact '%s' slides in a state where the normal force has no "
+              "solution or several (Painleve's paradox: 1 + u = %.6g <= 0, the friction "
+              "pushes the contact into the ground harder than the normal force can resist) at "
+              "t = %.17g: lower mu_kinetic or model the impact", m->name, sl[0]->name,
+              p == 1 ? m00 : small, d->t);
+    return AP_ERR_SINGULAR;
+  }
+  return AP_OK;
+}
+
+/* W = T P T^T (2 x 2, column-major) of a sliding contact (rows T, stride k + 1). */
+static void delassus(const ap_bmodel *M, ap_data *d, fr_work *w, const double *T, double *W) {
+  int k = M->k, na = w->na;
+  double *z = w->ex + k, *pt = w->ex + 2 * k;
+  for (int r = 0; r < 2; r++) {
+    memcpy(z, T + r * (k + 1), sizeof(double) * (size_t)k);
+    chol_solve(k, w->Lg, z);
+    for (int a = 0; a < na; a++) w->rhs[a] = arow_dot(M, d, w, a, z);
+    zero_dropped(w, w->rhs);
+    chol_solve(na, w->Sm, w->rhs);
+    memcpy(pt, z, sizeof(double) * (size_t)k);
+    for (int a = 0; a < na; a++)
+      for (int i = 0; i < k; i++) pt[i] -= w->X[(size_t)a * k + i] * w->rhs[a];
+    for (int q = 0; q < 2; q++) {
+      double x = 0.0;
+      for (int i = 0; i < k; i++) x += T[q * (k + 1) + i] * pt[i];
+      W[q + 2 * r] = x;
+    }
+  }
+}
+
+/* x = W^+ y for the symmetric 2 x 2 W (column-major): its eigenvalues below rel of the largest
+ * left out (a tangential direction the contact cannot slip in: the other wheel of an axle
+ * repeats its sideways row, and the force along it is not the contact's). -1 when W is 0. */
+static int pinv_solve(const double *W, const double *y, double rel, double *x) {
+  double a = W[0], b = 0.5 * (W[1] + W[2]), c = W[3];
+  double tr = 0.5 * (a + c), disc = sqrt(0.25 * (a - c) * (a - c) + b * b);
+  double l[2] = {tr + disc, tr - disc}, th = 0.5 * atan2(2.0 * b, a - c);
+  double e[2][2] = {{cos(th), sin(th)}, {-sin(th), cos(th)}};
+  if (!(l[0] > 0)) return -1;
+  x[0] = x[1] = 0.0;
+  for (int i = 0; i < 2; i++) {
+    if (!(l[i] > rel * l[0])) continue;
+    double p = (e[i][0] * y[0] + e[i][1] * y[1]) / l[i];
+    x[0] += p * e[i][0], x[1] += p * e[i][1];
+  }
+  return 0;
+}
+
+/* The sticking force F* of each sliding contact at the solve of pass 0: the tangential force
+ * that would make its slip acceleration s' = A_t v' - gamma_t vanish, all else alike,
+ * F* = F - W^-1 s', F its friction there, W = T P T^T with P = g^-1 - X S^-1 X^T the
+ * constrained response (its normal row active: F_n answers). Into w->gs: -F* / (mu_k F_n),
+ * along which a slip of round-off size grows (of length 1 at the cone's edge). */
+static void sticking(const ap_bmodel *M, ap_data *d, double *S, fr_work *w,
+                     const ap_mcon *const *sl, int p) {
+  int k = M->k, na = w->na;
+  double *vd = w->ex, *z = w->ex + k;
+  memcpy(vd, w->y, sizeof(double) * (size_t)k);
+  for (int a = 0; a < na; a++)
+    for (int i = 0; i < k; i++) vd[i] += w->X[(size_t)a * k + i] * w->lam0[a];
+  for (int j = 0; j < p; j++) {   /* v' = y + X lam0 + sum_j (g^-1 f_j - X u_j) F_n,j */
+    memcpy(z, w->F + (size_t)j * k, sizeof(double) * (size_t)k);
+    chol_solve(k, w->Lg, z);
+    for (int i = 0; i < k; i++) vd[i] += z[i] * w->lamN[j];
+    for (int a = 0; a < na; a++)
+      for (int i = 0; i < k; i++)
+        vd[i] -= w->X[(size_t)a * k + i] * w->U[a + (size_t)j * na] * w->lamN[j];
+  }
+  for (int j = 0; j < p; j++) {
+    const double *b = block(M, S, sl[j]), *T = b + FR_HEAD;
+    double sa[2], W[4], *gs = w->gs + 2 * j;
+    double mu = sl[j]->def.mu_kinetic >= 0 ? sl[j]->def.mu_kinetic : sl[j]->def.mu;
+    double fmu = mu * w->lamN[j];
+    for (int r = 0; r < 2; r++) {
+      sa[r] = -b[6 + r];
+      for (int i = 0; i < k; i++) sa[r] += T[r * (k + 1) + i] * vd[i];
+    }
+    delassus(M, d, w, T, W);
+    double x[2];
+    gs[0] = gs[1] = 0.0;
+    if (!(fmu > 0) || pinv_solve(W, sa, fmax(1e-9, d->manifold_rtol), x) != 0) continue;
+    gs[0] = b[4] + x[0] / fmu, gs[1] = b[5] + x[1] / fmu;   /* -F* / (mu F_n) */
+  }
+}
+
 int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   const ap_bmodel *M = ap_bm(m);
   fr_work w = carve(M, S);
@@ -351,27 +483,11 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   for (int ci = 0; ci < M->nc && ns < 64; ci++)
     if (M->cons[ci].fric >= 0 && ap_cfr_mode(M, S, &M->cons[ci]) == AP_CM_SLIDING)
       sl[ns++] = &M->cons[ci];
-  if (p > w.nrow) rc = load_base(m, d, &w, sl, p);
-  for (int j = 0; rc == AP_OK && j < p; j++) {
-    coulomb(M, d, S, sl[j], &w, w.F + (size_t)j * k, w.U + (size_t)j * w.na);
-    if (p > w.nrow) rc = load_column(m, d, &w, sl, p, j);
+  for (int pass = 0; rc == AP_OK && pass < 2; pass++) {
+    if (pass) sticking(M, d, S, &w, sl, p);
+    rc = normals(m, d, S, &w, sl, p, pass);
   }
   if (rc != AP_OK) return rc;
-  for (int i = 0; i < p; i++) {
-    int n = (int)w.nidx[i];
-    w.lamN[i] = n >= 0 ? w.lam0[n] : w.N0[i];
-    for (int j = 0; n >= 0 && j < p; j++)
-      w.Mp[i + (size_t)j * p] = (i == j) + w.U[n + (size_t)j * w.na];
-  }
-  double m00 = w.Mp[0], small = solve_nopivot(p, w.Mp, w.lamN);
-  if (small < 0) {
-    AP_BM_MSG(d, "model '%s': contact '%s' slides in a state where the normal force has no "
-              "solution or several (Painleve's paradox: 1 + u = %.6g <= 0, the friction "
-              "pushes the contact into the ground harder than the normal force can resist) at "
-              "t = %.17g: lower mu_kinetic or model the impact", m->name, sl[0]->name,
-              p == 1 ? m00 : small, d->t);
-    return AP_ERR_SINGULAR;
-  }
   for (int j = 0; j < p; j++) {
     for (int i = 0; i < k; i++) d->Q[i] += w.F[(size_t)j * k + i] * w.lamN[j];
     block(M, S, sl[j])[1] = w.lamN[j];
