@@ -2,11 +2,11 @@
  * "Consistent modes"): a rolling contact with a friction coefficient whose tangential rows
  * (.x, .y) are combinations of the other active rows (two wheels of one axle repeat each
  * other's sideways row; a loop may repeat a wheel's row) has no unique friction force: the
- * reactions split it by minimum norm in minimal and projected mode, by the rows IDA keeps in
- * DAE mode, so its slip and stick times depend on that choice and the modes may switch at
- * different times. Found at the start, with every contact's rows as when rolling: rank(A) -
- * rank(A without the two rows) < 2 (pivoted QR, the data's rank_rtol); the run's warning
- * names each such contact. */
+ * reactions split it by minimum norm in every mode (DAE mode: its events split IDA's reaction
+ * so, contact_dae.c), so its slip and stick times depend on that choice, and runs may switch at
+ * different times where a contact is near the edge of its cone. Found at the start, with
+ * every contact's rows as when rolling: rank(A) - rank(A without the two rows) < 2 (pivoted
+ * QR, the data's rank_rtol); the run's warning names each such contact. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,8 +41,8 @@ static void warn(ap_sim *s, const ap_mcon *c) {
   size_t used = strlen(s->warning);
   snprintf(s->warning + used, sizeof s->warning - used, "%scontact '%s': its friction rows are "
            "combinations of other rows (e.g. two wheels of one axle), so its friction force is "
-           "statically indeterminate: slip and stick follow the minimum-norm split of it (DAE "
-           "mode: the rows IDA keeps), and modes may switch at different times",
+           "statically indeterminate: slip and stick follow the minimum-norm split of it, and "
+           "modes may switch at different times",
            used ? "; " : "", c->name);
 }
 

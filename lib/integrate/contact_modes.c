@@ -191,7 +191,7 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   (void)q;
   *out = 1.0;
   if (s->dae && (e->kind == EV_SLIP || e->kind == EV_LIFT) && mode != AP_CM_AIRBORNE) {
-    if (ap_dae_multipliers(s->dae, t, e->cm->lam) != AP_OK) return -1;   /* IDA's own */
+    if (ap_drv_dae_event_multipliers(s, t, e->cm->lam) != 0) return -1;   /* IDA's own */
     lam = e->cm->lam;
   }
   switch (e->kind) {
