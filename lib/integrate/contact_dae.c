@@ -12,17 +12,19 @@
  * to Q; ap_drv_dae_coulomb takes that term out again and hands f_j to the residual as the
  * column W(:, n_j).
  *
- * Held direction. While a sliding contact's slip is below slip_tol = atol + rtol max |v_i|
- * (the stick event's own tolerance, contact_modes.c) the residual's friction keeps the slip
- * direction of the last accepted step (the stick event's reference s_ref; at a slip onset the
- * direction -F_t the switch chose) instead of s / |s|. At a slip onset, and where a slip
- * passes near zero on its way to a stick, s is of round-off size and s / |s| turned with each
- * Newton iterate's slip (1e-8 m/s in any direction, the Jacobian's difference increments as
- * large): IDA, restarted at order 1, failed with "the corrector convergence failed" at steps
- * of 1e-11 s where every explicit run went on (campaign seeds 1000438, 1002577, 1001876:
- * tests/scenes/difftest/dae_slip_onset.yaml, dae_slip_at_start.yaml, dae_axle_slip_onset.yaml).
- * The explicit modes follow s / |s| down to 1e-13 (1 + max |v_i|); the two forces differ only
- * while |s| <= slip_tol, for a time of slip_tol / |s'|.
+ * Held direction. While a slip that has just begun (a slip onset, or sliding from t0: the
+ * stick event not yet armed, contact_modes.c) is below slip_tol = atol + rtol max |v_i|, the
+ * stick event's own tolerance, the residual's friction keeps the slip direction of the last
+ * accepted step (at the onset the direction -F_t the switch chose) instead of s / |s|. There
+ * s is of round-off size and s / |s| turned with each Newton iterate's slip (1e-8 m/s in any
+ * direction, the Jacobian's difference increments as large): IDA, restarted at order 1, failed
+ * with "the corrector convergence failed" at steps of 1e-11 s where every explicit run went on
+ * (campaign seeds 1000438, 1002577, 1001876: tests/scenes/difftest/dae_slip_onset.yaml,
+ * dae_slip_at_start.yaml, dae_axle_slip_onset.yaml). The explicit modes follow s / |s| down to
+ * 1e-13 (1 + max |v_i|); the forces differ only while |s| <= slip_tol, for a time of about
+ * slip_tol / |s'|. Held on the way to a stick too, it moved the stick times by that much (4e-7
+ * s at campaign seed 1001020, whose later motion then differed): a slip on its way to 0 keeps
+ * s / |s|.
  *
  * Switches. A switch changes which rows are zero rows (rolling: all of the contact's rows;
  * sliding: the normal row only; airborne: none), hence the number of independent rows IDA
@@ -41,6 +43,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "integrate/contact_int.h"
 #include "integrate/sim_int.h"
 #include "linalg/linalg.h"
 #include "model/con_friction.h"
@@ -61,7 +64,7 @@ int ap_drv_dae_coulomb(void *user, ap_data *d, double *W) {
     for (int j = 0; j < k; j++) d->Q[j] -= f[j] * fn;   /* the Appell modes' F_n out again */
     double sl[2], *dir = ap_cfr_slip_dir(M, S, c);
     ap_cfr_slip(M, S, c, d->v, sl);
-    if (hypot(sl[0], sl[1]) <= s->def.atol + s->def.rtol * vmax) {   /* held direction */
+    if (ap_drv_cm_slip_young(s, c) && hypot(sl[0], sl[1]) <= s->def.atol + s->def.rtol * vmax) {
       dir[2] = dir[0], dir[3] = dir[1];
       ap_cfr_coulomb(M, S, c, f);
     }

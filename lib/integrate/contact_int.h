@@ -17,6 +17,9 @@ void ap_drv_cm_slide_against(ap_sim *s, const ap_mcon *c, const double *ft);
 int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
+/* 1 while sliding contact c's slip has not exceeded slip_tol at an accepted step since it
+ * began (its stick event not yet armed). */
+int ap_drv_cm_slip_young(const ap_sim *s, const ap_mcon *c);
 
 /* The run's warning names each rolling contact whose friction is statically indeterminate
  * at the start (its tangential rows combinations of the others; contact_indet.c). */

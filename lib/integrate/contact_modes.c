@@ -81,6 +81,9 @@ static double unarmed_gap(const struct ap_drv_contacts *cm, int ci) {
 static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
   return cm->armed[ci] == mode + 1;
 }
+int ap_drv_cm_slip_young(const ap_sim *s, const ap_mcon *c) {   /* contact_dae.c */
+  return !armed(s->cm, (int)(c - ap_bm(s->m)->cons), AP_CM_SLIDING);
+}
 /* The touchdown's value: after a lift-off (unarmed, no bounce) the contact lands only while
  * it closes (gap' < 0); while it opens its gap counts as 0 at most. A restarted CVODE `bdf`
  * steps at order 1, whose position error h^2 a / 2 points along gravity every step: it put
