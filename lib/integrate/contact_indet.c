@@ -3,7 +3,7 @@
  * (.x, .y) are combinations of the other active rows (two wheels of one axle repeat each
  * other's sideways row; a loop may repeat a wheel's row) has no unique friction force: the
  * reactions split it by minimum norm (in DAE mode the events split IDA's multipliers so too:
- * dae_loads.c), so its slip and stick times follow that choice, not physics. Found at the start, with every contact's rows as when rolling: rank(A) -
+ * contact_dae.c), so its slip and stick times follow that choice, not physics. Found at the start, with every contact's rows as when rolling: rank(A) -
  * rank(A without the two rows) < 2 (pivoted QR, the data's rank_rtol); the run's warning
  * names each such contact. */
 #include <stdio.h>

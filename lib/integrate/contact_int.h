@@ -16,17 +16,15 @@ double ap_drv_cm_normal(const ap_sim *s, const double *lam, const ap_mcon *c, do
  * when they cannot be evaluated. */
 double ap_drv_dae_cm_normal(ap_sim *s, double t, const double *lam, const ap_mcon *c,
                             double *vd, double *ft);
-/* DAE mode: IDA's multipliers lam (b; those of the rows IDA dropped 0) split among redundant
- * rows as the Appell modes' reactions split them, the minimum-norm lam with the same A^T lam
- * (the data's A at the event's state; work: k + ap_la_work_size(b, k), iwork:
- * ap_la_iwork_size(b, k); dae_loads.c). */
-int ap_drv_dae_min_norm(ap_sim *s, double *lam, double *work, int *iwork);
 /* Contact c slides along -F_t / |F_t|. */
 void ap_drv_cm_slide_against(ap_sim *s, const ap_mcon *c, const double *ft);
 /* Contact c flies from (t, q): q onto the current modes' manifold first (q in and out). */
 int ap_drv_cm_lift(ap_sim *s, const ap_mcon *c, double t, double *q);
 /* A wheel under a planar chassis whose load falls to fn: the run stops (its status). */
 int ap_drv_cm_tips(ap_sim *s, const ap_mcon *c, double t, double fn);
+/* 1 while sliding contact c's slip has not exceeded slip_tol at an accepted step since it
+ * began (its stick event not yet armed). */
+int ap_drv_cm_slip_young(const ap_sim *s, const ap_mcon *c);
 
 /* F_t (2, in place) of rolling contact c less the share that rows without a friction limit
  * can carry (its tangential rows' combinations in their span; contact_share.c), from the

@@ -52,8 +52,6 @@ struct ap_drv_contacts {
   cm_event *ev;      /* EV_N per contact */
   double *lam;       /* (b + nphi) DAE mode: IDA's multipliers at an event's time */
   double *vd;        /* (k, after lam) DAE mode: IDA's accelerations there (dae_loads.c) */
-  double *mnw;       /* DAE mode: the minimum-norm split's scratch (ap_drv_dae_min_norm) */
-  int *mni;
   char *armed;       /* (by constraint) 1 + the mode whose leaving event is armed (below) */
   char *lifted;      /* (by constraint) made airborne at t0 by its negative normal force */
   char *made;        /* (by constraint) DAE mode: the modes IDA was made for */
@@ -87,6 +85,9 @@ static double unarmed_gap(const struct ap_drv_contacts *cm, int ci) {
 static int armed(const struct ap_drv_contacts *cm, int ci, int mode) {
   return cm->armed[ci] == mode + 1;
 }
+int ap_drv_cm_slip_young(const ap_sim *s, const ap_mcon *c) {   /* contact_dae.c */
+  return !armed(s->cm, (int)(c - ap_bm(s->m)->cons), AP_CM_SLIDING);
+}
 /* The touchdown's value: after a lift-off (unarmed, no bounce) the contact lands only while
  * it closes (gap' < 0); while it opens its gap counts as 0 at most. A restarted CVODE `bdf`
  * steps at order 1, whose position error h^2 a / 2 points along gravity every step: it put
@@ -116,8 +117,6 @@ void ap_drv_contacts_free(ap_sim *s) {
   free(s->cm->ci);
   free(s->cm->ev);
   free(s->cm->lam);
-  free(s->cm->mnw);
-  free(s->cm->mni);
   free(s->cm->armed);
   free(s->cm->gap0);
   free(s->cm->share);
@@ -133,11 +132,6 @@ int ap_drv_contacts_init(ap_sim *s, double t0, const double *q0, const double *v
   if (s->cm && s->cm->ci) s->cm->ev = calloc((size_t)M->nfric * EV_N, sizeof(cm_event));
   if (s->cm) s->cm->lam = calloc((size_t)(s->b + s->m->nphi + s->k) + 1, sizeof(double));
   if (s->cm && s->cm->lam) s->cm->vd = s->cm->lam + s->b + s->m->nphi;
-  if (s->cm && s->def.mode == AP_MODE_DAE) {
-    s->cm->mnw = malloc(sizeof(double) * ((size_t)s->k + ap_la_work_size(s->b, s->k) + 1));
-    s->cm->mni = malloc(sizeof(int) * (ap_la_iwork_size(s->b, s->k) + 1));
-    if (!s->cm->mnw || !s->cm->mni) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
-  }
   if (s->cm) s->cm->armed = calloc(3 * (size_t)M->nc, 1);
   if (s->cm) s->cm->gap0 = malloc(sizeof(double) * (size_t)(M->nc + 1));
   if (s->cm) s->cm->share = malloc(sizeof(double) * ((size_t)(s->b + 2) * (size_t)s->k + 1));
@@ -211,9 +205,7 @@ static int value(double t, const double *q, const double *v, const ap_data *d, v
   (void)q;
   *out = 1.0;
   if (s->dae && (e->kind == EV_SLIP || e->kind == EV_LIFT) && mode != AP_CM_AIRBORNE) {
-    if (ap_dae_multipliers(s->dae, t, e->cm->lam) != AP_OK ||   /* IDA's own, split */
-        ap_drv_dae_min_norm(s, e->cm->lam, e->cm->mnw, e->cm->mni) != AP_OK)
-      return -1;
+    if (ap_drv_dae_event_multipliers(s, t, e->cm->lam) != 0) return -1;   /* IDA's own */
     lam = e->cm->lam;
   }
   switch (e->kind) {

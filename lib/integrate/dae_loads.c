@@ -126,13 +126,3 @@ double ap_drv_dae_cm_normal(ap_sim *s, double t, const double *lam, const ap_mco
   return N;
 }
 
-int ap_drv_dae_min_norm(ap_sim *s, double *lam, double *work, int *iwork) {
-  const ap_data *d = s->d;
-  int b = s->b, k = s->k;
-  double *rhs = work, resid = 0.0;
-  for (int j = 0; j < k; j++) {   /* A_s^T lambda_s: IDA's constraint forces */
-    rhs[j] = 0.0;
-    for (int r = 0; r < b; r++) rhs[j] += d->A[r + (size_t)j * b] * lam[r];
-  }
-  return ap_la_lstsq_At(b, k, d->A, rhs, d->rank_rtol, lam, &resid, work + k, iwork);
-}

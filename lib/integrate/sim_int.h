@@ -177,6 +177,9 @@ int ap_drv_dae_remake(ap_sim *s, double t, double *y);
 /* The coupling for IDA made at the current modes: ap_drv_dae_coulomb, and while a wheel under
  * a planar chassis slides, its Coulomb force with its load (dae_loads.c). */
 ap_dae_couple ap_drv_dae_couple(ap_sim *s);
+/* IDA's multipliers at t (b + nphi) for the contact events, the rows' reaction split over
+ * redundant rows by minimum norm as in the other modes (contact_dae.c); 0 or -1. */
+int ap_drv_dae_event_multipliers(ap_sim *s, double t, double *lam);
 /* 1 when a contact's mode changed since the last call (contact_modes.c; IDA is made again
  * only then, a restart with the same modes keeps it). */
 int ap_drv_contacts_switched(ap_sim *s);
