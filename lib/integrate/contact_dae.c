@@ -27,6 +27,14 @@
  * s at campaign seed 1001020, whose later motion then differed): a slip on its way to 0 keeps
  * s / |s|.
  *
+ * Onset at zero slip. IDA holds the rolling rows only to its tolerance, so at a slip onset the
+ * slip was not 0 but 1e-11 m/s in any direction, and the contact stage (contact_modes.c) took
+ * that direction as the stick event's reference: in the planar robot's turn at rtol 1e-6 it
+ * pointed against the slip to come, the stick fired 4.8e-6 s after the onset and the run's
+ * later switches moved by 0.06 s (tests/test_planar_dae.c, turn_coarse). The remake puts v on
+ * s = 0 for a young slip below slip_tol first, nearest in g with the other rows held, as the
+ * minimal modes' state has it at the onset.
+ *
  * Switches. A switch changes which rows are zero rows (rolling: all of the contact's rows;
  * sliding: the normal row only; airborne: none), hence the number of independent rows IDA
  * carries multipliers for. IDA is made again for the new size at the switch state (ap_dae_create
