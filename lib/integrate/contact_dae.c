@@ -27,6 +27,14 @@
  * s at campaign seed 1001020, whose later motion then differed): a slip on its way to 0 keeps
  * s / |s|.
  *
+ * Onset at zero slip. IDA holds the rolling rows only to its tolerance, so at a slip onset the
+ * slip was not 0 but 1e-11 m/s in any direction, and the contact stage (contact_modes.c) took
+ * that direction as the stick event's reference: in the planar robot's turn at rtol 1e-6 it
+ * pointed against the slip to come, the stick fired 4.8e-6 s after the onset and the run's
+ * later switches moved by 0.06 s (tests/test_planar_dae.c, turn_coarse). The remake puts v on
+ * s = 0 for a young slip below slip_tol first, nearest in g with the other rows held, as the
+ * minimal modes' state has it at the onset.
+ *
  * Switches. A switch changes which rows are zero rows (rolling: all of the contact's rows;
  * sliding: the normal row only; airborne: none), hence the number of independent rows IDA
  * carries multipliers for. IDA is made again for the new size at the switch state (ap_dae_create
@@ -75,13 +83,46 @@ int ap_drv_dae_coulomb(void *user, ap_data *d, double *W) {
   return AP_OK;
 }
 
+/* Contacts whose slip has just begun (young) with |s| <= slip_tol: v onto s = 0 for them too
+ * (nearest in g, the other rows held), their mode rolling for the projection only. */
+static int onset_slips_zero(ap_sim *s, double t, double *y) {
+  const ap_bmodel *M = ap_bm(s->m);
+  ap_data *d = s->d;
+  double *S = ap_bm_scratch(d), vmax = 0.0, sl[2], change = 0.0;
+  int any = 0, rc = AP_OK;
+  ap_drv_load_state(s, t, y);
+  if (ap_fwd_position(s->m, d) != AP_OK) return AP_OK;   /* ap_forward reports it */
+  char *on = calloc((size_t)M->nc + 1, 1);
+  if (!on) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
+  for (int j = 0; j < s->k; j++) vmax = fmax(vmax, fabs(y[s->n + j]));
+  for (int ci = 0; ci < M->nc; ci++) {
+    const ap_mcon *c = &M->cons[ci];
+    if (c->fric < 0 || ap_cfr_mode(M, S, c) != AP_CM_SLIDING || !ap_drv_cm_slip_young(s, c))
+      continue;
+    ap_cfr_slip(M, S, c, y + s->n, sl);
+    if (hypot(sl[0], sl[1]) > s->def.atol + s->def.rtol * vmax) continue;
+    ap_cfr_set_mode(M, S, c, AP_CM_ROLLING), any = 1;
+    on[ci] = 1;
+  }
+  if (any) {
+    ap_drv_load_state(s, t, y);
+    rc = ap_fwd_position(s->m, d);
+    if (rc == AP_OK) rc = ap_core_project_here(s->m, d, y + s->n, &change);
+  }
+  for (int ci = 0; ci < M->nc; ci++)
+    if (on[ci]) ap_cfr_set_mode(M, S, &M->cons[ci], AP_CM_SLIDING);
+  free(on);
+  return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc < 0 ? rc : AP_ERR_SINGULAR, "%s", d->msg);
+}
+
 int ap_drv_dae_remake(ap_sim *s, double t, double *y) {
   ap_data *d = s->d;
   double *yp = malloc(sizeof(double) * (size_t)s->ny);
   if (!yp) return ap_drv_fail(s, AP_ERR_NOMEM, "out of memory");
   d->basis = AP_BASIS_ORTHONORMAL;
+  int rc = onset_slips_zero(s, t, y);
   ap_drv_load_state(s, t, y);
-  int rc = ap_forward(s->m, d);
+  if (rc == AP_OK) rc = ap_forward(s->m, d);
   d->basis = AP_BASIS_NONE;
   if (rc != AP_OK) {
     free(yp);

@@ -100,7 +100,7 @@ double ap_drv_dae_h0(const ap_sim *s, const double *q, const double *vdot) {
 }
 
 /* With redundant rows: when the kept ones degraded (ap_dae_review_rows), restart IDA at the
- * accepted state (s->ytry) from the Appell solve there, with the new choice. */
+ * accepted state (s->ytry) put on every row, from the Appell solve there, with the new choice. */
 static int stage_dae_rows(ap_sim *s, double *tp) {
   double t = *tp;
   const ap_model *m = s->m;
@@ -112,6 +112,8 @@ static int stage_dae_rows(ap_sim *s, double *tp) {
   int rc = ap_fwd_position(m, d);
   if (rc == AP_OK) rc = ap_dae_review_rows(s->dae, s->def.rank_rtol);
   if (rc <= 0) return rc == AP_OK ? AP_OK : ap_drv_fail(s, rc, "%s", d->msg);
+  rc = ap_drv_dae_onto_rows(s, t, s->ytry);   /* the newly kept rows hold (sim_restart.c) */
+  if (rc != AP_OK) return rc;
   d->basis = AP_BASIS_ORTHONORMAL;   /* the Appell solve gives q', v' */
   rc = ap_forward(m, d);
   d->basis = AP_BASIS_NONE;

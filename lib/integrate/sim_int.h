@@ -174,6 +174,8 @@ void ap_drv_contacts_free(ap_sim *s);
  * and the number of multipliers change with the modes). */
 int ap_drv_dae_coulomb(void *user, ap_data *d, double *W);
 int ap_drv_dae_remake(ap_sim *s, double t, double *y);
+/* y's (q, v) onto phi = 0 and every row of A before IDA restarts with other kept rows. */
+int ap_drv_dae_onto_rows(ap_sim *s, double t, double *y);
 /* The coupling for IDA made at the current modes: ap_drv_dae_coulomb, and while a wheel under
  * a planar chassis slides, its Coulomb force with its load (dae_loads.c). */
 ap_dae_couple ap_drv_dae_couple(ap_sim *s);
