@@ -247,7 +247,7 @@ static int split_units(const char *src, const char *hash, char **tu) {
     size_t at = pre;
     for (int i = 0; i < np; i++)
       if (unit[i] == u) memcpy(t + at, src + start[i], end[i] - start[i]), at += end[i] - start[i];
-    at += (size_t)snprintf(t + at, size - at, u ? "" : "const char apc_hash[] = \"%s\";\n", hash);
+    if (u == 0) at += (size_t)snprintf(t + at, size - at, "const char apc_hash[] = \"%s\";\n", hash);
     t[at] = '\0';
   }
   return n;
