@@ -10,7 +10,8 @@
  * watches:
  *   NAME.slip      rolling:   mu F_n - |F_t|         -> sliding, slip along -F_t / |F_t|
  *                                                       (airborne when F_n <= 0, unilateral)
- *   NAME.lift_off  rolling, sliding: F_n             -> airborne
+ *   NAME.lift_off  rolling, sliding: F_n             -> airborne (sliding: while the slip is
+ *                                                       resolved, see stick_value)
  *   NAME.stick     sliding:   s . s_ref               -> rolling when the sticking force lies
  *                                                       in the cone, else sliding along -F_t
  *   NAME.touchdown airborne:  the gap                 -> rolling, sliding or airborne (the
