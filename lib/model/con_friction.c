@@ -48,7 +48,15 @@
  * mu_kinetic = mu). */
 #define FR_PIN 1e-13
 #define FR_FOLLOW 1e5
-#define FR_BAND 1e-1
+#define FR_BAND 1e-1   /* a smoothing width, not an accuracy: see below */
+/* FR_BAND does not follow from the tolerance. It is the width, in |g| (a ratio of forces), over
+ * which the weight turns on, so that f stays continuous in the state; whatever its value the
+ * friction leaves s / |s| by at most sig FR_FOLLOW / |s| rad, so it matters only while the slip
+ * is within a few sig of 0. A width from the tolerance (1000 rtol, as the settle's band) would
+ * make the direction turn by O(1) over a change of |g| of 1e-5: a near-discontinuity in f that
+ * the steppers resolve by rejecting steps (with 1e-3, bdf failed on the car after its third
+ * slip; with 0.1 it runs). The quantity that sets the accuracy is sig FR_FOLLOW
+ * (1e-8 (1 + max |v_i|)). */
 #define FR_HEAD 8   /* mode, F_n, slip direction (2), direction of the last friction (2), gamma of
                        the tangential rows (2) */
 static size_t fr_stride(const ap_bmodel *M) { return FR_HEAD + 2 * ((size_t)M->k + 1); }

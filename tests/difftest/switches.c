@@ -40,6 +40,22 @@ static int next_of(const dt_events *e, const char *of, int i, double t_upto) {
   return e->n;
 }
 
+/* The time a switch's error accumulates from: the contact's previous switch t_prev, or, for a
+ * switch that repeats the previous one's name (a touchdown after a bounce), the switch before
+ * that chain (t0 when none). An impact does not reset the state's error, and a bounce chain's
+ * flights shrink as e^i while its closing speeds do too: the i-th touchdown's time error is
+ * about the gap's error over the closing speed, growing as 1 / e^i, where the time since the
+ * last bounce shrinks as e^i (seed 150: errors 4.2e-7, 8.1e-7, 1.6e-6, 2.9e-6 s at touchdowns
+ * 3 to 6 of one chain, e = 0.571). */
+static double chain_start(const dt_events *e, int i, double t0, double t_prev) {
+  for (int p = i - 1; p >= 0; p--) {
+    if (!same_contact(e->name[p], e->name[i])) continue;
+    if (strcmp(e->name[p], e->name[i])) return e->t[p];
+    t_prev = t0;   /* a repeat: the chain's start is further back */
+  }
+  return t_prev;
+}
+
 /* Compare the switches of one contact (named as ref->name[first] or u->name[first]). */
 static int compare_contact(const dt_events *ref, const dt_events *u, const char *of, double t0,
                            double t_upto, double tol, double *worst, char *msg, size_t len) {
@@ -53,7 +69,7 @@ static int compare_contact(const dt_events *ref, const dt_events *u, const char 
       return 1;
     }
     double dt = fabs(u->t[j] - ref->t[i]);
-    double b = tol * (ref->t[i] - t_prev) + 8 * 2.3e-16 * fabs(ref->t[i]);
+    double b = tol * (ref->t[i] - chain_start(ref, i, t0, t_prev)) + 8 * 2.3e-16 * fabs(ref->t[i]);
     *worst = fmax(*worst, dt / b);
     if (dt > b) {
       snprintf(msg, len, "'%s' at t = %.12g, the reference's at %.12g: %.3g apart, bound %.3g",
@@ -78,9 +94,10 @@ static void drop_bursts(dt_events *e, double t0, double tol) {
         break;
       }
     int j = next_of(e, e->name[i], i, INFINITY);
+    int both = j < e->n && strcmp(e->name[i], e->name[j]) != 0;
+    if (j < e->n && !both) t_prev = chain_start(e, i, t0, t_prev);   /* a bounce chain */
     if (j >= e->n || e->t[j] - e->t[i] > tol * (e->t[i] - t_prev) + 8 * 2.3e-16 * e->t[j])
       continue;
-    int both = strcmp(e->name[i], e->name[j]) != 0;
     for (int k = j; both && k + 1 < e->n; k++)   /* j first: it comes after i */
       memcpy(e->name[k], e->name[k + 1], sizeof e->name[k]), e->t[k] = e->t[k + 1];
     e->n -= both;
