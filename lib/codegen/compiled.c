@@ -46,8 +46,14 @@ static int fast_acceleration(const ap_model *m, ap_data *d) {
   if (!F || d->estimate_cond || d->l != cg_free_speeds(ap_bm(m)) || k > lim || m->n > lim)
     return AP_ERR_UNSUPPORTED;
   ap_scratch *s = (ap_scratch *)d->internal;
-  int rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
-                               s->gB, d->Phi, d->edd, d->vdot, d->qdot);
+  /* the variant for the expected partition first: 2 when this state's B and w do not have
+   * the identity rows and zeros it folded (another partition) */
+  int rc = F->lib.acc_part ? F->lib.acc_part(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1,
+                                             s->tk2, d->G, s->gB, d->Phi, d->edd, d->vdot,
+                                             d->qdot) : 2;
+  if (rc == 2)
+    rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
+                             s->gB, d->Phi, d->edd, d->vdot, d->qdot);
   return rc == 0 ? AP_OK : AP_ERR_UNSUPPORTED;
 }
 
@@ -127,13 +133,18 @@ static int why_not(const ap_model *m, char *why, size_t len) {
 
 int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notice,
                             size_t len) {
+  return cg_compile_hinted(m, mode, NULL, notice, len);
+}
+
+int cg_compile_hinted(const ap_model *m, ap_compile_mode mode, const int *indep, char *notice,
+                      size_t len) {
   char why[512] = "", dummy[1];
   if (!notice) notice = dummy, len = sizeof dummy;
   if (len) notice[0] = '\0';
   if (!m || (int)mode < AP_COMPILE_NEVER || (int)mode > AP_COMPILE_ALWAYS) return AP_ERR_ARG;
   if (mode == AP_COMPILE_NEVER) return 0;
   if (ap_model_is_compiled(m)) return 1;
-  char *src = why_not(m, why, sizeof why) == 0 ? cg_source(ap_bm(m), why, sizeof why) : NULL;
+  char *src = why_not(m, why, sizeof why) == 0 ? cg_source(ap_bm(m), indep, why, sizeof why) : NULL;
   cg_fast *F = src ? calloc(1, sizeof *F) : NULL;
   if (src && !F) snprintf(why, sizeof why, "out of memory");
   int rc = F ? cg_load(src, &F->lib, why, sizeof why) : -1;

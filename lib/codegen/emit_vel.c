@@ -115,7 +115,7 @@ static void stage_begin(cg_kin *K, int nout) {
   K->text0 = K->G->len, K->id0 = K->G->ntemp;
 }
 
-char *cg_source(const ap_bmodel *M, char *why, size_t len) {
+char *cg_source(const ap_bmodel *M, const int *indep, char *why, size_t len) {
   if (cg_kin_supported(M, why, len) != 0) return NULL;
   size_t ns = M->scratch ? M->scratch : 1, kk = (size_t)M->k * M->k + 1;
   cg_gen G = {0};
@@ -164,8 +164,19 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
             "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
             "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "
             "(void)gB, (void)Phi, (void)tk1, (void)tk2;\n");
-  if (!G.fail) cg_kin_acceleration(&G, M, gpos);
+  if (!G.fail) cg_kin_acceleration(&G, M, gpos, NULL);
   cg_printf(&G, "  return 0;\n}\n\n");
+  if (indep && M->b > 0 && M->b < M->k) {   /* the variant for the expected partition */
+    cg_printf(&G, CG_TU_MARK "const int apc_acc_indep[] = {");
+    for (int i = 0; i < M->k - M->b; i++) cg_printf(&G, "%s%d", i ? ", " : "", indep[i]);
+    cg_printf(&G, "};\nint apc_acc_part(const double *g, const double *B, const double *Q, "
+              "const double *h, const double *w, const double *N, const double *v, double *tk1, "
+              "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
+              "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "
+              "(void)gB, (void)Phi, (void)tk1, (void)tk2;\n");
+    if (!G.fail) cg_kin_acceleration(&G, M, gpos, indep);
+    cg_printf(&G, "  return 0;\n}\n\n");
+  }
   if (!G.fail) cg_emit_basis(&G, M, gpos);
   free(gpos);
   free(K.base), free(K.sh), free(K.wr), free(K.out), free(K.owr);
