@@ -96,8 +96,15 @@ void cg_kin_store(cg_kin *K, const char *out_name, int nout);
 /* The acceleration stage at the model's sizes (emit_acc.c), g's structure from the position
  * stage's traced g (gpos, k x k). indep (l = k - b entries, or NULL): the variant for a
  * partition whose independent speeds are indep, B's rows there the identity and w 0 there
- * (folded; the caller checks those entries at run time before calling it). */
+ * (folded; the variant checks those entries first, and on a mismatch returns what
+ * apc_acceleration returns). */
 int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos, const int *indep);
+/* The generated acceleration stages' parameters (cg_acc_fn) and the arguments passing them on. */
+#define CG_ACC_PARAMS                                                                           \
+  "const double *g, const double *B, const double *Q, const double *h, const double *w, "      \
+  "const double *N, const double *v, double *tk1, double *tk2, double *G, double *gB, "         \
+  "double *Phi, double *edd, double *vdot, double *qdot"
+#define CG_ACC_ARGS "g, B, Q, h, w, N, v, tk1, tk2, G, gB, Phi, edd, vdot, qdot"
 /* The free speeds the generated acceleration stage is made for: k - b, or 0 when b >= k (every
  * speed fixed by the rows, as on a robot with prescribed wheel speeds). */
 int cg_free_speeds(const ap_bmodel *M);
@@ -113,7 +120,7 @@ void cg_emit_basis(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
 /* The whole translation unit for a model (emit_vel.c): NULL when out of memory. indep (k - b
  * ascending speeds, or NULL): the independent speeds of a partition expected at run time (the
  * scene's initial one); with it the source also has apc_acc_part, the acceleration stage for
- * that partition, and apc_acc_indep, its independent speeds. */
+ * that partition, which calls apc_acceleration for a state of another partition. */
 char *cg_source(const ap_bmodel *M, const int *indep, char *why, size_t len);
 
 /* ---- compile, cache, load (cache.c) ------------------------------------------------------ */
@@ -141,9 +148,7 @@ typedef struct cg_lib {
   void *handle;
   cg_pos_fn position;
   cg_vel_fn velocity;
-  cg_acc_fn acceleration;
-  cg_acc_fn acc_part;                    /* apc_acc_part, or NULL (no partition expected) */
-  const int *acc_indep;                  /* its independent speeds (k - b) */
+  cg_acc_fn acceleration;                /* apc_acc_part when there is one, else the generic */
   cg_finite_fn finite_pos, finite_vel;   /* 1: every output of the stage finite, <= AP_HUGE */
   cg_basis_fn basis;                     /* NULL when the model has none (no rows) */
   cg_part_fn particular;

@@ -39,21 +39,17 @@ static void fast_velocity(const ap_bm_fast *f, const double *v, double *S, doubl
 }
 
 /* The compiled acceleration stage where the core would run its native kernels on the model's
- * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration). */
+ * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration): the
+ * variant for the expected partition when the model has one (it goes on to the generic stage
+ * for another partition, cache.c). */
 static int fast_acceleration(const ap_model *m, ap_data *d) {
   const cg_fast *F = (const cg_fast *)ap_bm(m)->fast;
   int k = m->k, lim = ap_la_small_limit();
   if (!F || d->estimate_cond || d->l != cg_free_speeds(ap_bm(m)) || k > lim || m->n > lim)
     return AP_ERR_UNSUPPORTED;
   ap_scratch *s = (ap_scratch *)d->internal;
-  /* the variant for the expected partition first: 2 when this state's B and w do not have
-   * the identity rows and zeros it folded (another partition) */
-  int rc = F->lib.acc_part ? F->lib.acc_part(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1,
-                                             s->tk2, d->G, s->gB, d->Phi, d->edd, d->vdot,
-                                             d->qdot) : 2;
-  if (rc == 2)
-    rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
-                             s->gB, d->Phi, d->edd, d->vdot, d->qdot);
+  int rc = F->lib.acceleration(d->g, d->B, d->Q, d->h, d->w, d->N, d->v, s->tk1, s->tk2, d->G,
+                               s->gB, d->Phi, d->edd, d->vdot, d->qdot);
   return rc == 0 ? AP_OK : AP_ERR_UNSUPPORTED;
 }
 

@@ -146,10 +146,11 @@ int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos, const i
   for (int i = 0; indep && b > 0 && i < l; i++) {   /* the variant: B's identity rows, w's 0s */
     for (int j = 0; j < l; j++) {
       size_t at = indep[i] + (size_t)j * k;
-      cg_printf(G, "  if (B[%zu] != %s) return 2;\n", at, i == j ? "1.0" : "0.0");
+      cg_printf(G, "  if (B[%zu] != %s) return apc_acceleration(" CG_ACC_ARGS ");\n", at,
+                i == j ? "1.0" : "0.0");
       B[at] = cg_const(i == j ? 1.0 : 0.0);
     }
-    cg_printf(G, "  if (w[%d] != 0.0) return 2;\n", indep[i]);
+    cg_printf(G, "  if (w[%d] != 0.0) return apc_acceleration(" CG_ACC_ARGS ");\n", indep[i]);
     w[indep[i]] = cg_const(0.0);
   }
   n_structure(M, N);
