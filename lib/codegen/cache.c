@@ -105,6 +105,8 @@ static int try_open(const char *path, const char *hash, cg_lib *out) {
   out->position = (cg_pos_fn)(uintptr_t)dlsym(h, "apc_position");
   out->velocity = (cg_vel_fn)(uintptr_t)dlsym(h, "apc_velocity");
   out->acceleration = (cg_acc_fn)(uintptr_t)dlsym(h, "apc_acceleration");
+  cg_acc_fn part = (cg_acc_fn)(uintptr_t)dlsym(h, "apc_acc_part");   /* optional: the */
+  if (part) out->acceleration = part;   /* expected partition's, calling the generic one */
   out->finite_pos = (cg_finite_fn)(uintptr_t)dlsym(h, "apc_finite_pos");
   out->finite_vel = (cg_finite_fn)(uintptr_t)dlsym(h, "apc_finite_vel");
   out->basis = (cg_basis_fn)(uintptr_t)dlsym(h, "apc_basis");   /* optional */

@@ -13,6 +13,7 @@
 
 #include <stddef.h>
 
+#include "appell/compiled.h"
 #include "model/model.h"
 
 /* ---- traced scalars and the text they emit (trace.c) ------------------------------------- */
@@ -93,8 +94,17 @@ void cg_kin_velocity(cg_kin *K);
 void cg_kin_store(cg_kin *K, const char *out_name, int nout);
 
 /* The acceleration stage at the model's sizes (emit_acc.c), g's structure from the position
- * stage's traced g (gpos, k x k). */
-int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
+ * stage's traced g (gpos, k x k). indep (l = k - b entries, or NULL): the variant for a
+ * partition whose independent speeds are indep, B's rows there the identity and w 0 there
+ * (folded; the variant checks those entries first, and on a mismatch returns what
+ * apc_acceleration returns). */
+int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos, const int *indep);
+/* The generated acceleration stages' parameters (cg_acc_fn) and the arguments passing them on. */
+#define CG_ACC_PARAMS                                                                           \
+  "const double *g, const double *B, const double *Q, const double *h, const double *w, "      \
+  "const double *N, const double *v, double *tk1, double *tk2, double *G, double *gB, "         \
+  "double *Phi, double *edd, double *vdot, double *qdot"
+#define CG_ACC_ARGS "g, B, Q, h, w, N, v, tk1, tk2, G, gB, Phi, edd, vdot, qdot"
 /* The free speeds the generated acceleration stage is made for: k - b, or 0 when b >= k (every
  * speed fixed by the rows, as on a robot with prescribed wheel speeds). */
 int cg_free_speeds(const ap_bmodel *M);
@@ -107,8 +117,11 @@ int cg_basis_supported(const ap_bmodel *M);
 int cg_basis_rank(int b, int k);
 void cg_emit_basis(cg_gen *G, const ap_bmodel *M, const cg_v *gpos);
 
-/* The whole translation unit for a model (emit_vel.c): NULL when out of memory. */
-char *cg_source(const ap_bmodel *M, char *why, size_t len);
+/* The whole translation unit for a model (emit_vel.c): NULL when out of memory. indep (k - b
+ * ascending speeds, or NULL): the independent speeds of a partition expected at run time (the
+ * scene's initial one); with it the source also has apc_acc_part, the acceleration stage for
+ * that partition, which calls apc_acceleration for a state of another partition. */
+char *cg_source(const ap_bmodel *M, const int *indep, char *why, size_t len);
 
 /* ---- compile, cache, load (cache.c) ------------------------------------------------------ */
 
@@ -135,7 +148,7 @@ typedef struct cg_lib {
   void *handle;
   cg_pos_fn position;
   cg_vel_fn velocity;
-  cg_acc_fn acceleration;
+  cg_acc_fn acceleration;                /* apc_acc_part when there is one, else the generic */
   cg_finite_fn finite_pos, finite_vel;   /* 1: every output of the stage finite, <= AP_HUGE */
   cg_basis_fn basis;                     /* NULL when the model has none (no rows) */
   cg_part_fn particular;
@@ -177,6 +190,10 @@ typedef struct cg_fast {
  * rows and forces hooks (and the core's fills flags); without them the model keeps the
  * library's contacts, N and effects. AP_OK or AP_ERR_NOMEM. */
 int cg_rows_install(ap_model *m, cg_fast *F);
+/* ap_model_compile_native with the independent speeds of the partition expected at run time
+ * (indep, k - b ascending, or NULL; compiled.c): the acceleration stage gets a variant for it. */
+int cg_compile_hinted(const ap_model *m, ap_compile_mode mode, const int *indep, char *notice,
+                      size_t len);
 void cg_rows_free(cg_fast *F);
 
 #endif

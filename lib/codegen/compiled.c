@@ -39,7 +39,9 @@ static void fast_velocity(const ap_bm_fast *f, const double *v, double *S, doubl
 }
 
 /* The compiled acceleration stage where the core would run its native kernels on the model's
- * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration). */
+ * sizes with the same free speeds and no condition estimate (forward.c fwd_acceleration): the
+ * variant for the expected partition when the model has one (it goes on to the generic stage
+ * for another partition, cache.c). */
 static int fast_acceleration(const ap_model *m, ap_data *d) {
   const cg_fast *F = (const cg_fast *)ap_bm(m)->fast;
   int k = m->k, lim = ap_la_small_limit();
@@ -127,13 +129,18 @@ static int why_not(const ap_model *m, char *why, size_t len) {
 
 int ap_model_compile_native(const ap_model *m, ap_compile_mode mode, char *notice,
                             size_t len) {
+  return cg_compile_hinted(m, mode, NULL, notice, len);
+}
+
+int cg_compile_hinted(const ap_model *m, ap_compile_mode mode, const int *indep, char *notice,
+                      size_t len) {
   char why[512] = "", dummy[1];
   if (!notice) notice = dummy, len = sizeof dummy;
   if (len) notice[0] = '\0';
   if (!m || (int)mode < AP_COMPILE_NEVER || (int)mode > AP_COMPILE_ALWAYS) return AP_ERR_ARG;
   if (mode == AP_COMPILE_NEVER) return 0;
   if (ap_model_is_compiled(m)) return 1;
-  char *src = why_not(m, why, sizeof why) == 0 ? cg_source(ap_bm(m), why, sizeof why) : NULL;
+  char *src = why_not(m, why, sizeof why) == 0 ? cg_source(ap_bm(m), indep, why, sizeof why) : NULL;
   cg_fast *F = src ? calloc(1, sizeof *F) : NULL;
   if (src && !F) snprintf(why, sizeof why, "out of memory");
   int rc = F ? cg_load(src, &F->lib, why, sizeof why) : -1;

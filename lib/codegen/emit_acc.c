@@ -130,7 +130,7 @@ static void store(cg_gen *G, const char *name, const cg_v *x, size_t n) {
 
 int cg_free_speeds(const ap_bmodel *M) { return M->k > M->b ? M->k - M->b : 0; }
 
-int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos) {
+int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos, const int *indep) {
   int k = M->k, n = M->n, b = M->b, l = k - b > 0 ? k - b : 0;   /* cg_free_speeds */
   size_t kk = (size_t)k * k, kl = (size_t)k * l;
   cg_v *buf = calloc(4 * kk + 3 * kl + (size_t)n * k + (size_t)l * l + 12 * (size_t)k + 8 +
@@ -143,6 +143,16 @@ int cg_kin_acceleration(cg_gen *G, const ap_bmodel *M, const cg_v *gpos) {
   for (size_t i = 0; i < kk; i++) g[i] = gpos[i].kind == CG_CONST ? gpos[i] : cg_ref('g', i);
   refs('B', kl, B), refs('Q', (size_t)k, Q), refs('h', (size_t)k, h), refs('w', (size_t)k, w);
   refs('v', (size_t)k, v);
+  for (int i = 0; indep && b > 0 && i < l; i++) {   /* the variant: B's identity rows, w's 0s */
+    for (int j = 0; j < l; j++) {
+      size_t at = indep[i] + (size_t)j * k;
+      cg_printf(G, "  if (B[%zu] != %s) return apc_acceleration(" CG_ACC_ARGS ");\n", at,
+                i == j ? "1.0" : "0.0");
+      B[at] = cg_const(i == j ? 1.0 : 0.0);
+    }
+    cg_printf(G, "  if (w[%d] != 0.0) return apc_acceleration(" CG_ACC_ARGS ");\n", indep[i]);
+    w[indep[i]] = cg_const(0.0);
+  }
   n_structure(M, N);
   gemv(G, k, k, g, w, tk1);
   for (int i = 0; i < k; i++) tk2[i] = SUB(SUB(Q[i], h[i]), tk1[i]);

@@ -115,7 +115,16 @@ static void stage_begin(cg_kin *K, int nout) {
   K->text0 = K->G->len, K->id0 = K->G->ntemp;
 }
 
-char *cg_source(const ap_bmodel *M, char *why, size_t len) {
+/* One acceleration stage: the generic one, or the variant for the independent speeds indep. */
+static void acc_function(cg_gen *G, const ap_bmodel *M, const cg_v *gpos, const char *name,
+                         const int *indep) {
+  cg_printf(G, CG_TU_MARK "int %s(" CG_ACC_PARAMS ") {\n  (void)g, (void)B, (void)Q, (void)h, "
+            "(void)w, (void)N, (void)v, (void)gB, (void)Phi, (void)tk1, (void)tk2;\n", name);
+  cg_kin_acceleration(G, M, gpos, indep);
+  cg_printf(G, "  return 0;\n}\n\n");
+}
+
+char *cg_source(const ap_bmodel *M, const int *indep, char *why, size_t len) {
   if (cg_kin_supported(M, why, len) != 0) return NULL;
   size_t ns = M->scratch ? M->scratch : 1, kk = (size_t)M->k * M->k + 1;
   cg_gen G = {0};
@@ -133,7 +142,8 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
             "#define isfinite(x) __builtin_isfinite(x)\n\n"
             "typedef int (*apc_plane_fn)(void *ctx, int joint, const double *Rj, double *z);\n"
             "typedef int (*apc_drive_fn)(void *ctx, int joint);\n"
-            "extern const char apc_hash[];\n\n" CG_TU_MARK
+            "extern const char apc_hash[];\n"
+            "int apc_acceleration(" CG_ACC_PARAMS ");\n\n" CG_TU_MARK
             "int apc_position(const double *q, double *S, double *g, apc_plane_fn plane, "
             "apc_drive_fn drive, void *ctx) {\n  double z[%d];\n"
             "  (void)plane, (void)drive, (void)ctx, (void)z;\n",
@@ -159,13 +169,9 @@ char *cg_source(const ap_bmodel *M, char *why, size_t len) {
   }
   cg_printf(&G, "}\n\n");
   if (!G.fail) cg_emit_forces(&K);   /* apc_forces: gravity, gamma (emit_contact.c) */
-  cg_printf(&G, CG_TU_MARK "int apc_acceleration(const double *g, const double *B, const double *Q, "
-            "const double *h, const double *w, const double *N, const double *v, double *tk1, "
-            "double *tk2, double *G, double *gB, double *Phi, double *edd, double *vdot, "
-            "double *qdot) {\n  (void)g, (void)B, (void)Q, (void)h, (void)w, (void)N, (void)v, "
-            "(void)gB, (void)Phi, (void)tk1, (void)tk2;\n");
-  if (!G.fail) cg_kin_acceleration(&G, M, gpos);
-  cg_printf(&G, "  return 0;\n}\n\n");
+  if (!G.fail) acc_function(&G, M, gpos, "apc_acceleration", NULL);
+  if (!G.fail && indep && M->b > 0 && M->b < M->k)   /* the expected partition's variant */
+    acc_function(&G, M, gpos, "apc_acc_part", indep);
   if (!G.fail) cg_emit_basis(&G, M, gpos);
   free(gpos);
   free(K.base), free(K.sh), free(K.wr), free(K.out), free(K.owr);

@@ -14,6 +14,7 @@
 
 #include "core/text.h"
 #include "appell/compiled.h"
+#include "codegen/codegen.h"
 #include "scene/scene_int.h"
 
 #define SC_MAX_FILE (16L << 20)
@@ -84,6 +85,24 @@ static int sets_parts(const char *set) {
   return (n == 5 && strncmp(set, "parts", 5) == 0) || (n == 9 && strncmp(set, "instances", 9) == 0);
 }
 
+/* The independent speeds of the partition at the scene's initial state (ap_partition), for the
+ * compiled acceleration stage's variant (lib/codegen): 0 when there is none to expect. */
+static int initial_indep(ap_scene *sc, int *indep) {
+  const ap_model *m = sc->m;
+  ap_data *d = NULL;
+  int got = 0, l = m->k - m->b;
+  if (!ap_model_is_body_model(m) || m->ops || m->b <= 0 || l <= 0 || l > 64 ||
+      ap_data_create(m, &d) != AP_OK)
+    return 0;
+  if (ap_scene_initial_state(sc, d->q, d->v, NULL, 0, NULL, 0) == AP_OK) {
+    d->t = sc->s.run.t0;
+    got = ap_partition(m, d) == AP_OK && d->rank == m->b;
+    for (int i = 0; got && i < l; i++) indep[i] = d->perm[m->b + i];
+  }
+  ap_data_free(d);
+  return got;
+}
+
 /* simulation.compile, else $APPELL_COMPILE, else never (docs/compiled.md). */
 static void compile_model(ap_scene *sc) {
   ap_compile_mode mode = AP_COMPILE_NEVER;
@@ -92,8 +111,10 @@ static void compile_model(ap_scene *sc) {
   else if (env && env[0] && ap_compile_mode_parse(env, &mode) != AP_OK)
     snprintf(sc->compile_notice, sizeof sc->compile_notice, "appell: APPELL_COMPILE='%.40s' is "
              "not never, auto or always: ignored", env);
+  int indep[64];
   if (mode != AP_COMPILE_NEVER)
-    ap_model_compile_native(sc->m, mode, sc->compile_notice, sizeof sc->compile_notice);
+    cg_compile_hinted(sc->m, mode, initial_indep(sc, indep) ? indep : NULL, sc->compile_notice,
+                      sizeof sc->compile_notice);
 }
 
 const char *ap_scene_compile_notice(const ap_scene *s) {
