@@ -290,6 +290,14 @@ static int frictionless(const ap_model *m, ap_data *d, fr_work *w) {
   return AP_OK;
 }
 
+/* The weight (0 ... 1) with which g = -F* / (mu_k F_n) turns a sliding contact's friction
+ * off its slip (1 while |g| >= 1, 0 below 1 - FR_BAND or against dir, the slip's reference
+ * direction): 0 for every contact means pass 1 of ap_cfr_friction would repeat pass 0. */
+static double follow_weight(const double *g, const double *dir) {
+  double ng = hypot(g[0], g[1]), cs = ng > 0 ? (g[0] * dir[0] + g[1] * dir[1]) / ng : 0.0;
+  return fmin(fmax((ng - 1.0) / FR_BAND + 1.0, 0.0), 1.0) * fmax(cs, 0.0);
+}
+
 /* f_j of sliding contact c into F (k), u_j into U (na). */
 static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c, fr_work *w,
                     double *F, double *U, const double *g) {
@@ -299,8 +307,7 @@ static void coulomb(const ap_bmodel *M, ap_data *d, double *S, const ap_mcon *c,
   for (int j = 0; j < k; j++) vmag = fmax(vmag, fabs(d->v[j]));
   double *dir = ap_cfr_slip_dir(M, S, c), sig = FR_PIN * (1.0 + vmag), ns = hypot(s[0], s[1]);
   if (g && ns > sig) {   /* while the sticking force is at or beyond the cone: |g| >= 1 */
-    double ng = hypot(g[0], g[1]), cs = ng > 0 ? (g[0] * dir[0] + g[1] * dir[1]) / ng : 0.0;
-    double wt = fmin(fmax((ng - 1.0) / FR_BAND + 1.0, 0.0), 1.0) * fmax(cs, 0.0) * FR_FOLLOW * sig;
+    double wt = follow_weight(g, dir) * FR_FOLLOW * sig;
     s[0] += wt * g[0], s[1] += wt * g[1];
   }
   else if (ns <= sig) s[0] = dir[0], s[1] = dir[1];   /* round-off: the pinned direction */
@@ -479,6 +486,16 @@ static void sticking(const ap_bmodel *M, ap_data *d, double *S, fr_work *w,
   }
 }
 
+/* The sticking forces after pass 0 (sticking); 1 when some contact's friction follows them,
+ * so that pass 1 changes the solve. */
+static int follows(const ap_bmodel *M, ap_data *d, double *S, fr_work *w,
+                   const ap_mcon *const *sl, int p) {
+  sticking(M, d, S, w, sl, p);
+  for (int j = 0; j < p; j++)
+    if (follow_weight(w->gs + 2 * j, ap_cfr_slip_dir(M, S, sl[j])) > 0) return 1;
+  return 0;
+}
+
 int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   const ap_bmodel *M = ap_bm(m);
   fr_work w = carve(M, S);
@@ -491,10 +508,8 @@ int ap_cfr_friction(const ap_model *m, ap_data *d, double *S) {
   for (int ci = 0; ci < M->nc && ns < 64; ci++)
     if (M->cons[ci].fric >= 0 && ap_cfr_mode(M, S, &M->cons[ci]) == AP_CM_SLIDING)
       sl[ns++] = &M->cons[ci];
-  for (int pass = 0; rc == AP_OK && pass < 2; pass++) {
-    if (pass) sticking(M, d, S, &w, sl, p);
-    rc = normals(m, d, S, &w, sl, p, pass);
-  }
+  rc = normals(m, d, S, &w, sl, p, 0);
+  if (rc == AP_OK && follows(M, d, S, &w, sl, p)) rc = normals(m, d, S, &w, sl, p, 1);
   if (rc != AP_OK) return rc;
   for (int j = 0; j < p; j++) {
     for (int i = 0; i < k; i++) d->Q[i] += w.F[(size_t)j * k + i] * w.lamN[j];
